@@ -1,0 +1,289 @@
+//! The flatray command line: flag definitions and the glue that loads a
+//! scene, renders it and writes the result.
+//!
+//! What it is for: parsing arguments, showing progress, printing summaries
+//! and statistics, and owning the exit codes (0 success, 2 bad usage or a
+//! bad scene, 1 any other failure).
+//!
+//! What it never does: physics or file formats. Those live in
+//! `flatray-tracer` and `flatray-io`; this crate only wires them together,
+//! and never panics on user input.
+
+use std::ffi::OsString;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use flatray_io::{Format, Loaded};
+use flatray_tracer::{Integrator, RenderOptions, image_size};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// Exit code: success.
+pub const EXIT_OK: i32 = 0;
+/// Exit code: any failure that is not the user's input.
+pub const EXIT_FAILURE: i32 = 1;
+/// Exit code: bad usage or a bad scene.
+pub const EXIT_USAGE: i32 = 2;
+
+/// flatray: a 2D Monte Carlo path tracer for floor plans.
+#[derive(Debug, Parser)]
+#[command(name = "flatray", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Render a scene to a PNG (tone-mapped) or EXR (linear) image.
+    Render(RenderArgs),
+    /// Validate a scene file; exit 0, or print the error and exit 2.
+    Check {
+        /// The scene file (RON).
+        scene: PathBuf,
+    },
+}
+
+#[derive(Debug, clap::Args)]
+struct RenderArgs {
+    /// The scene file (RON).
+    scene: PathBuf,
+    /// The output image; its extension (.png or .exr) picks the format.
+    /// Default: the scene's name with .png, in the current folder.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Samples per pixel (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)))]
+    spp: Option<u32>,
+    /// Most wall reflections between a light and the floor (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    bounces: Option<u32>,
+    /// Seed of the random streams (overrides the scene).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Multiplies every pixel value (overrides the scene).
+    #[arg(long)]
+    exposure: Option<f64>,
+    /// The estimator (overrides the scene).
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    /// Render the canvas at this many pixels per world unit (0.25 for a
+    /// preview, 2 for a sharper image); the geometry is unchanged.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    threads: Option<u32>,
+    /// Print counts of rays, paths and seconds per phase.
+    #[arg(long)]
+    stats: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum IntegratorArg {
+    /// Path tracing with next-event estimation at every diffuse vertex.
+    Path,
+    /// The original project's uniform bounce, aimed at the lights.
+    Original,
+}
+
+/// Runs flatray with `args` (the program name first), writing messages to
+/// `out` and `err`; returns the exit code.
+pub fn run<I, T>(args: I, out: &mut dyn Write, err: &mut dyn Write) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let code = if e.use_stderr() { EXIT_USAGE } else { EXIT_OK };
+            let text = e.render().ansi().to_string();
+            let _ = if e.use_stderr() {
+                write!(err, "{text}")
+            } else {
+                write!(out, "{text}")
+            };
+            return code;
+        }
+    };
+    let result = match cli.command {
+        Command::Render(args) => render(args, out),
+        Command::Check { scene } => check(&scene, out),
+    };
+    match result {
+        Ok(()) => EXIT_OK,
+        Err(failure) => {
+            let _ = writeln!(err, "error: {}", failure.message);
+            failure.code
+        }
+    }
+}
+
+/// A failure with its exit code.
+struct Failure {
+    code: i32,
+    message: String,
+}
+
+impl Failure {
+    fn usage(message: impl ToString) -> Failure {
+        Failure {
+            code: EXIT_USAGE,
+            message: message.to_string(),
+        }
+    }
+
+    fn other(message: impl ToString) -> Failure {
+        Failure {
+            code: EXIT_FAILURE,
+            message: message.to_string(),
+        }
+    }
+}
+
+fn load(path: &Path) -> Result<Loaded, Failure> {
+    flatray_io::load(path).map_err(|e| match e {
+        flatray_io::SceneError::Read { .. } if path.exists() => Failure::other(e),
+        _ => Failure::usage(e),
+    })
+}
+
+fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
+    let loaded = load(scene)?;
+    let _ = writeln!(
+        out,
+        "{}: ok ({} walls, {} lights, canvas {} x {})",
+        scene.display(),
+        loaded.scene.walls.len(),
+        loaded.scene.lights.len(),
+        loaded.scene.canvas.width,
+        loaded.scene.canvas.height
+    );
+    Ok(())
+}
+
+fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
+    let started = Instant::now();
+    let output = match &args.output {
+        Some(path) => path.clone(),
+        None => default_output(&args.scene),
+    };
+    Format::from_path(&output).map_err(Failure::usage)?;
+    if !(args.scale.is_finite() && args.scale > 0.0) {
+        return Err(Failure::usage(format!(
+            "--scale: expected a finite number > 0, found {}",
+            args.scale
+        )));
+    }
+    if let Some(exposure) = args.exposure
+        && !(exposure.is_finite() && exposure > 0.0)
+    {
+        return Err(Failure::usage(format!(
+            "--exposure: expected a finite number > 0, found {exposure}"
+        )));
+    }
+
+    let loaded = load(&args.scene)?;
+    let options = RenderOptions {
+        samples: args.spp.unwrap_or(loaded.options.samples),
+        bounces: args.bounces.unwrap_or(loaded.options.bounces),
+        seed: args.seed.unwrap_or(loaded.options.seed),
+        exposure: args.exposure.unwrap_or(loaded.options.exposure),
+        scale: args.scale,
+        integrator: match args.integrator {
+            None => loaded.options.integrator,
+            Some(IntegratorArg::Path) => Integrator::Path,
+            Some(IntegratorArg::Original) => Integrator::Original,
+        },
+    };
+    let (width, height) = image_size(&loaded.scene, options.scale);
+    let pixels = width as u64 * height as u64;
+    if width > flatray_io::format::MAX_CANVAS_SIDE
+        || height > flatray_io::format::MAX_CANVAS_SIDE
+        || pixels > flatray_io::format::MAX_CANVAS_PIXELS
+    {
+        return Err(Failure::usage(format!(
+            "--scale {}: the image would be {width} x {height} pixels, more than flatray renders",
+            args.scale
+        )));
+    }
+    let loaded_at = Instant::now();
+
+    let total = pixels * options.samples as u64;
+    let bar = if args.quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template(
+            "{spinner} rendering [{bar:40}] {percent:>3}%  {elapsed_precise} elapsed, ETA {eta}",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar
+    };
+    let progress = |n: u64| bar.inc(n);
+
+    let rendered = match args.threads {
+        None => flatray_tracer::render(&loaded.scene, &options, &progress),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n as usize)
+            .build()
+            .map_err(|e| Failure::other(format!("cannot start {n} threads: {e}")))?
+            .install(|| flatray_tracer::render(&loaded.scene, &options, &progress)),
+    };
+    bar.finish_and_clear();
+    let rendered_at = Instant::now();
+
+    flatray_io::write_image(&rendered.image, loaded.tonemap, &output).map_err(Failure::other)?;
+    let written_at = Instant::now();
+
+    let _ = writeln!(
+        out,
+        "wrote {} ({width} x {height}, {} spp, {} bounce{}) in {:.2} s",
+        output.display(),
+        options.samples,
+        options.bounces,
+        if options.bounces == 1 { "" } else { "s" },
+        (written_at - started).as_secs_f64()
+    );
+    if rendered.stats.nonfinite_samples > 0 {
+        let _ = writeln!(
+            out,
+            "warning: {} samples were not finite and were left out",
+            rendered.stats.nonfinite_samples
+        );
+    }
+    if args.stats {
+        let _ = writeln!(out, "{}", rendered.stats);
+        let _ = writeln!(out, "seconds");
+        let _ = writeln!(
+            out,
+            "  load             {:>14.3}",
+            (loaded_at - started).as_secs_f64()
+        );
+        let _ = writeln!(
+            out,
+            "  render           {:>14.3}",
+            (rendered_at - loaded_at).as_secs_f64()
+        );
+        let _ = writeln!(
+            out,
+            "  write            {:>14.3}",
+            (written_at - rendered_at).as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn default_output(scene: &Path) -> PathBuf {
+    let stem = scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "render".to_string());
+    PathBuf::from(format!("{stem}.png"))
+}

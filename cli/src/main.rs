@@ -1,0 +1,10 @@
+//! The `flatray` binary: runs [`flatray_cli::run`] and exits with its code.
+
+fn main() {
+    let code = flatray_cli::run(
+        std::env::args_os(),
+        &mut std::io::stdout(),
+        &mut std::io::stderr(),
+    );
+    std::process::exit(code);
+}

@@ -1,0 +1,218 @@
+//! Plane geometry for flatray: points, segments, rays, and the ray-segment
+//! queries every integrator is built on.
+//!
+//! What it is for: one vector formula for every orientation of a wall (no
+//! special case for vertical, horizontal or diagonal segments), exact
+//! endpoint ownership so that closed corners never leak, and reflection.
+//!
+//! What it never does: colour, randomness, files or threads. It knows
+//! nothing of materials or lights; a segment is identified by its index in
+//! a [`SegmentSet`], and callers attach meaning to that index.
+//!
+//! # The crossing rule
+//!
+//! A ray `o + t d` crosses a segment `a b` when the two endpoints are not
+//! strictly on the same side of the ray's line. The sides are the signs of
+//! `cross(d, a - o)` and `cross(d, b - o)`, and each is computed from the
+//! endpoint alone, so two walls that share an endpoint see the *same* sign
+//! for it: the ray can pass on one side of the shared corner or the other,
+//! or through it, and in every case at least one of the two walls is
+//! crossed. No epsilon is involved. A ray that lies exactly along a segment
+//! (both signs zero) does not cross it: a grazing ray slides along the wall.
+
+pub use glam::DVec2;
+
+mod segment_set;
+pub use segment_set::{SegmentSet, Skip};
+
+/// The 2D cross product (perp dot product) `a.x * b.y - a.y * b.x`.
+///
+/// Positive when `b` turns counter-clockwise from `a` in a y-up frame (in
+/// flatray's y-down image frame that is clockwise on screen).
+#[inline]
+pub fn cross(a: DVec2, b: DVec2) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Mirror reflection of direction `d` about a line with unit normal `n`.
+///
+/// Preserves the length of `d`; `n` may point to either side.
+#[inline]
+pub fn reflect(d: DVec2, n: DVec2) -> DVec2 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// A line segment from `a` to `b`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    pub a: DVec2,
+    pub b: DVec2,
+}
+
+/// One of the two sides of a segment, seen from `a` towards `b`.
+///
+/// `Positive` is the side where `cross(b - a, p - a) > 0`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Side {
+    Positive,
+    Negative,
+}
+
+impl Side {
+    /// The other side.
+    #[inline]
+    pub fn flip(self) -> Side {
+        match self {
+            Side::Positive => Side::Negative,
+            Side::Negative => Side::Positive,
+        }
+    }
+
+    /// `+1.0` or `-1.0`.
+    #[inline]
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Positive => 1.0,
+            Side::Negative => -1.0,
+        }
+    }
+
+    /// 0 for `Positive`, 1 for `Negative`: an index for per-side tables.
+    #[inline]
+    pub fn index(self) -> usize {
+        match self {
+            Side::Positive => 0,
+            Side::Negative => 1,
+        }
+    }
+}
+
+impl Segment {
+    #[inline]
+    pub fn new(a: DVec2, b: DVec2) -> Segment {
+        Segment { a, b }
+    }
+
+    /// The vector `b - a`.
+    #[inline]
+    pub fn edge(&self) -> DVec2 {
+        self.b - self.a
+    }
+
+    #[inline]
+    pub fn length(&self) -> f64 {
+        self.edge().length()
+    }
+
+    /// The point `a + u (b - a)`.
+    #[inline]
+    pub fn point_at(&self, u: f64) -> DVec2 {
+        self.a + u * self.edge()
+    }
+
+    /// The unit normal on the `Positive` side, or zero for a degenerate
+    /// segment.
+    #[inline]
+    pub fn normal(&self) -> DVec2 {
+        // perp() turns (x, y) into (-y, x): cross(e, perp(e)) = |e|^2 > 0.
+        self.edge().perp().normalize_or_zero()
+    }
+
+    /// The unit normal pointing into `side`.
+    #[inline]
+    pub fn normal_on(&self, side: Side) -> DVec2 {
+        self.normal() * side.sign()
+    }
+
+    /// `cross(b - a, p - a)`: positive on the `Positive` side, negative on
+    /// the other, zero on the segment's line.
+    #[inline]
+    pub fn side_value(&self, p: DVec2) -> f64 {
+        cross(self.edge(), p - self.a)
+    }
+
+    /// The side of the line that `p` is on, or `None` when `p` is exactly on
+    /// the line.
+    #[inline]
+    pub fn side_of(&self, p: DVec2) -> Option<Side> {
+        let s = self.side_value(p);
+        if s > 0.0 {
+            Some(Side::Positive)
+        } else if s < 0.0 {
+            Some(Side::Negative)
+        } else {
+            None
+        }
+    }
+
+    /// The side from which a ray travelling in direction `d` arrives at
+    /// the segment, or `None` when `d` is parallel to it.
+    #[inline]
+    pub fn arrival_side(&self, d: DVec2) -> Option<Side> {
+        // Arriving from the positive side means travelling against the
+        // positive normal: cross(e, d) < 0.
+        let s = cross(self.edge(), d);
+        if s < 0.0 {
+            Some(Side::Positive)
+        } else if s > 0.0 {
+            Some(Side::Negative)
+        } else {
+            None
+        }
+    }
+}
+
+/// A ray `origin + t * dir`, `t >= 0`. `dir` need not be unit length; `t`
+/// is measured in multiples of `dir`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: DVec2,
+    pub dir: DVec2,
+}
+
+impl Ray {
+    #[inline]
+    pub fn new(origin: DVec2, dir: DVec2) -> Ray {
+        Ray { origin, dir }
+    }
+
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec2 {
+        self.origin + t * self.dir
+    }
+}
+
+/// Where a ray crosses a segment: the ray parameter `t` and the segment
+/// parameter `u` in `[0, 1]` (0 at `a`, 1 at `b`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f64,
+    pub u: f64,
+}
+
+/// Where the line of `ray` crosses `seg`, by the crossing rule of this
+/// crate, whatever the sign of `t`. `None` when both endpoints lie strictly
+/// on one side of the line, or the ray lies along the segment.
+#[inline]
+pub fn line_crossing(ray: &Ray, seg: &Segment) -> Option<Hit> {
+    let sa = cross(ray.dir, seg.a - ray.origin);
+    let sb = cross(ray.dir, seg.b - ray.origin);
+    if (sa > 0.0 && sb > 0.0) || (sa < 0.0 && sb < 0.0) || (sa == 0.0 && sb == 0.0) {
+        return None;
+    }
+    // The signs differ or exactly one is zero, so sa - sb is not zero and u
+    // lies in [0, 1] without clamping.
+    let denom = sa - sb;
+    let u = sa / denom;
+    let t = cross(seg.a - ray.origin, seg.edge()) / -denom;
+    Some(Hit { t, u })
+}
+
+/// The crossing of `ray` with `seg` at `t > 0`, if any.
+#[inline]
+pub fn intersect(ray: &Ray, seg: &Segment) -> Option<Hit> {
+    line_crossing(ray, seg).filter(|h| h.t > 0.0)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,44 @@
+//! The errors of `flatray-io`: each names the file, and for scene errors
+//! the line and column, and says what was expected.
+
+use std::path::PathBuf;
+
+/// Why a scene could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The scene file itself could not be read.
+    #[error("{}: cannot read the scene file: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not a valid scene: syntax, unknown field, wrong type,
+    /// or a value out of range.
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    Invalid {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+}
+
+impl SceneError {
+    /// The (line, column) the error points at, when it points anywhere.
+    pub fn location(&self) -> Option<(usize, usize)> {
+        match self {
+            SceneError::Read { .. } => None,
+            SceneError::Invalid { line, column, .. } => Some((*line, *column)),
+        }
+    }
+}
+
+/// Why an image could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    #[error("{}: unknown output format: expected a name ending in .png or .exr", path.display())]
+    UnknownFormat { path: PathBuf },
+    #[error("{}: cannot write the image: {message}", path.display())]
+    Io { path: PathBuf, message: String },
+}

@@ -1,0 +1,475 @@
+//! The serde types of the RON scene file. They mirror the file's text;
+//! [`crate::load`] turns them into a `flatray_tracer::Scene`.
+//!
+//! Value checks that need no context live in the `TryFrom` conversions of
+//! small newtypes (a finite number, a colour in range, a wall of non-zero
+//! length), so that the RON parser reports them with the line and column
+//! where the value stands.
+
+use serde::Deserialize;
+
+/// Largest canvas side, in pixels.
+pub const MAX_CANVAS_SIDE: u32 = 32_768;
+/// Largest canvas area, in pixels (about 2 GB of f32 RGB at most).
+pub const MAX_CANVAS_PIXELS: u64 = 1 << 27;
+/// Most samples per pixel a scene may ask for.
+pub const MAX_SAMPLES: u32 = 1 << 20;
+/// Most bounces a scene may ask for.
+pub const MAX_BOUNCES: u32 = 1000;
+
+/// A finite number.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Finite(pub f64);
+
+impl TryFrom<f64> for Finite {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Finite, String> {
+        if v.is_finite() {
+            Ok(Finite(v))
+        } else {
+            Err(format!("expected a finite number, found {v}"))
+        }
+    }
+}
+
+/// A finite number `>= 0`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct NonNegative(pub f64);
+
+impl TryFrom<f64> for NonNegative {
+    type Error = String;
+    fn try_from(v: f64) -> Result<NonNegative, String> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(NonNegative(v))
+        } else {
+            Err(format!("expected a finite number >= 0, found {v}"))
+        }
+    }
+}
+
+/// A finite number `> 0`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Positive(pub f64);
+
+impl TryFrom<f64> for Positive {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Positive, String> {
+        if v.is_finite() && v > 0.0 {
+            Ok(Positive(v))
+        } else {
+            Err(format!("expected a finite number > 0, found {v}"))
+        }
+    }
+}
+
+/// A point or vector `(x, y)` of finite numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(from = "(Finite, Finite)")]
+pub struct Point(pub f64, pub f64);
+
+impl From<(Finite, Finite)> for Point {
+    fn from((x, y): (Finite, Finite)) -> Point {
+        Point(x.0, y.0)
+    }
+}
+
+/// A non-zero direction `(x, y)`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "(Finite, Finite)")]
+pub struct Direction(pub f64, pub f64);
+
+impl TryFrom<(Finite, Finite)> for Direction {
+    type Error = String;
+    fn try_from((x, y): (Finite, Finite)) -> Result<Direction, String> {
+        let len = x.0.hypot(y.0);
+        if len > 0.0 && len.is_finite() {
+            Ok(Direction(x.0 / len, y.0 / len))
+        } else {
+            Err("expected a non-zero direction (x, y)".to_string())
+        }
+    }
+}
+
+/// An RGB colour, each component in `[0, 1]`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "(f64, f64, f64)")]
+pub struct Color(pub f64, pub f64, pub f64);
+
+impl Color {
+    pub const WHITE: Color = Color(1.0, 1.0, 1.0);
+}
+
+impl TryFrom<(f64, f64, f64)> for Color {
+    type Error = String;
+    fn try_from((r, g, b): (f64, f64, f64)) -> Result<Color, String> {
+        for v in [r, g, b] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(format!(
+                    "expected a colour (r, g, b) with each component in [0, 1], found {v}"
+                ));
+            }
+        }
+        Ok(Color(r, g, b))
+    }
+}
+
+fn white() -> Color {
+    Color::WHITE
+}
+fn one() -> NonNegative {
+    NonNegative(1.0)
+}
+
+/// The canvas size in pixels, bounded so that a typo cannot allocate
+/// gigabytes.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "(u32, u32)")]
+pub struct CanvasSize(pub u32, pub u32);
+
+impl TryFrom<(u32, u32)> for CanvasSize {
+    type Error = String;
+    fn try_from((w, h): (u32, u32)) -> Result<CanvasSize, String> {
+        if w == 0 || h == 0 || w > MAX_CANVAS_SIDE || h > MAX_CANVAS_SIDE {
+            return Err(format!(
+                "expected a canvas of 1 to {MAX_CANVAS_SIDE} pixels each way, found {w} x {h}"
+            ));
+        }
+        if w as u64 * h as u64 > MAX_CANVAS_PIXELS {
+            return Err(format!(
+                "expected a canvas of at most {MAX_CANVAS_PIXELS} pixels, found {w} x {h}"
+            ));
+        }
+        Ok(CanvasSize(w, h))
+    }
+}
+
+/// The whole scene file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Scene")]
+pub struct SceneFile {
+    /// Canvas size in pixels; taken from the floor image when omitted.
+    #[serde(default)]
+    pub canvas: Option<CanvasSize>,
+    /// World position of the canvas's top-left corner.
+    #[serde(default)]
+    pub origin: Option<Point>,
+    pub floor: FloorSpec,
+    #[serde(default)]
+    pub falloff: FalloffSpec,
+    /// Every kernel clamps the distance below at this radius.
+    #[serde(default = "half")]
+    pub small_radius: Positive,
+    #[serde(default)]
+    pub walls: Vec<WallSpec>,
+    #[serde(default)]
+    pub lights: Vec<LightSpec>,
+    #[serde(default)]
+    pub render: RenderSpec,
+}
+
+fn half() -> Positive {
+    Positive(0.5)
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum FloorSpec {
+    /// An image file, relative to the scene file's folder.
+    Image(String),
+    /// One albedo everywhere.
+    Color(Color),
+    /// A procedural tile pattern.
+    Tiles {
+        #[serde(default = "tile_size")]
+        size: Positive,
+        #[serde(default = "grout_width")]
+        grout_width: NonNegative,
+        #[serde(default = "tile_color")]
+        tile: Color,
+        #[serde(default = "grout_color")]
+        grout: Color,
+        #[serde(default = "tile_variation")]
+        variation: Fraction,
+    },
+}
+
+fn tile_size() -> Positive {
+    Positive(25.0)
+}
+fn grout_width() -> NonNegative {
+    NonNegative(2.0)
+}
+fn tile_color() -> Color {
+    Color(0.75, 0.75, 0.72)
+}
+fn grout_color() -> Color {
+    Color(0.35, 0.35, 0.35)
+}
+fn tile_variation() -> Fraction {
+    Fraction(0.08)
+}
+
+/// A number in `[0, 1]`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Fraction(pub f64);
+
+impl TryFrom<f64> for Fraction {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Fraction, String> {
+        if (0.0..=1.0).contains(&v) {
+            Ok(Fraction(v))
+        } else {
+            Err(format!("expected a number in [0, 1], found {v}"))
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum FalloffSpec {
+    #[default]
+    Flatland,
+    InverseSquare,
+    Window {
+        range: Positive,
+    },
+    Constant,
+}
+
+/// A wall: a segment of non-zero length with a material, optionally
+/// emitting light itself.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Wall", try_from = "RawWall")]
+pub struct WallSpec {
+    pub a: Point,
+    pub b: Point,
+    pub material: MaterialSpec,
+    pub emit: Option<EmitSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Wall")]
+pub struct RawWall {
+    a: Point,
+    b: Point,
+    #[serde(default)]
+    material: MaterialSpec,
+    #[serde(default)]
+    emit: Option<EmitSpec>,
+}
+
+impl TryFrom<RawWall> for WallSpec {
+    type Error = String;
+    fn try_from(w: RawWall) -> Result<WallSpec, String> {
+        if w.a == w.b {
+            return Err(format!(
+                "a wall needs two different endpoints, found ({}, {}) twice",
+                w.a.0, w.a.1
+            ));
+        }
+        Ok(WallSpec {
+            a: w.a,
+            b: w.b,
+            material: w.material,
+            emit: w.emit,
+        })
+    }
+}
+
+/// Light that a wall emits: it is then also a solid line light.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmitSpec {
+    #[serde(default = "white")]
+    pub color: Color,
+    /// Per unit length.
+    #[serde(default = "one")]
+    pub intensity: NonNegative,
+    #[serde(default)]
+    pub one_sided: bool,
+    #[serde(default)]
+    pub falloff: Option<FalloffSpec>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum MaterialSpec {
+    Diffuse {
+        #[serde(default)]
+        albedo: Option<Color>,
+    },
+    Mirror {
+        #[serde(default = "white")]
+        tint: Color,
+    },
+    Transparent {
+        #[serde(default = "white")]
+        tint: Color,
+    },
+    /// Diffuse with the floor's albedo: what `material` means when omitted.
+    #[default]
+    #[serde(skip)]
+    FloorDiffuse,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum LightSpec {
+    Point {
+        at: Point,
+        #[serde(default = "white")]
+        color: Color,
+        #[serde(default = "one")]
+        intensity: NonNegative,
+        #[serde(default)]
+        falloff: Option<FalloffSpec>,
+    },
+    Spot {
+        at: Point,
+        direction: Direction,
+        /// Half-angle of the cone, in degrees, where the light ends.
+        cone: Positive,
+        /// Width of the soft edge inside the cone, in degrees.
+        #[serde(default)]
+        softness: NonNegative,
+        #[serde(default = "white")]
+        color: Color,
+        #[serde(default = "one")]
+        intensity: NonNegative,
+        #[serde(default)]
+        falloff: Option<FalloffSpec>,
+    },
+    Line {
+        a: Point,
+        b: Point,
+        #[serde(default = "white")]
+        color: Color,
+        /// Per unit length.
+        #[serde(default = "one")]
+        intensity: NonNegative,
+        #[serde(default)]
+        one_sided: bool,
+        /// A solid line light also blocks light, as a black wall.
+        #[serde(default)]
+        solid: bool,
+        #[serde(default)]
+        falloff: Option<FalloffSpec>,
+    },
+    Directional {
+        direction: Direction,
+        #[serde(default = "white")]
+        color: Color,
+        /// Irradiance across the beam.
+        #[serde(default = "one")]
+        intensity: NonNegative,
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderSpec {
+    #[serde(default = "default_samples")]
+    pub samples: Samples,
+    #[serde(default = "default_bounces")]
+    pub bounces: Bounces,
+    #[serde(default)]
+    pub seed: u64,
+    #[serde(default = "one_positive")]
+    pub exposure: Positive,
+    #[serde(default)]
+    pub integrator: IntegratorSpec,
+    #[serde(default)]
+    pub tonemap: ToneMap,
+}
+
+impl Default for RenderSpec {
+    fn default() -> RenderSpec {
+        RenderSpec {
+            samples: default_samples(),
+            bounces: default_bounces(),
+            seed: 0,
+            exposure: one_positive(),
+            integrator: IntegratorSpec::default(),
+            tonemap: ToneMap::default(),
+        }
+    }
+}
+
+fn default_samples() -> Samples {
+    Samples(16)
+}
+fn default_bounces() -> Bounces {
+    Bounces(1)
+}
+
+/// Samples per pixel, 1 to [`MAX_SAMPLES`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(try_from = "u32")]
+pub struct Samples(pub u32);
+
+impl TryFrom<u32> for Samples {
+    type Error = String;
+    fn try_from(v: u32) -> Result<Samples, String> {
+        if (1..=MAX_SAMPLES).contains(&v) {
+            Ok(Samples(v))
+        } else {
+            Err(format!("expected 1 to {MAX_SAMPLES} samples, found {v}"))
+        }
+    }
+}
+
+/// Bounces, 0 to [`MAX_BOUNCES`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(try_from = "u32")]
+pub struct Bounces(pub u32);
+
+impl TryFrom<u32> for Bounces {
+    type Error = String;
+    fn try_from(v: u32) -> Result<Bounces, String> {
+        if v <= MAX_BOUNCES {
+            Ok(Bounces(v))
+        } else {
+            Err(format!("expected 0 to {MAX_BOUNCES} bounces, found {v}"))
+        }
+    }
+}
+fn one_positive() -> Positive {
+    Positive(1.0)
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum IntegratorSpec {
+    #[default]
+    Path,
+    Original,
+}
+
+/// How PNG output maps linear values to `[0, 1]` before sRGB encoding.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ToneMap {
+    /// Values above 1 clip to white.
+    Clamp,
+    /// `x (1 + x / w^2) / (1 + x)`: highlights roll off and reach white at
+    /// `white`.
+    Reinhard {
+        #[serde(default = "default_white")]
+        white: Positive,
+    },
+}
+
+impl Default for ToneMap {
+    fn default() -> ToneMap {
+        ToneMap::Reinhard {
+            white: default_white(),
+        }
+    }
+}
+
+fn default_white() -> Positive {
+    Positive(4.0)
+}

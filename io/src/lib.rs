@@ -1,0 +1,23 @@
+//! flatray's files: the RON scene format, its validation with located
+//! messages, floor images, and PNG/EXR output.
+//!
+//! What it is for: turning a scene file into the plain in-memory
+//! `flatray_tracer::Scene` (with the render settings the file asks for),
+//! and a rendered `flatray_tracer::Image` into a file, atomically.
+//!
+//! What it never does: render, sample, or decide physics. Every error it
+//! returns names the file, and for scene text the line and column, and
+//! says what was expected; no input makes it panic.
+
+mod error;
+pub mod format;
+mod load;
+mod output;
+
+pub use error::{SceneError, WriteError};
+pub use format::ToneMap;
+pub use load::{Loaded, load, parse};
+pub use output::{
+    Format, linear_to_srgb, png_bytes, read_exr, srgb_to_linear, to_srgb8, tone_map, write_exr,
+    write_image, write_png,
+};

@@ -1,0 +1,326 @@
+//! From scene text to a `flatray_tracer::Scene` and its render settings.
+
+use std::path::{Path, PathBuf};
+
+use flatray_geometry::{DVec2, Segment};
+use flatray_tracer::scene::{Canvas, Falloff, Floor, Light, LightShape, Material, Scene, Wall};
+use flatray_tracer::{Integrator, RenderOptions, Rgb};
+use ron::extensions::Extensions;
+
+use crate::error::SceneError;
+use crate::format::{
+    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LightSpec, MAX_CANVAS_PIXELS,
+    MAX_CANVAS_SIDE, MaterialSpec, SceneFile, ToneMap,
+};
+
+/// A loaded scene with the render settings its file asks for.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    pub scene: Scene,
+    pub options: RenderOptions,
+    pub tonemap: ToneMap,
+}
+
+/// Reads and validates the scene file at `path`. Relative paths inside it
+/// resolve against its folder.
+pub fn load(path: &Path) -> Result<Loaded, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    parse(&text, path, &base)
+}
+
+/// Parses and validates scene `text`; `path` names it in messages and
+/// `base` is the folder that relative paths resolve against.
+pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError> {
+    let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
+    let file: SceneFile = options.from_str(text).map_err(|e| SceneError::Invalid {
+        path: path.to_path_buf(),
+        line: e.span.start.line,
+        column: e.span.start.col,
+        message: e.code.to_string(),
+    })?;
+    let at = |needle: &str, message: String| {
+        let (line, column) = locate(text, needle);
+        SceneError::Invalid {
+            path: path.to_path_buf(),
+            line,
+            column,
+            message,
+        }
+    };
+
+    let floor = match &file.floor {
+        FloorSpec::Color(c) => Floor::Color(rgb(*c)),
+        FloorSpec::Tiles {
+            size,
+            grout_width,
+            tile,
+            grout,
+            variation,
+        } => Floor::Tiles {
+            size: size.0,
+            grout_width: grout_width.0,
+            tile: rgb(*tile),
+            grout: rgb(*grout),
+            variation: variation.0,
+        },
+        FloorSpec::Image(relative) => {
+            let image_path = base.join(relative);
+            load_floor_image(&image_path).map_err(|reason| at(&format!("{relative:?}"), reason))?
+        }
+    };
+
+    let (width, height) = match (file.canvas, &floor) {
+        (Some(c), _) => (c.0, c.1),
+        (None, Floor::Image { width, height, .. }) => {
+            if *width > MAX_CANVAS_SIDE
+                || *height > MAX_CANVAS_SIDE
+                || *width as u64 * *height as u64 > MAX_CANVAS_PIXELS
+            {
+                return Err(at(
+                    "floor",
+                    format!("the floor image is {width} x {height}, too large for a canvas"),
+                ));
+            }
+            (*width, *height)
+        }
+        (None, _) => {
+            return Err(at(
+                "floor",
+                "expected a `canvas: (width, height)`: only an image floor gives its own size"
+                    .to_string(),
+            ));
+        }
+    };
+    let origin = file.origin.map_or(DVec2::ZERO, |p| DVec2::new(p.0, p.1));
+    let canvas = Canvas {
+        width,
+        height,
+        origin,
+    };
+
+    let default_falloff = falloff(file.falloff);
+    let mut walls = Vec::with_capacity(file.walls.len());
+    let mut lights = Vec::with_capacity(file.lights.len());
+    for wall in &file.walls {
+        let segment = Segment::new(
+            DVec2::new(wall.a.0, wall.a.1),
+            DVec2::new(wall.b.0, wall.b.1),
+        );
+        let material = match wall.material {
+            MaterialSpec::FloorDiffuse => Material::Diffuse { albedo: None },
+            MaterialSpec::Diffuse { albedo } => Material::Diffuse {
+                albedo: albedo.map(rgb),
+            },
+            MaterialSpec::Mirror { tint } => Material::Mirror { tint: rgb(tint) },
+            MaterialSpec::Transparent { tint } => Material::Transparent { tint: rgb(tint) },
+        };
+        if let Some(EmitSpec {
+            color,
+            intensity,
+            one_sided,
+            falloff: light_falloff,
+        }) = wall.emit
+        {
+            lights.push(Light {
+                shape: LightShape::Line {
+                    segment,
+                    one_sided,
+                    wall: Some(walls.len() as u32),
+                },
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: light_falloff.map_or(default_falloff, falloff),
+            });
+        }
+        walls.push(Wall { segment, material });
+    }
+    for light in &file.lights {
+        lights.push(match *light {
+            LightSpec::Point {
+                at,
+                color,
+                intensity,
+                falloff: f,
+            } => Light {
+                shape: LightShape::Point {
+                    at: DVec2::new(at.0, at.1),
+                },
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: f.map_or(default_falloff, falloff),
+            },
+            LightSpec::Spot {
+                at,
+                direction,
+                cone,
+                softness,
+                color,
+                intensity,
+                falloff: f,
+            } => {
+                if cone.0 > 180.0 || softness.0 > cone.0 {
+                    return Err(at_light(
+                        text,
+                        path,
+                        "Spot",
+                        format!(
+                            "expected 0 < cone <= 180 and softness <= cone (degrees), found cone {} and softness {}",
+                            cone.0, softness.0
+                        ),
+                    ));
+                }
+                Light {
+                    shape: LightShape::Spot {
+                        at: DVec2::new(at.0, at.1),
+                        direction: DVec2::new(direction.0, direction.1),
+                        cone: cone.0.to_radians(),
+                        softness: softness.0.to_radians(),
+                    },
+                    color: rgb(color),
+                    intensity: intensity.0,
+                    falloff: f.map_or(default_falloff, falloff),
+                }
+            }
+            LightSpec::Line {
+                a,
+                b,
+                color,
+                intensity,
+                one_sided,
+                solid,
+                falloff: f,
+            } => {
+                if a == b {
+                    return Err(at_light(
+                        text,
+                        path,
+                        "Line",
+                        format!(
+                            "a line light needs two different endpoints, found ({}, {}) twice; use a Point light",
+                            a.0, a.1
+                        ),
+                    ));
+                }
+                let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
+                let wall = if solid {
+                    walls.push(Wall {
+                        segment,
+                        material: Material::Diffuse {
+                            albedo: Some(Rgb::ZERO),
+                        },
+                    });
+                    Some(walls.len() as u32 - 1)
+                } else {
+                    None
+                };
+                Light {
+                    shape: LightShape::Line {
+                        segment,
+                        one_sided,
+                        wall,
+                    },
+                    color: rgb(color),
+                    intensity: intensity.0,
+                    falloff: f.map_or(default_falloff, falloff),
+                }
+            }
+            LightSpec::Directional {
+                direction,
+                color,
+                intensity,
+            } => Light {
+                shape: LightShape::Directional {
+                    direction: DVec2::new(direction.0, direction.1),
+                },
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: Falloff::Constant,
+            },
+        });
+    }
+
+    let scene = Scene::new(canvas, floor, file.small_radius.0, walls, lights);
+    let options = RenderOptions {
+        samples: file.render.samples.0,
+        bounces: file.render.bounces.0,
+        seed: file.render.seed,
+        exposure: file.render.exposure.0,
+        scale: 1.0,
+        integrator: match file.render.integrator {
+            IntegratorSpec::Path => Integrator::Path,
+            IntegratorSpec::Original => Integrator::Original,
+        },
+    };
+    Ok(Loaded {
+        scene,
+        options,
+        tonemap: file.render.tonemap,
+    })
+}
+
+/// The error for a light of kind `kind` (its first occurrence in the text).
+fn at_light(text: &str, path: &Path, kind: &str, message: String) -> SceneError {
+    let (line, column) = locate(text, &format!("{kind}("));
+    SceneError::Invalid {
+        path: path.to_path_buf(),
+        line,
+        column,
+        message,
+    }
+}
+
+/// The 1-based line and column of the first `needle` in `text`, or (1, 1).
+fn locate(text: &str, needle: &str) -> (usize, usize) {
+    match text.find(needle) {
+        None => (1, 1),
+        Some(offset) => {
+            let before = &text[..offset];
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            (line, column)
+        }
+    }
+}
+
+fn rgb(c: Color) -> Rgb {
+    Rgb::new(c.0, c.1, c.2)
+}
+
+fn falloff(f: FalloffSpec) -> Falloff {
+    match f {
+        FalloffSpec::Flatland => Falloff::Flatland,
+        FalloffSpec::InverseSquare => Falloff::InverseSquare,
+        FalloffSpec::Window { range } => Falloff::Window { range: range.0 },
+        FalloffSpec::Constant => Falloff::Constant,
+    }
+}
+
+/// Loads an image as linear albedo (its 8-bit values decoded from sRGB).
+fn load_floor_image(path: &PathBuf) -> Result<Floor, String> {
+    let decoded = image::open(path)
+        .map_err(|e| format!("cannot load the floor image {}: {e}", path.display()))?;
+    let rgb8 = decoded.to_rgb8();
+    let (width, height) = rgb8.dimensions();
+    if width == 0 || height == 0 {
+        return Err(format!("the floor image {} is empty", path.display()));
+    }
+    let texels = rgb8
+        .pixels()
+        .map(|p| {
+            Rgb::new(
+                crate::output::srgb_to_linear(p.0[0]),
+                crate::output::srgb_to_linear(p.0[1]),
+                crate::output::srgb_to_linear(p.0[2]),
+            )
+        })
+        .collect();
+    Ok(Floor::Image {
+        width,
+        height,
+        texels,
+    })
+}

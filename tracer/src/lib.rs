@@ -1,0 +1,28 @@
+//! flatray's renderer: the in-memory scene, the integrators, the samplers
+//! and random streams, and the parallel render loop with its statistics.
+//!
+//! What it is for: estimating, for every floor pixel, the quantity that
+//! `shared/spec/model.md` defines (exposure times floor albedo times the
+//! pixel's mean fluence), reproducibly: every sample draws from a stream
+//! keyed by (seed, pixel, sample), so an image is bit-identical for any
+//! number of threads.
+//!
+//! What it never does: read or write files, parse text, or print. Scenes
+//! come in as plain data ([`Scene`]); images go out as linear floats
+//! ([`Image`]); progress goes out through a callback.
+
+mod light;
+mod path;
+mod render;
+pub mod sampling;
+pub mod scene;
+mod stats;
+
+/// A linear RGB triple: a colour, an albedo, or a light quantity.
+pub type Rgb = glam::DVec3;
+
+pub use render::{
+    Image, Integrator, RenderOptions, Rendered, TILE, image_size, pixel_sample, render,
+};
+pub use scene::{Canvas, Falloff, Floor, Light, LightShape, Material, Scene, Wall};
+pub use stats::Stats;

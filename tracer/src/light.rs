@@ -1,0 +1,154 @@
+//! Direct light: shadow rays from a receiver point to every light.
+
+use flatray_geometry::{DVec2, Ray, Skip};
+
+use crate::sampling::{Stream, sample_subtended_angle};
+use crate::scene::{EMITTING_SIDE, LightShape, Material, Scene};
+use crate::{Rgb, Stats};
+
+/// Who receives the light: the floor (no cosine, every direction) or one
+/// side of a wall (cosine to its normal, only that side).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Receiver {
+    /// The unit normal of the receiving side; `None` for the floor.
+    pub normal: Option<DVec2>,
+    /// The wall the receiver lies on, skipped by its shadow rays.
+    pub wall: Option<u32>,
+}
+
+impl Receiver {
+    pub const FLOOR: Receiver = Receiver {
+        normal: None,
+        wall: None,
+    };
+
+    #[inline]
+    fn cosine(&self, to_light: DVec2) -> f64 {
+        match self.normal {
+            None => 1.0,
+            Some(n) => n.dot(to_light).max(0.0),
+        }
+    }
+
+    #[inline]
+    fn skip(&self, light_wall: Option<u32>) -> Skip {
+        Skip(
+            self.wall.unwrap_or(u32::MAX),
+            light_wall.unwrap_or(u32::MAX),
+        )
+    }
+}
+
+/// The light that reaches `x` directly from every light: fluence for the
+/// floor, irradiance for a wall side. One shadow ray per light.
+pub(crate) fn direct_light(
+    scene: &Scene,
+    x: DVec2,
+    receiver: Receiver,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    let r0 = scene.small_radius;
+    for light in &scene.lights {
+        let contribution = match light.shape {
+            LightShape::Point { at } | LightShape::Spot { at, .. } => {
+                let to = at - x;
+                let r = to.length();
+                if r == 0.0 {
+                    // The receiver sits on the light: no direction to test,
+                    // nothing in between. A wall gets no cosine from it.
+                    if receiver.normal.is_some() {
+                        continue;
+                    }
+                    Rgb::splat(light.intensity * light.falloff.g(0.0, r0))
+                } else {
+                    let dir = to / r;
+                    let weight = receiver.cosine(dir) * light.spot_window(-dir);
+                    if weight == 0.0 {
+                        continue;
+                    }
+                    let vis =
+                        transmittance(scene, &Ray::new(x, to), 1.0, receiver.skip(None), stats);
+                    Rgb::splat(light.intensity * light.falloff.g(r, r0) * weight) * vis
+                }
+            }
+            LightShape::Line {
+                segment,
+                one_sided,
+                wall,
+            } => {
+                if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
+                    continue;
+                }
+                let Some(s) = sample_subtended_angle(x, &segment, stream.next()) else {
+                    continue;
+                };
+                let weight = receiver.cosine(s.dir);
+                if weight == 0.0 {
+                    continue;
+                }
+                let vis = transmittance(
+                    scene,
+                    &Ray::new(x, s.point - x),
+                    1.0,
+                    receiver.skip(wall),
+                    stats,
+                );
+                if vis == Rgb::ZERO {
+                    continue;
+                }
+                // Per radian, a length element contributes I G(r) r: the
+                // cosine at the light cancels against the Jacobian.
+                let per_angle = light.intensity * light.falloff.g(s.distance, r0) * s.distance;
+                Rgb::splat(per_angle * s.subtended * weight) * vis
+            }
+            LightShape::Directional { direction } => {
+                let to_light = -direction;
+                let weight = receiver.cosine(to_light);
+                if weight == 0.0 {
+                    continue;
+                }
+                let vis = transmittance(
+                    scene,
+                    &Ray::new(x, to_light),
+                    f64::INFINITY,
+                    receiver.skip(None),
+                    stats,
+                );
+                Rgb::splat(light.intensity * weight) * vis
+            }
+        };
+        sum += contribution * light.color;
+    }
+    sum
+}
+
+/// What fraction of light gets along `ray` for `0 < t < t_max`: zero when
+/// an opaque wall is in the way, else the product of the transparent
+/// walls' tints. Counts one shadow ray.
+pub(crate) fn transmittance(
+    scene: &Scene,
+    ray: &Ray,
+    t_max: f64,
+    skip: Skip,
+    stats: &mut Stats,
+) -> Rgb {
+    stats.shadow_rays += 1;
+    let mut through = Rgb::ONE;
+    scene
+        .segments
+        .for_each_crossing(ray, t_max, skip, |index, _| {
+            match scene.walls[index as usize].material {
+                Material::Transparent { tint } => {
+                    through *= tint;
+                    through != Rgb::ZERO
+                }
+                Material::Diffuse { .. } | Material::Mirror { .. } => {
+                    through = Rgb::ZERO;
+                    false
+                }
+            }
+        });
+    through
+}

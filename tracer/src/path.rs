@@ -1,0 +1,167 @@
+//! Path tracing from the pixel: the estimator of `model.md`, written as an
+//! iterative loop so that no scene can grow the stack.
+
+use std::f64::consts::{PI, TAU};
+
+use flatray_geometry::{DVec2, Ray, Skip, intersect, reflect};
+
+use crate::light::{Receiver, direct_light};
+use crate::sampling::{Stream, cosine_half_circle, uniform_circle, uniform_half_circle};
+use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
+use crate::{Integrator, Rgb, Stats};
+
+/// One sample of the fluence at floor point `p`, with at most `bounces`
+/// wall reflections between a light and the floor.
+pub(crate) fn path_sample(
+    scene: &Scene,
+    p: DVec2,
+    bounces: u32,
+    integrator: Integrator,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    let mut fluence = direct_light(scene, p, Receiver::FLOOR, stream, stats);
+    if bounces == 0 {
+        return fluence;
+    }
+
+    // The floor sees the whole circle: a uniform direction, weight 2pi.
+    let mut throughput = Rgb::splat(TAU);
+    let mut ray = Ray::new(p, uniform_circle(stream.next()));
+    let mut skip = Skip::NONE;
+    let mut bounce = 0;
+    // After a mirror the path can carry light from a line light that no
+    // shadow ray found, so emission met by the ray then counts.
+    let mut after_mirror = false;
+    // Distance travelled since the receiver or the last diffuse vertex:
+    // a light seen through mirrors is that far away.
+    let mut unfolded = 0.0;
+
+    loop {
+        stats.bounce_rays += 1;
+        let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
+        let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
+        if after_mirror {
+            fluence += throughput * emission_crossed(scene, &ray, hit_t, unfolded);
+        }
+        let Some((index, h)) = hit else {
+            stats.paths_escaped += 1;
+            break;
+        };
+        let wall = &scene.walls[index as usize];
+        let Some(side) = wall.segment.arrival_side(ray.dir) else {
+            // A crossing implies the ray is not parallel to the wall.
+            stats.paths_escaped += 1;
+            break;
+        };
+        let x = wall.segment.point_at(h.u);
+        unfolded += h.t;
+        if after_mirror && let Some(light) = scene.light_of_wall(index) {
+            let light = &scene.lights[light as usize];
+            fluence += throughput * line_emission(light, side, unfolded, scene.small_radius);
+        }
+
+        let normal = wall.segment.normal_on(side);
+        match wall.material {
+            Material::Transparent { tint } => {
+                throughput *= tint;
+                if throughput == Rgb::ZERO {
+                    stats.paths_absorbed += 1;
+                    break;
+                }
+                ray = Ray::new(x, ray.dir);
+                skip = Skip::one(index);
+                continue;
+            }
+            Material::Mirror { tint } => {
+                bounce += 1;
+                if bounce > bounces {
+                    stats.paths_bounce_limit += 1;
+                    break;
+                }
+                throughput *= tint;
+                if throughput == Rgb::ZERO {
+                    stats.paths_absorbed += 1;
+                    break;
+                }
+                ray = Ray::new(x, reflect(ray.dir, normal));
+                skip = Skip::one(index);
+                after_mirror = true;
+            }
+            Material::Diffuse { albedo } => {
+                bounce += 1;
+                if bounce > bounces {
+                    stats.paths_bounce_limit += 1;
+                    break;
+                }
+                let rho = scene.wall_albedo(albedo, x);
+                let receiver = Receiver {
+                    normal: Some(normal),
+                    wall: Some(index),
+                };
+                // 2pi L_o = 2pi (rho / 2) E, with 2pi already in throughput.
+                let irradiance = direct_light(scene, x, receiver, stream, stats);
+                fluence += throughput * rho * 0.5 * irradiance;
+                if bounce == bounces {
+                    stats.paths_bounce_limit += 1;
+                    break;
+                }
+                if rho == Rgb::ZERO {
+                    stats.paths_absorbed += 1;
+                    break;
+                }
+                let dir = match integrator {
+                    Integrator::Path => {
+                        // BRDF rho/2 times cos over pdf cos/2: exactly rho.
+                        throughput *= rho;
+                        cosine_half_circle(normal, stream.next())
+                    }
+                    Integrator::Original => {
+                        // BRDF rho/2 times cos over pdf 1/pi.
+                        let (dir, cos) = uniform_half_circle(normal, stream.next());
+                        throughput *= rho * (0.5 * PI * cos);
+                        dir
+                    }
+                };
+                ray = Ray::new(x, dir);
+                skip = Skip::one(index);
+                after_mirror = false;
+                unfolded = 0.0;
+            }
+        }
+    }
+    fluence
+}
+
+/// Radiance-like emission of non-solid line lights that `ray` crosses
+/// before `t_max`, seen from `unfolded` further back.
+fn emission_crossed(scene: &Scene, ray: &Ray, t_max: f64, unfolded: f64) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    for light in &scene.lights {
+        if let LightShape::Line {
+            segment,
+            wall: None,
+            ..
+        } = light.shape
+            && let Some(h) = intersect(ray, &segment)
+            && h.t < t_max
+            && let Some(side) = segment.arrival_side(ray.dir)
+        {
+            sum += line_emission(light, side, unfolded + h.t, scene.small_radius);
+        }
+    }
+    sum
+}
+
+/// What a path ray meeting line light `light` from `side` at total distance
+/// `r` carries back: `I G(r) r` per radian (the radiance `I` for
+/// `Flatland`), zero on the dark side of a one-sided light.
+fn line_emission(light: &Light, side: flatray_geometry::Side, r: f64, r0: f64) -> Rgb {
+    let LightShape::Line { one_sided, .. } = light.shape else {
+        return Rgb::ZERO;
+    };
+    if one_sided && side != EMITTING_SIDE {
+        return Rgb::ZERO;
+    }
+    light.color * (light.intensity * light.falloff.g(r, r0) * r)
+}

@@ -1,0 +1,207 @@
+//! The render loop, written once: tiles in parallel, then pixels, then
+//! samples. Integrators only say how one sample is estimated.
+
+use flatray_geometry::DVec2;
+use rayon::prelude::*;
+
+use crate::path::path_sample;
+use crate::sampling::Stream;
+use crate::scene::Scene;
+use crate::{Rgb, Stats};
+
+/// Which estimator a render uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Integrator {
+    /// Path tracing with next-event estimation at every diffuse vertex and
+    /// cosine-weighted bounces: the sound default.
+    #[default]
+    Path,
+    /// The original project's estimator, kept as a baseline: uniform
+    /// random bounce directions, each diffuse vertex aimed at the lights
+    /// (for one bounce, exactly its light-directed last bounce).
+    Original,
+}
+
+/// Everything about a render that is not the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Samples per pixel.
+    pub samples: u32,
+    /// Most wall reflections between a light and the floor.
+    pub bounces: u32,
+    pub seed: u64,
+    /// Multiplies every pixel value.
+    pub exposure: f64,
+    /// Pixels per world unit.
+    pub scale: f64,
+    pub integrator: Integrator,
+}
+
+impl Default for RenderOptions {
+    fn default() -> RenderOptions {
+        RenderOptions {
+            samples: 16,
+            bounces: 1,
+            seed: 0,
+            exposure: 1.0,
+            scale: 1.0,
+            integrator: Integrator::Path,
+        }
+    }
+}
+
+/// A linear RGB image, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Image {
+        Image {
+            width,
+            height,
+            pixels: vec![[0.0; 3]; width as usize * height as usize],
+        }
+    }
+
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+}
+
+/// The result of a render.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    pub image: Image,
+    pub stats: Stats,
+}
+
+/// The side of a square tile in pixels.
+pub const TILE: u32 = 16;
+
+/// The image size for `scene` at `scale`: at least one pixel each way.
+pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
+    let w = (scene.canvas.width as f64 * scale).round().max(1.0) as u32;
+    let h = (scene.canvas.height as f64 * scale).round().max(1.0) as u32;
+    (w, h)
+}
+
+/// Renders `scene`. `progress` is called from worker threads with the
+/// number of pixel samples each finished tile took; the image does not
+/// depend on the number of threads or on their scheduling.
+pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + Sync)) -> Rendered {
+    let (width, height) = image_size(scene, options.scale);
+    let tiles_x = width.div_ceil(TILE);
+    let tiles_y = height.div_ceil(TILE);
+    let tiles: Vec<(u32, u32)> = (0..tiles_y)
+        .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
+        .collect();
+    let results: Vec<(Vec<[f32; 3]>, Stats)> = tiles
+        .par_iter()
+        .map(|&(tx, ty)| {
+            let x0 = tx * TILE;
+            let y0 = ty * TILE;
+            let x1 = (x0 + TILE).min(width);
+            let y1 = (y0 + TILE).min(height);
+            let mut stats = Stats::default();
+            let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    pixels.push(render_pixel(
+                        scene,
+                        options,
+                        (width, height),
+                        x,
+                        y,
+                        &mut stats,
+                    ));
+                }
+            }
+            progress(pixels.len() as u64 * options.samples as u64);
+            (pixels, stats)
+        })
+        .collect();
+
+    let mut image = Image::new(width, height);
+    let mut stats = Stats::default();
+    for (&(tx, ty), (pixels, tile_stats)) in tiles.iter().zip(&results) {
+        stats.merge(tile_stats);
+        let x0 = tx * TILE;
+        let y0 = ty * TILE;
+        let tile_width = (x0 + TILE).min(width) - x0;
+        for (k, value) in pixels.iter().enumerate() {
+            let x = x0 + k as u32 % tile_width;
+            let y = y0 + k as u32 / tile_width;
+            image.pixels[(y * width + x) as usize] = *value;
+        }
+    }
+    Rendered { image, stats }
+}
+
+/// The size of one pixel in world units, in x and y.
+fn pixel_size(scene: &Scene, (width, height): (u32, u32)) -> DVec2 {
+    DVec2::new(
+        scene.canvas.width as f64 / width as f64,
+        scene.canvas.height as f64 / height as f64,
+    )
+}
+
+/// One pixel's value: exposure times floor albedo times the mean fluence
+/// over its samples. A sample whose estimate is not finite is left out and
+/// reported in `stats`.
+fn render_pixel(
+    scene: &Scene,
+    options: &RenderOptions,
+    size: (u32, u32),
+    x: u32,
+    y: u32,
+    stats: &mut Stats,
+) -> [f32; 3] {
+    let step = pixel_size(scene, size);
+    let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
+    let mut sum = Rgb::ZERO;
+    for sample in 0..options.samples {
+        let value = pixel_sample(scene, options, size, x, y, sample, stats);
+        if value.is_finite() {
+            sum += value;
+        } else {
+            stats.record_nonfinite(x, y, sample);
+        }
+    }
+    let mean = sum / options.samples.max(1) as f64;
+    let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
+    let value = mean * albedo * options.exposure;
+    [value.x as f32, value.y as f32, value.z as f32]
+}
+
+/// One sample of the fluence averaged over pixel `(x, y)`: the receiver is
+/// jittered uniformly inside the pixel (the box filter). Deterministic in
+/// `(seed, pixel, sample)`, so it can be re-run alone for debugging.
+pub fn pixel_sample(
+    scene: &Scene,
+    options: &RenderOptions,
+    size: (u32, u32),
+    x: u32,
+    y: u32,
+    sample: u32,
+    stats: &mut Stats,
+) -> Rgb {
+    let step = pixel_size(scene, size);
+    let pixel_index = y as u64 * size.0 as u64 + x as u64;
+    let mut stream = Stream::new(options.seed, pixel_index, sample as u64);
+    let jitter = DVec2::new(stream.next(), stream.next());
+    let p = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + jitter) * step;
+    stats.camera_samples += 1;
+    path_sample(
+        scene,
+        p,
+        options.bounces,
+        options.integrator,
+        &mut stream,
+        stats,
+    )
+}

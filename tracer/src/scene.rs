@@ -1,0 +1,287 @@
+//! The in-memory scene: plain data that the integrators read.
+//!
+//! `flatray-io` builds it from a scene file; tests and benchmarks build it
+//! directly. Every value here is assumed valid (finite, in range): the
+//! loader checks user input, [`Scene::new`] only builds derived tables.
+
+use flatray_geometry::{DVec2, Segment, SegmentSet, Side};
+
+use crate::Rgb;
+
+/// The rectangle of the world that the image covers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Canvas {
+    /// Size in world units (one unit is one pixel at scale 1).
+    pub width: u32,
+    pub height: u32,
+    /// World position of the top-left corner.
+    pub origin: DVec2,
+}
+
+impl Canvas {
+    /// Whether `p` lies in the canvas rectangle `[origin, origin + size)`.
+    pub fn contains(&self, p: DVec2) -> bool {
+        let q = p - self.origin;
+        q.x >= 0.0 && q.y >= 0.0 && q.x < self.width as f64 && q.y < self.height as f64
+    }
+}
+
+/// The floor's albedo, a function of the world point.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Floor {
+    /// One colour everywhere.
+    Color(Rgb),
+    /// Square tiles of side `size` with grout lines of width `grout_width`
+    /// between them, anchored at the canvas origin. A tile's colour is
+    /// `tile`, varied by `variation` (0 to 1) per tile, reproducibly.
+    Tiles {
+        size: f64,
+        grout_width: f64,
+        tile: Rgb,
+        grout: Rgb,
+        variation: f64,
+    },
+    /// A linear-albedo image stretched over the canvas, nearest texel.
+    Image {
+        width: u32,
+        height: u32,
+        texels: Vec<Rgb>,
+    },
+}
+
+impl Floor {
+    /// The albedo at world point `p` of a floor laid over `canvas`.
+    pub fn albedo_at(&self, canvas: &Canvas, p: DVec2) -> Rgb {
+        match self {
+            Floor::Color(c) => *c,
+            Floor::Tiles {
+                size,
+                grout_width,
+                tile,
+                grout,
+                variation,
+            } => {
+                let q = (p - canvas.origin) / *size;
+                let cell = q.floor();
+                let within = (q - cell) * *size;
+                let half = grout_width * 0.5;
+                let in_grout = within.x < half
+                    || within.y < half
+                    || within.x >= size - half
+                    || within.y >= size - half;
+                if in_grout {
+                    *grout
+                } else {
+                    let h = hash2(cell.x as i64, cell.y as i64);
+                    let shade = 1.0 - variation * (h as f64 / u64::MAX as f64);
+                    *tile * shade
+                }
+            }
+            Floor::Image {
+                width,
+                height,
+                texels,
+            } => {
+                let q = p - canvas.origin;
+                let sx = *width as f64 / canvas.width as f64;
+                let sy = *height as f64 / canvas.height as f64;
+                let ix = ((q.x * sx).floor().max(0.0) as usize).min(*width as usize - 1);
+                let iy = ((q.y * sy).floor().max(0.0) as usize).min(*height as usize - 1);
+                texels[iy * *width as usize + ix]
+            }
+        }
+    }
+}
+
+fn hash2(x: i64, y: i64) -> u64 {
+    let mut z = (x as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (y as u64).rotate_left(32);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Distance falloff `G(r)` of a light, with `r` clamped below at the
+/// scene's small radius.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Falloff {
+    /// `1 / r`: the physical law of flatland.
+    Flatland,
+    /// `1 / r^2`: the law the original project describes.
+    InverseSquare,
+    /// `max(0, 1 - r / range)^2`: what the original program computes.
+    Window { range: f64 },
+    /// No falloff.
+    Constant,
+}
+
+impl Falloff {
+    /// `G(max(r, r0))`.
+    #[inline]
+    pub fn g(self, r: f64, r0: f64) -> f64 {
+        let r = r.max(r0);
+        match self {
+            Falloff::Flatland => 1.0 / r,
+            Falloff::InverseSquare => 1.0 / (r * r),
+            Falloff::Window { range } => {
+                let w = (1.0 - r / range).max(0.0);
+                w * w
+            }
+            Falloff::Constant => 1.0,
+        }
+    }
+}
+
+/// How a wall treats light that reaches it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    /// Lambertian reflector; `None` takes the floor's albedo at the hit.
+    Diffuse { albedo: Option<Rgb> },
+    /// Perfect specular reflector.
+    Mirror { tint: Rgb },
+    /// Light passes straight through, multiplied by `tint`.
+    Transparent { tint: Rgb },
+}
+
+/// A two-sided wall.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wall {
+    pub segment: Segment,
+    pub material: Material,
+}
+
+/// The shape of a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightShape {
+    /// An isotropic point.
+    Point { at: DVec2 },
+    /// A point whose intensity is multiplied by a smooth window around
+    /// `direction` (unit): 1 within `cone - softness` radians of it, 0
+    /// beyond `cone`, smoothstep between.
+    Spot {
+        at: DVec2,
+        direction: DVec2,
+        cone: f64,
+        softness: f64,
+    },
+    /// A segment emitting from both sides, or from its `Positive` side only
+    /// when `one_sided`. `wall` is the index of the wall it also is, when
+    /// the light is solid.
+    Line {
+        segment: Segment,
+        one_sided: bool,
+        wall: Option<u32>,
+    },
+    /// Parallel rays travelling in `direction` (unit) from outside the
+    /// scene; `intensity` is the irradiance across the beam.
+    Directional { direction: DVec2 },
+}
+
+/// A light: its shape, colour, intensity and falloff.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub shape: LightShape,
+    pub color: Rgb,
+    pub intensity: f64,
+    pub falloff: Falloff,
+}
+
+impl Light {
+    /// The spot window at a unit direction `to_receiver` from the light, or
+    /// 1 for a light that is not a spot.
+    #[inline]
+    pub fn spot_window(&self, to_receiver: DVec2) -> f64 {
+        match self.shape {
+            LightShape::Spot {
+                direction,
+                cone,
+                softness,
+                ..
+            } => {
+                let angle = direction.dot(to_receiver).clamp(-1.0, 1.0).acos();
+                smooth_window(angle, cone, softness)
+            }
+            _ => 1.0,
+        }
+    }
+}
+
+/// 1 for `angle <= cone - softness`, 0 for `angle >= cone`, smoothstep
+/// between.
+pub fn smooth_window(angle: f64, cone: f64, softness: f64) -> f64 {
+    if angle >= cone {
+        0.0
+    } else if softness <= 0.0 || angle <= cone - softness {
+        1.0
+    } else {
+        let x = (cone - angle) / softness;
+        x * x * (3.0 - 2.0 * x)
+    }
+}
+
+/// A complete scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub canvas: Canvas,
+    pub floor: Floor,
+    /// Every kernel clamps `r` below at this radius (world units).
+    pub small_radius: f64,
+    pub walls: Vec<Wall>,
+    pub lights: Vec<Light>,
+    /// For each wall, the index of the line light it also is.
+    pub(crate) wall_light: Vec<Option<u32>>,
+    /// The walls' segments, indexed like `walls`.
+    pub(crate) segments: SegmentSet,
+}
+
+impl Scene {
+    /// Builds a scene and its derived tables. A line light whose `wall` is
+    /// out of range is treated as not solid.
+    pub fn new(
+        canvas: Canvas,
+        floor: Floor,
+        small_radius: f64,
+        walls: Vec<Wall>,
+        mut lights: Vec<Light>,
+    ) -> Scene {
+        let mut wall_light = vec![None; walls.len()];
+        for (index, light) in lights.iter_mut().enumerate() {
+            if let LightShape::Line { wall, .. } = &mut light.shape
+                && let Some(w) = *wall
+            {
+                match wall_light.get_mut(w as usize) {
+                    Some(slot) => *slot = Some(index as u32),
+                    None => *wall = None,
+                }
+            }
+        }
+        let segments = SegmentSet::new(walls.iter().map(|w| w.segment).collect());
+        Scene {
+            canvas,
+            floor,
+            small_radius,
+            walls,
+            lights,
+            wall_light,
+            segments,
+        }
+    }
+
+    /// The segment set of the walls, for queries.
+    pub fn segments(&self) -> &SegmentSet {
+        &self.segments
+    }
+
+    /// The line light that wall `index` also is, if any.
+    pub fn light_of_wall(&self, index: u32) -> Option<u32> {
+        self.wall_light.get(index as usize).copied().flatten()
+    }
+
+    /// The albedo of a diffuse wall at point `x`, or the floor's there.
+    #[inline]
+    pub fn wall_albedo(&self, albedo: Option<Rgb>, x: DVec2) -> Rgb {
+        albedo.unwrap_or_else(|| self.floor.albedo_at(&self.canvas, x))
+    }
+}
+
+/// The side of a one-sided line light that emits.
+pub const EMITTING_SIDE: Side = Side::Positive;

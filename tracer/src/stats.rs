@@ -1,0 +1,72 @@
+//! Counts of what a render did, summed per tile in a fixed order.
+
+use std::fmt;
+
+/// What a render did: rays by kind, paths by how they ended, and samples
+/// whose estimate was not finite.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Receiver points drawn on the floor (one per pixel sample).
+    pub camera_samples: u64,
+    /// Visibility tests towards a light.
+    pub shadow_rays: u64,
+    /// Closest-hit rays of indirect paths (the first from the floor, then
+    /// one after every reflection or pass through a transparent wall).
+    pub bounce_rays: u64,
+    /// Paths whose last ray hit nothing.
+    pub paths_escaped: u64,
+    /// Paths stopped by the bounce limit.
+    pub paths_bounce_limit: u64,
+    /// Paths whose throughput became exactly zero.
+    pub paths_absorbed: u64,
+    /// Samples whose estimate was NaN or infinite, left out of the image.
+    pub nonfinite_samples: u64,
+    /// The first such sample in tile order: (x, y, sample index).
+    pub first_nonfinite: Option<(u32, u32, u32)>,
+}
+
+impl Stats {
+    pub(crate) fn record_nonfinite(&mut self, x: u32, y: u32, sample: u32) {
+        self.nonfinite_samples += 1;
+        if self.first_nonfinite.is_none() {
+            self.first_nonfinite = Some((x, y, sample));
+        }
+    }
+
+    /// Adds `other`'s counts; keeps the earlier first non-finite sample.
+    pub fn merge(&mut self, other: &Stats) {
+        self.camera_samples += other.camera_samples;
+        self.shadow_rays += other.shadow_rays;
+        self.bounce_rays += other.bounce_rays;
+        self.paths_escaped += other.paths_escaped;
+        self.paths_bounce_limit += other.paths_bounce_limit;
+        self.paths_absorbed += other.paths_absorbed;
+        self.nonfinite_samples += other.nonfinite_samples;
+        if self.first_nonfinite.is_none() {
+            self.first_nonfinite = other.first_nonfinite;
+        }
+    }
+
+    /// All rays cast.
+    pub fn rays(&self) -> u64 {
+        self.shadow_rays + self.bounce_rays
+    }
+}
+
+impl fmt::Display for Stats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "rays")?;
+        writeln!(f, "  camera samples   {:>14}", self.camera_samples)?;
+        writeln!(f, "  shadow rays      {:>14}", self.shadow_rays)?;
+        writeln!(f, "  bounce rays      {:>14}", self.bounce_rays)?;
+        writeln!(f, "paths ended by")?;
+        writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
+        writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;
+        writeln!(f, "  absorption       {:>14}", self.paths_absorbed)?;
+        write!(f, "non-finite samples {:>14}", self.nonfinite_samples)?;
+        if let Some((x, y, s)) = self.first_nonfinite {
+            write!(f, " (first: pixel ({x}, {y}), sample {s})")?;
+        }
+        Ok(())
+    }
+}
