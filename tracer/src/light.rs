@@ -98,9 +98,7 @@ pub(crate) fn direct_light(
                 if vis == Rgb::ZERO {
                     continue;
                 }
-                // Per radian, a length element contributes I G(r) r: the
-                // cosine at the light cancels against the Jacobian.
-                let per_angle = light.intensity * light.falloff.g(s.distance, r0) * s.distance;
+                let per_angle = light.intensity * light.falloff.per_radian(s.distance, r0);
                 Rgb::splat(per_angle * s.subtended * weight) * vis
             }
             LightShape::Directional { direction } => {

@@ -154,7 +154,7 @@ fn emission_crossed(scene: &Scene, ray: &Ray, t_max: f64, unfolded: f64) -> Rgb 
 }
 
 /// What a path ray meeting line light `light` from `side` at total distance
-/// `r` carries back: `I G(r) r` per radian (the radiance `I` for
+/// `r` carries back: `I G(r) r` per radian (see `Falloff::per_radian`) (the radiance `I` for
 /// `Flatland`), zero on the dark side of a one-sided light.
 fn line_emission(light: &Light, side: flatray_geometry::Side, r: f64, r0: f64) -> Rgb {
     let LightShape::Line { one_sided, .. } = light.shape else {
@@ -163,5 +163,5 @@ fn line_emission(light: &Light, side: flatray_geometry::Side, r: f64, r0: f64) -
     if one_sided && side != EMITTING_SIDE {
         return Rgb::ZERO;
     }
-    light.color * (light.intensity * light.falloff.g(r, r0) * r)
+    light.color * (light.intensity * light.falloff.per_radian(r, r0))
 }

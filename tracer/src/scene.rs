@@ -129,6 +129,21 @@ impl Falloff {
             Falloff::Constant => 1.0,
         }
     }
+
+    /// What a line light delivers per radian of the angle it subtends,
+    /// per unit intensity, at distance `r`: `G(r') r'` with
+    /// `r' = max(r, r0)` (the cosine at the light cancels against the
+    /// Jacobian from length to angle). The distance is clamped wherever it
+    /// appears, so for `Flatland` this is exactly 1 at every distance: a
+    /// Lambertian emitter of radiance `I`, with no bias next to the light.
+    #[inline]
+    pub fn per_radian(self, r: f64, r0: f64) -> f64 {
+        let r = r.max(r0);
+        match self {
+            Falloff::Flatland => 1.0,
+            _ => self.g(r, r0) * r,
+        }
+    }
 }
 
 /// How a wall treats light that reaches it.

@@ -1,0 +1,218 @@
+//! Closed forms 1 to 3 of `model.md` for direct light, read back from the
+//! EXR output. Each statistical check states its tolerance in standard
+//! errors of the pixel's jittered mean, computed by quadrature.
+
+use flatray_geometry::{DVec2, Segment};
+use flatray_tests::{TempDir, render, scene};
+use flatray_tracer::RenderOptions;
+use flatray_tracer::sampling::subtended_angle;
+
+/// Mean and standard deviation of `f` over the unit pixel at `(x, y)`, by
+/// a `n` x `n` midpoint rule.
+fn pixel_moments(x: u32, y: u32, n: u32, f: impl Fn(DVec2) -> f64) -> (f64, f64) {
+    let (mut s1, mut s2) = (0.0, 0.0);
+    for j in 0..n {
+        for i in 0..n {
+            let p = DVec2::new(
+                x as f64 + (i as f64 + 0.5) / n as f64,
+                y as f64 + (j as f64 + 0.5) / n as f64,
+            );
+            let v = f(p);
+            s1 += v;
+            s2 += v * v;
+        }
+    }
+    let count = (n * n) as f64;
+    let mean = s1 / count;
+    (mean, (s2 / count - mean * mean).max(0.0).sqrt())
+}
+
+/// Renders `text` to EXR and reads it back.
+fn render_to_exr(text: &str, options: RenderOptions) -> flatray_tracer::Image {
+    let loaded = scene(text);
+    let rendered = render(&loaded.scene, &options);
+    let dir = TempDir::new("direct");
+    let path = dir.path().join("out.exr");
+    flatray_io::write_exr(&rendered.image, &path).unwrap();
+    let back = flatray_io::read_exr(&path).unwrap();
+    assert_eq!(
+        back, rendered.image,
+        "EXR must store the linear values untouched"
+    );
+    back
+}
+
+/// Every pixel farther than `min_distance` from `centre` matches `exact`
+/// within 5 standard errors of its mean over `samples` jittered points.
+fn assert_matches(
+    image: &flatray_tracer::Image,
+    samples: u32,
+    centre: DVec2,
+    min_distance: f64,
+    exact: impl Fn(DVec2) -> f64,
+) {
+    let mut checked = 0;
+    let mut worst_z: f64 = 0.0;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let mid = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            if mid.distance(centre) < min_distance {
+                continue;
+            }
+            let (mean, sd) = pixel_moments(x, y, 24, &exact);
+            let se = sd / (samples as f64).sqrt();
+            let got = image.get(x, y)[0] as f64;
+            // f32 storage and quadrature add a small relative error.
+            let tolerance = 5.0 * se + 1e-5 * mean.abs();
+            let z = (got - mean).abs() / tolerance.max(f64::MIN_POSITIVE);
+            worst_z = worst_z.max(z);
+            assert!(
+                (got - mean).abs() <= tolerance,
+                "pixel ({x}, {y}): got {got}, exact mean {mean}, 5 SE = {}",
+                5.0 * se
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "only {checked} pixels checked");
+    assert!(worst_z.is_finite());
+}
+
+#[test]
+fn closed_form_1_point_light_gives_the_mean_of_one_over_r() {
+    let samples = 64;
+    let light = DVec2::new(40.3, 31.7);
+    let image = render_to_exr(
+        "Scene(canvas: (80, 64), floor: Color((1, 1, 1)),
+               lights: [Point(at: (40.3, 31.7), intensity: 2.5)])",
+        RenderOptions {
+            samples,
+            bounces: 0,
+            ..RenderOptions::default()
+        },
+    );
+    assert_matches(&image, samples, light, 2.0, |p| {
+        2.5 / p.distance(light).max(0.5)
+    });
+}
+
+#[test]
+fn closed_form_1_holds_with_bounces_when_nothing_reflects() {
+    let samples = 16;
+    let light = DVec2::new(10.5, 50.25);
+    let image = render_to_exr(
+        "Scene(canvas: (64, 64), floor: Color((1, 1, 1)),
+               lights: [Point(at: (10.5, 50.25))])",
+        RenderOptions {
+            samples,
+            bounces: 3,
+            ..RenderOptions::default()
+        },
+    );
+    assert_matches(&image, samples, light, 2.0, |p| {
+        1.0 / p.distance(light).max(0.5)
+    });
+}
+
+#[test]
+fn closed_form_2_line_light_gives_intensity_times_subtended_angle() {
+    let samples = 32;
+    let light = Segment::new(DVec2::new(20.0, 30.5), DVec2::new(55.0, 22.0));
+    let image = render_to_exr(
+        "Scene(canvas: (80, 64), floor: Color((1, 1, 1)),
+               lights: [Line(a: (20, 30.5), b: (55, 22), intensity: 0.7)])",
+        RenderOptions {
+            samples,
+            bounces: 0,
+            ..RenderOptions::default()
+        },
+    );
+    // Exclude pixels the light crosses, where the subtended angle jumps.
+    let mut checked = 0;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            let along = (centre - light.a).dot(light.edge()) / light.edge().length_squared();
+            let nearest = light.point_at(along.clamp(0.0, 1.0));
+            if centre.distance(nearest) < 2.0 {
+                continue;
+            }
+            let (mean, sd) = pixel_moments(x, y, 24, |p| 0.7 * subtended_angle(p, &light));
+            let se = sd / (samples as f64).sqrt();
+            let got = image.get(x, y)[0] as f64;
+            assert!(
+                (got - mean).abs() <= 5.0 * se + 1e-5 * mean,
+                "pixel ({x}, {y}): got {got}, exact {mean}, 5 SE = {}",
+                5.0 * se
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 4000);
+}
+
+/// A closed square room whose corners are shared endpoints at coordinates
+/// no binary float holds exactly, rotated by `angle`, with a point light
+/// and a line light outside.
+fn closed_room(angle_degrees: f64) -> String {
+    let centre = DVec2::new(50.1, 50.3);
+    let (s, c) = angle_degrees.to_radians().sin_cos();
+    let corner = |x: f64, y: f64| centre + DVec2::new(c * x - s * y, s * x + c * y);
+    let k = [
+        corner(-30.1, -30.7),
+        corner(30.3, -30.7),
+        corner(30.3, 30.9),
+        corner(-30.1, 30.9),
+    ];
+    let walls: Vec<String> = (0..4)
+        .map(|i| {
+            let (a, b) = (k[i], k[(i + 1) % 4]);
+            format!("Wall(a: ({:?}, {:?}), b: ({:?}, {:?}))", a.x, a.y, b.x, b.y)
+        })
+        .collect();
+    format!(
+        "Scene(canvas: (100, 100), floor: Color((1, 1, 1)), walls: [{}],
+               lights: [Point(at: (2.3, 3.1), intensity: 100.0),
+                        Line(a: (97, 2), b: (99, 98), intensity: 100.0),
+                        Directional(direction: (0.3, 1.0), intensity: 100.0)])",
+        walls.join(", ")
+    )
+}
+
+#[test]
+fn closed_form_3_no_direct_light_leaks_into_a_closed_room() {
+    for angle in [0.0, 17.0, 45.0] {
+        let loaded = scene(&closed_room(angle));
+        let rendered = render(
+            &loaded.scene,
+            &RenderOptions {
+                samples: 8,
+                bounces: 0,
+                ..RenderOptions::default()
+            },
+        );
+        let inside = |x: u32, y: u32| {
+            let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            // Well inside the square in its own frame.
+            let (s, c) = (-angle as f64).to_radians().sin_cos();
+            let q = p - DVec2::new(50.1, 50.3);
+            let local = DVec2::new(c * q.x - s * q.y, s * q.x + c * q.y);
+            local.x.abs() < 28.0 && local.y.abs() < 28.0
+        };
+        let mut inside_count = 0;
+        let mut outside_lit = 0;
+        for y in 0..100 {
+            for x in 0..100 {
+                let v = rendered.image.get(x, y);
+                if inside(x, y) {
+                    inside_count += 1;
+                    assert_eq!(v, [0.0; 3], "angle {angle}: light leaked into ({x}, {y})");
+                } else if v[0] > 0.0 {
+                    outside_lit += 1;
+                }
+            }
+        }
+        assert!(inside_count > 2500);
+        assert!(outside_lit > 1000, "the lights must light the outside");
+    }
+}

@@ -1,0 +1,35 @@
+//! Snapshots of small deterministic renders of the example scenes: the
+//! PNG itself and the render's statistics. An accidental change to the
+//! output fails here and is reviewed with `cargo insta review`.
+
+use flatray_tests::{render, workspace_root};
+use flatray_tracer::RenderOptions;
+
+fn snapshot_scene(name: &str, options: impl FnOnce(RenderOptions) -> RenderOptions) {
+    let loaded = flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
+    let options = options(loaded.options);
+    let rendered = render(&loaded.scene, &options);
+    let png = flatray_io::png_bytes(&rendered.image, loaded.tonemap).unwrap();
+    insta::assert_binary_snapshot!(&format!("{name}.png"), png);
+    insta::assert_snapshot!(format!("{name}-stats"), rendered.stats.to_string());
+}
+
+#[test]
+fn room() {
+    snapshot_scene("room", |o| RenderOptions {
+        samples: 4,
+        scale: 0.2,
+        seed: 7,
+        ..o
+    });
+}
+
+#[test]
+fn soft_shadow() {
+    snapshot_scene("soft-shadow", |o| RenderOptions {
+        samples: 4,
+        scale: 0.3,
+        seed: 7,
+        ..o
+    });
+}
