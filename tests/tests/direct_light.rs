@@ -194,7 +194,7 @@ fn closed_form_3_no_direct_light_leaks_into_a_closed_room() {
         let inside = |x: u32, y: u32| {
             let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
             // Well inside the square in its own frame.
-            let (s, c) = (-angle as f64).to_radians().sin_cos();
+            let (s, c) = (-angle).to_radians().sin_cos();
             let q = p - DVec2::new(50.1, 50.3);
             let local = DVec2::new(c * q.x - s * q.y, s * q.x + c * q.y);
             local.x.abs() < 28.0 && local.y.abs() < 28.0

@@ -81,7 +81,7 @@ pub(crate) fn direct_light(
                 if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
                     continue;
                 }
-                let Some(s) = sample_subtended_angle(x, &segment, stream.next()) else {
+                let Some(s) = sample_subtended_angle(x, &segment, stream.uniform()) else {
                     continue;
                 };
                 let weight = receiver.cosine(s.dir);

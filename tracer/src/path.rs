@@ -27,7 +27,7 @@ pub(crate) fn path_sample(
 
     // The floor sees the whole circle: a uniform direction, weight 2pi.
     let mut throughput = Rgb::splat(TAU);
-    let mut ray = Ray::new(p, uniform_circle(stream.next()));
+    let mut ray = Ray::new(p, uniform_circle(stream.uniform()));
     let mut skip = Skip::NONE;
     let mut bounce = 0;
     // After a mirror the path can carry light from a line light that no
@@ -114,11 +114,11 @@ pub(crate) fn path_sample(
                     Integrator::Path => {
                         // BRDF rho/2 times cos over pdf cos/2: exactly rho.
                         throughput *= rho;
-                        cosine_half_circle(normal, stream.next())
+                        cosine_half_circle(normal, stream.uniform())
                     }
                     Integrator::Original => {
                         // BRDF rho/2 times cos over pdf 1/pi.
-                        let (dir, cos) = uniform_half_circle(normal, stream.next());
+                        let (dir, cos) = uniform_half_circle(normal, stream.uniform());
                         throughput *= rho * (0.5 * PI * cos);
                         dir
                     }

@@ -193,7 +193,7 @@ pub fn pixel_sample(
     let step = pixel_size(scene, size);
     let pixel_index = y as u64 * size.0 as u64 + x as u64;
     let mut stream = Stream::new(options.seed, pixel_index, sample as u64);
-    let jitter = DVec2::new(stream.next(), stream.next());
+    let jitter = DVec2::new(stream.uniform(), stream.uniform());
     let p = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + jitter) * step;
     stats.camera_samples += 1;
     path_sample(
