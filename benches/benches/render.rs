@@ -1,1 +1,81 @@
-fn main() {}
+//! Criterion benchmarks of flatray: ray queries against the room and
+//! against mazes of 1k to 100k walls (brute force and BVH), and the room
+//! rendered end to end at a reduced size, with the memo on and off.
+//!
+//! Run: `cargo bench -p flatray-benches` (all), or with a filter, e.g.
+//! `cargo bench -p flatray-benches -- closest_hit`.
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use flatray_benches::{Inputs, maze, room_walls};
+use flatray_geometry::{SegmentSet, Skip, Strategy};
+use flatray_tracer::{MemoOptions, RenderOptions};
+
+fn closest_hit(c: &mut Criterion) {
+    let mut group = c.benchmark_group("closest_hit");
+    let rays = Inputs::new(1).rays(4096, 500.0);
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    let mut sets = vec![("room-13".to_string(), room_walls())];
+    for walls in [1_000, 10_000, 100_000] {
+        sets.push((format!("maze-{walls}"), maze(walls, 500.0, 2)));
+    }
+    for (name, segments) in sets {
+        for strategy in [Strategy::BruteForce, Strategy::Bvh] {
+            if strategy == Strategy::BruteForce && segments.len() > 20_000 {
+                continue;
+            }
+            let set = SegmentSet::with_strategy(segments.clone(), strategy);
+            group.bench_with_input(
+                BenchmarkId::new(format!("{strategy:?}"), &name),
+                &set,
+                |b, set| {
+                    b.iter(|| {
+                        let mut found = 0u32;
+                        for ray in &rays {
+                            if let Some((i, _)) =
+                                set.closest_hit(black_box(ray), f64::INFINITY, Skip::NONE)
+                            {
+                                found = found.wrapping_add(i);
+                            }
+                        }
+                        found
+                    })
+                },
+            );
+        }
+    }
+    group.finish();
+}
+
+fn room_render(c: &mut Criterion) {
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    let loaded = match flatray_io::load(&scene_path) {
+        Ok(l) => l,
+        Err(e) => panic!("{e}"),
+    };
+    let mut group = c.benchmark_group("room_render");
+    group.sample_size(10);
+    for memo in [true, false] {
+        let options = RenderOptions {
+            samples: 32,
+            scale: 0.2,
+            memo: MemoOptions {
+                enabled: memo,
+                ..loaded.options.memo
+            },
+            ..loaded.options
+        };
+        let samples = 100 * 100 * 32u64;
+        group.throughput(Throughput::Elements(samples));
+        group.bench_function(
+            BenchmarkId::new("memo", if memo { "on" } else { "off" }),
+            |b| b.iter(|| flatray_tracer::render(&loaded.scene, &options, &|_| {})),
+        );
+    }
+    group.finish();
+}
+
+criterion_group!(benches, closest_hit, room_render);
+criterion_main!(benches);

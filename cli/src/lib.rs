@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use flatray_io::{Format, Loaded};
-use flatray_tracer::{Integrator, RenderOptions, image_size};
+use flatray_tracer::{Integrator, MemoOptions, RenderOptions, image_size};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Exit code: success.
@@ -68,6 +68,9 @@ struct RenderArgs {
     /// The estimator (overrides the scene).
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
+    /// The direct-light memo (overrides the scene).
+    #[arg(long, value_enum)]
+    cache: Option<Switch>,
     /// Render the canvas at this many pixels per world unit (0.25 for a
     /// preview, 2 for a sharper image); the geometry is unchanged.
     #[arg(long, default_value_t = 1.0)]
@@ -81,6 +84,12 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Switch {
+    On,
+    Off,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -199,6 +208,14 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
             None => loaded.options.integrator,
             Some(IntegratorArg::Path) => Integrator::Path,
             Some(IntegratorArg::Original) => Integrator::Original,
+        },
+        memo: MemoOptions {
+            enabled: match args.cache {
+                None => loaded.options.memo.enabled,
+                Some(Switch::On) => true,
+                Some(Switch::Off) => false,
+            },
+            ..loaded.options.memo
         },
     };
     let (width, height) = image_size(&loaded.scene, options.scale);

@@ -23,7 +23,7 @@
 pub use glam::DVec2;
 
 mod segment_set;
-pub use segment_set::{SegmentSet, Skip};
+pub use segment_set::{BVH_THRESHOLD, SegmentSet, Skip, Strategy};
 
 /// The 2D cross product (perp dot product) `a.x * b.y - a.y * b.x`.
 ///

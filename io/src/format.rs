@@ -384,6 +384,22 @@ pub struct RenderSpec {
     pub integrator: IntegratorSpec,
     #[serde(default)]
     pub tonemap: ToneMap,
+    /// Whether the direct-light memo is used.
+    #[serde(default = "yes")]
+    pub cache: bool,
+    /// The memo's wall bin length, in pixels.
+    #[serde(default = "one_positive")]
+    pub cache_bin: Positive,
+    /// Stratified receiver points per pixel for the memoised floor light.
+    #[serde(default = "default_floor_samples")]
+    pub cache_floor_samples: Samples,
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_floor_samples() -> Samples {
+    Samples(64)
 }
 
 impl Default for RenderSpec {
@@ -395,6 +411,9 @@ impl Default for RenderSpec {
             exposure: one_positive(),
             integrator: IntegratorSpec::default(),
             tonemap: ToneMap::default(),
+            cache: yes(),
+            cache_bin: one_positive(),
+            cache_floor_samples: default_floor_samples(),
         }
     }
 }

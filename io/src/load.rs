@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use flatray_geometry::{DVec2, Segment};
 use flatray_tracer::scene::{Canvas, Falloff, Floor, Light, LightShape, Material, Scene, Wall};
-use flatray_tracer::{Integrator, RenderOptions, Rgb};
+use flatray_tracer::{Integrator, MemoOptions, RenderOptions, Rgb};
 use ron::extensions::Extensions;
 
 use crate::error::SceneError;
@@ -253,6 +253,12 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         integrator: match file.render.integrator {
             IntegratorSpec::Path => Integrator::Path,
             IntegratorSpec::Original => Integrator::Original,
+        },
+        memo: MemoOptions {
+            enabled: file.render.cache,
+            bin_length: file.render.cache_bin.0,
+            floor_samples: file.render.cache_floor_samples.0,
+            ..MemoOptions::default()
         },
     };
     Ok(Loaded {

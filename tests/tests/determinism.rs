@@ -7,19 +7,33 @@ use flatray_tracer::{Integrator, RenderOptions};
 #[test]
 fn one_thread_and_several_threads_give_bit_identical_images() {
     let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
-    for integrator in [Integrator::Path, Integrator::Original] {
+    for (integrator, memo) in [
+        (Integrator::Path, true),
+        (Integrator::Path, false),
+        (Integrator::Original, true),
+    ] {
         let options = RenderOptions {
             samples: 3,
             bounces: 2,
             scale: 0.3,
             integrator,
+            memo: flatray_tracer::MemoOptions {
+                enabled: memo,
+                ..loaded.options.memo
+            },
             ..loaded.options
         };
         let one = render_on(&loaded.scene, &options, 1);
         for threads in [2, 5] {
             let many = render_on(&loaded.scene, &options, threads);
-            assert_eq!(one.image, many.image, "{integrator:?}, {threads} threads");
-            assert_eq!(one.stats, many.stats, "{integrator:?}, {threads} threads");
+            assert_eq!(
+                one.image, many.image,
+                "{integrator:?}, memo {memo}, {threads} threads"
+            );
+            assert_eq!(
+                one.stats, many.stats,
+                "{integrator:?}, memo {memo}, {threads} threads"
+            );
         }
         assert!(one.image.pixels.iter().any(|p| p[0] > 0.0));
     }
@@ -41,10 +55,15 @@ fn a_different_seed_gives_a_different_image() {
 #[test]
 fn a_pixel_sample_can_be_rerendered_alone() {
     let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
+    // Without the memo, a pixel is the mean of its samples alone.
     let options = RenderOptions {
         samples: 1,
         scale: 0.1,
         exposure: 1.0,
+        memo: flatray_tracer::MemoOptions {
+            enabled: false,
+            ..loaded.options.memo
+        },
         ..loaded.options
     };
     let whole = render_on(&loaded.scene, &options, 2);

@@ -7,7 +7,7 @@ use std::f64::consts::{PI, TAU};
 
 use flatray_geometry::DVec2;
 use flatray_tests::{render, scene};
-use flatray_tracer::{Image, Integrator, RenderOptions};
+use flatray_tracer::{Image, Integrator, MemoOptions, RenderOptions};
 
 /// Mean and standard error of the mean of channel 0 over selected pixels.
 fn mean_se(image: &Image, keep: impl Fn(DVec2) -> bool) -> (f64, f64, usize) {
@@ -56,6 +56,16 @@ fn well_inside(points: &[DVec2], p: DVec2, margin: f64) -> bool {
     inside
 }
 
+/// The memo switched on or off. The closed forms hold for both: the
+/// memo's binning bias is below these tests' noise (`docs/performance.md`
+/// measures it on the room).
+fn memo_options(enabled: bool) -> MemoOptions {
+    MemoOptions {
+        enabled,
+        ..MemoOptions::default()
+    }
+}
+
 fn geometric_sum(rho: f64, terms: u32) -> f64 {
     (0..terms).map(|k| rho.powi(k as i32)).sum()
 }
@@ -81,7 +91,7 @@ fn closed_form_4_flatland_furnace() {
     ];
     let (l_e, rho) = (0.3, 0.6);
     for (name, room) in [("square", &square[..]), ("L-shaped", &l_shape[..])] {
-        for bounces in [0, 1, 3] {
+        for (bounces, memo) in [(0, false), (1, false), (3, false), (1, true), (3, true)] {
             let extra = format!(
                 ", material: Diffuse(albedo: ({rho}, {rho}, {rho})), emit: (intensity: {l_e})"
             );
@@ -94,6 +104,7 @@ fn closed_form_4_flatland_furnace() {
                 samples: 8,
                 bounces,
                 seed: 11,
+                memo: memo_options(memo),
                 ..RenderOptions::default()
             };
             let image = render(&loaded.scene, &options).image;
@@ -119,7 +130,7 @@ fn closed_form_4_flatland_furnace() {
                 let tolerance = 4.0 * se + 1e-5 * expected;
                 assert!(
                     (mean - expected).abs() <= tolerance,
-                    "{name}, D = {bounces}, quadrant {quadrant}: mean {mean}, expected {expected}, 4 SE = {}",
+                    "{name}, D = {bounces}, memo {memo}, quadrant {quadrant}: mean {mean}, expected {expected}, 4 SE = {}",
                     4.0 * se
                 );
             }
@@ -154,12 +165,13 @@ fn closed_form_3_no_leak_with_bounces() {
         walls.join(", ")
     );
     let loaded = scene(&text);
-    for bounces in [1, 2, 5] {
+    for (bounces, memo) in [(1, false), (2, false), (5, false), (1, true), (5, true)] {
         let image = render(
             &loaded.scene,
             &RenderOptions {
                 samples: 4,
                 bounces,
+                memo: memo_options(memo),
                 ..RenderOptions::default()
             },
         )
@@ -206,15 +218,16 @@ fn closed_form_5_circle_room() {
         )
     );
     let loaded = scene(&text);
-    let base = RenderOptions {
-        samples: 16,
-        seed: 5,
-        ..RenderOptions::default()
-    };
-    // The direct part draws no random numbers after the jitter, so the
-    // difference of two renders with one seed is the indirect part alone.
-    let direct = render(&loaded.scene, &RenderOptions { bounces: 0, ..base }).image;
-    for bounces in [1, 2] {
+    for (bounces, memo) in [(1, false), (2, false), (1, true), (2, true)] {
+        let base = RenderOptions {
+            samples: 16,
+            seed: 5,
+            memo: memo_options(memo),
+            ..RenderOptions::default()
+        };
+        // The direct part draws no random numbers after the jitter, so the
+        // difference of two renders with one seed is the indirect part.
+        let direct = render(&loaded.scene, &RenderOptions { bounces: 0, ..base }).image;
         let total = render(&loaded.scene, &RenderOptions { bounces, ..base }).image;
         let indirect = Image {
             pixels: total
@@ -237,7 +250,7 @@ fn closed_form_5_circle_room() {
             let tolerance = 4.0 * se + 0.005 * expected;
             assert!(
                 (mean - expected).abs() <= tolerance,
-                "D = {bounces}, ring {ring:?}: mean {mean}, expected {expected}, 4 SE = {}",
+                "D = {bounces}, memo {memo}, ring {ring:?}: mean {mean}, expected {expected}, 4 SE = {}",
                 4.0 * se
             );
         }
@@ -269,6 +282,7 @@ fn closed_form_6_symmetric_scene_gives_symmetric_image() {
             samples: 16,
             bounces: 2,
             seed: 3,
+            memo: memo_options(false),
             ..RenderOptions::default()
         },
     )
@@ -332,6 +346,7 @@ fn the_mean_of_many_low_sample_renders_matches_a_high_sample_render() {
             samples: 1,
             bounces: 3,
             integrator,
+            memo: memo_options(false),
             ..RenderOptions::default()
         };
         let runs = 128;
@@ -377,6 +392,7 @@ fn the_original_estimator_converges_to_the_same_image() {
         samples: 128,
         bounces: 2,
         seed: 99,
+        memo: memo_options(false),
         ..RenderOptions::default()
     };
     let path = render(&loaded.scene, &options).image;

@@ -12,6 +12,7 @@
 //! ([`Image`]); progress goes out through a callback.
 
 mod light;
+mod memo;
 mod path;
 mod render;
 pub mod sampling;
@@ -21,6 +22,7 @@ mod stats;
 /// A linear RGB triple: a colour, an albedo, or a light quantity.
 pub type Rgb = glam::DVec3;
 
+pub use memo::MemoOptions;
 pub use render::{
     Image, Integrator, RenderOptions, Rendered, TILE, image_size, pixel_sample, render,
 };

@@ -3,7 +3,7 @@
 use flatray_geometry::{DVec2, Ray, Skip};
 
 use crate::sampling::{Stream, sample_subtended_angle};
-use crate::scene::{EMITTING_SIDE, LightShape, Material, Scene};
+use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
 /// Who receives the light: the floor (no cosine, every direction) or one
@@ -40,7 +40,8 @@ impl Receiver {
 }
 
 /// The light that reaches `x` directly from every light: fluence for the
-/// floor, irradiance for a wall side. One shadow ray per light.
+/// floor, irradiance for a wall side. One shadow ray per light; line
+/// lights draw one number from `stream`.
 pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
@@ -49,77 +50,91 @@ pub(crate) fn direct_light(
     stats: &mut Stats,
 ) -> Rgb {
     let mut sum = Rgb::ZERO;
-    let r0 = scene.small_radius;
     for light in &scene.lights {
-        let contribution = match light.shape {
-            LightShape::Point { at } | LightShape::Spot { at, .. } => {
-                let to = at - x;
-                let r = to.length();
-                if r == 0.0 {
-                    // The receiver sits on the light: no direction to test,
-                    // nothing in between. A wall gets no cosine from it.
-                    if receiver.normal.is_some() {
-                        continue;
-                    }
-                    Rgb::splat(light.intensity * light.falloff.g(0.0, r0))
-                } else {
-                    let dir = to / r;
-                    let weight = receiver.cosine(dir) * light.spot_window(-dir);
-                    if weight == 0.0 {
-                        continue;
-                    }
-                    let vis =
-                        transmittance(scene, &Ray::new(x, to), 1.0, receiver.skip(None), stats);
-                    Rgb::splat(light.intensity * light.falloff.g(r, r0) * weight) * vis
-                }
-            }
-            LightShape::Line {
-                segment,
-                one_sided,
-                wall,
-            } => {
-                if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
-                    continue;
-                }
-                let Some(s) = sample_subtended_angle(x, &segment, stream.uniform()) else {
-                    continue;
-                };
-                let weight = receiver.cosine(s.dir);
-                if weight == 0.0 {
-                    continue;
-                }
-                let vis = transmittance(
-                    scene,
-                    &Ray::new(x, s.point - x),
-                    1.0,
-                    receiver.skip(wall),
-                    stats,
-                );
-                if vis == Rgb::ZERO {
-                    continue;
-                }
-                let per_angle = light.intensity * light.falloff.per_radian(s.distance, r0);
-                Rgb::splat(per_angle * s.subtended * weight) * vis
-            }
-            LightShape::Directional { direction } => {
-                let to_light = -direction;
-                let weight = receiver.cosine(to_light);
-                if weight == 0.0 {
-                    continue;
-                }
-                let vis = transmittance(
-                    scene,
-                    &Ray::new(x, to_light),
-                    f64::INFINITY,
-                    receiver.skip(None),
-                    stats,
-                );
-                Rgb::splat(light.intensity * weight) * vis
-            }
+        let u = match light.shape {
+            LightShape::Line { .. } => stream.uniform(),
+            _ => 0.0,
         };
-        sum += contribution * light.color;
+        sum += light_contribution(scene, light, x, receiver, u, stats);
     }
     sum
+}
+
+/// The light that reaches `x` from one light, coloured, with one shadow
+/// ray. `u` in `[0, 1)` picks the point on a line light (uniform in the
+/// angle it subtends); other lights ignore it.
+pub(crate) fn light_contribution(
+    scene: &Scene,
+    light: &Light,
+    x: DVec2,
+    receiver: Receiver,
+    u: f64,
+    stats: &mut Stats,
+) -> Rgb {
+    let r0 = scene.small_radius;
+    let value = match light.shape {
+        LightShape::Point { at } | LightShape::Spot { at, .. } => {
+            let to = at - x;
+            let r = to.length();
+            if r == 0.0 {
+                // The receiver sits on the light: no direction to test,
+                // nothing in between. A wall gets no cosine from it.
+                if receiver.normal.is_some() {
+                    return Rgb::ZERO;
+                }
+                Rgb::splat(light.intensity * light.falloff.g(0.0, r0))
+            } else {
+                let dir = to / r;
+                let weight = receiver.cosine(dir) * light.spot_window(-dir);
+                if weight == 0.0 {
+                    return Rgb::ZERO;
+                }
+                let vis = transmittance(scene, &Ray::new(x, to), 1.0, receiver.skip(None), stats);
+                Rgb::splat(light.intensity * light.falloff.g(r, r0) * weight) * vis
+            }
+        }
+        LightShape::Line {
+            segment,
+            one_sided,
+            wall,
+        } => {
+            if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
+                return Rgb::ZERO;
+            }
+            let Some(s) = sample_subtended_angle(x, &segment, u) else {
+                return Rgb::ZERO;
+            };
+            let weight = receiver.cosine(s.dir);
+            if weight == 0.0 {
+                return Rgb::ZERO;
+            }
+            let vis = transmittance(
+                scene,
+                &Ray::new(x, s.point - x),
+                1.0,
+                receiver.skip(wall),
+                stats,
+            );
+            let per_angle = light.intensity * light.falloff.per_radian(s.distance, r0);
+            Rgb::splat(per_angle * s.subtended * weight) * vis
+        }
+        LightShape::Directional { direction } => {
+            let to_light = -direction;
+            let weight = receiver.cosine(to_light);
+            if weight == 0.0 {
+                return Rgb::ZERO;
+            }
+            let vis = transmittance(
+                scene,
+                &Ray::new(x, to_light),
+                f64::INFINITY,
+                receiver.skip(None),
+                stats,
+            );
+            Rgb::splat(light.intensity * weight) * vis
+        }
+    };
+    value * light.color
 }
 
 /// What fraction of light gets along `ray` for `0 < t < t_max`: zero when

@@ -3,6 +3,7 @@
 
 use std::f64::consts::{PI, TAU};
 
+use flatray_cache::{Key, WallMemo};
 use flatray_geometry::{DVec2, Ray, Skip, intersect, reflect};
 
 use crate::light::{Receiver, direct_light};
@@ -12,22 +13,33 @@ use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
 /// wall reflections between a light and the floor.
+///
+/// With `floor_direct` false the floor's own direct light is left out (the
+/// render loop has it from the memo). With a `memo`, next-event estimation
+/// at a diffuse wall reads it instead of casting shadow rays.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn path_sample(
     scene: &Scene,
     p: DVec2,
     bounces: u32,
     integrator: Integrator,
+    floor_direct: bool,
+    memo: Option<&WallMemo>,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
-    let mut fluence = direct_light(scene, p, Receiver::FLOOR, stream, stats);
+    let mut fluence = if floor_direct {
+        direct_light(scene, p, Receiver::FLOOR, stream, stats)
+    } else {
+        Rgb::ZERO
+    };
     if bounces == 0 {
         return fluence;
     }
 
     // The floor sees the whole circle: a uniform direction, weight 2pi.
     let mut throughput = Rgb::splat(TAU);
-    let mut ray = Ray::new(p, uniform_circle(stream.uniform()));
+    let mut ray = Ray::new(p, uniform_circle(stream));
     let mut skip = Skip::NONE;
     let mut bounce = 0;
     // After a mirror the path can carry light from a line light that no
@@ -95,12 +107,25 @@ pub(crate) fn path_sample(
                     break;
                 }
                 let rho = scene.wall_albedo(albedo, x);
-                let receiver = Receiver {
-                    normal: Some(normal),
-                    wall: Some(index),
-                };
                 // 2pi L_o = 2pi (rho / 2) E, with 2pi already in throughput.
-                let irradiance = direct_light(scene, x, receiver, stream, stats);
+                let irradiance = match memo {
+                    Some(memo) => {
+                        stats.memo_lookups += 1;
+                        let v = memo.lookup(Key {
+                            wall: index,
+                            side: side.index(),
+                            u: h.u,
+                        });
+                        Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64)
+                    }
+                    None => {
+                        let receiver = Receiver {
+                            normal: Some(normal),
+                            wall: Some(index),
+                        };
+                        direct_light(scene, x, receiver, stream, stats)
+                    }
+                };
                 fluence += throughput * rho * 0.5 * irradiance;
                 if bounce == bounces {
                     stats.paths_bounce_limit += 1;

@@ -4,9 +4,13 @@
 use flatray_geometry::DVec2;
 use rayon::prelude::*;
 
+use flatray_cache::WallMemo;
+
+use crate::light::{Receiver, direct_light};
+use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::path::path_sample;
 use crate::sampling::Stream;
-use crate::scene::Scene;
+use crate::scene::{Material, Scene};
 use crate::{Rgb, Stats};
 
 /// Which estimator a render uses.
@@ -35,6 +39,8 @@ pub struct RenderOptions {
     /// Pixels per world unit.
     pub scale: f64,
     pub integrator: Integrator,
+    /// The direct-light memo.
+    pub memo: MemoOptions,
 }
 
 impl Default for RenderOptions {
@@ -46,6 +52,7 @@ impl Default for RenderOptions {
             exposure: 1.0,
             scale: 1.0,
             integrator: Integrator::Path,
+            memo: MemoOptions::default(),
         }
     }
 }
@@ -95,6 +102,14 @@ pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
 /// depend on the number of threads or on their scheduling.
 pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + Sync)) -> Rendered {
     let (width, height) = image_size(scene, options.scale);
+    let mut memo_stats = Stats::default();
+    let memo = wall_memo_for(scene, options, &mut memo_stats);
+    let context = Context {
+        scene,
+        options,
+        size: (width, height),
+        memo: memo.as_ref(),
+    };
     let tiles_x = width.div_ceil(TILE);
     let tiles_y = height.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> = (0..tiles_y)
@@ -111,14 +126,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
             for y in y0..y1 {
                 for x in x0..x1 {
-                    pixels.push(render_pixel(
-                        scene,
-                        options,
-                        (width, height),
-                        x,
-                        y,
-                        &mut stats,
-                    ));
+                    pixels.push(render_pixel(&context, x, y, &mut stats));
                 }
             }
             progress(pixels.len() as u64 * options.samples as u64);
@@ -127,7 +135,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         .collect();
 
     let mut image = Image::new(width, height);
-    let mut stats = Stats::default();
+    let mut stats = memo_stats;
     for (&(tx, ty), (pixels, tile_stats)) in tiles.iter().zip(&results) {
         stats.merge(tile_stats);
         let x0 = tx * TILE;
@@ -150,46 +158,89 @@ fn pixel_size(scene: &Scene, (width, height): (u32, u32)) -> DVec2 {
     )
 }
 
-/// One pixel's value: exposure times floor albedo times the mean fluence
-/// over its samples. A sample whose estimate is not finite is left out and
-/// reported in `stats`.
-fn render_pixel(
-    scene: &Scene,
-    options: &RenderOptions,
+/// What every pixel of one render shares.
+struct Context<'a> {
+    scene: &'a Scene,
+    options: &'a RenderOptions,
     size: (u32, u32),
-    x: u32,
-    y: u32,
-    stats: &mut Stats,
-) -> [f32; 3] {
+    memo: Option<&'a WallMemo>,
+}
+
+/// The wall memo, when the options ask for it and a path can read it: with
+/// at least one bounce, a diffuse wall and a light.
+fn wall_memo_for(scene: &Scene, options: &RenderOptions, stats: &mut Stats) -> Option<WallMemo> {
+    let useful = options.memo.enabled
+        && options.bounces > 0
+        && !scene.lights.is_empty()
+        && scene
+            .walls
+            .iter()
+            .any(|w| matches!(w.material, Material::Diffuse { .. }));
+    useful.then(|| build_wall_memo(scene, &options.memo, options.scale, stats))
+}
+
+/// Stream sample indices from here up key the floor memo's strata, apart
+/// from every path sample's.
+const FLOOR_STREAMS: u64 = 1 << 40;
+
+/// One pixel's value: exposure times floor albedo times its mean fluence.
+/// With the memo, the floor's direct light is estimated once per pixel
+/// over a stratified grid and every path sample reuses it; without, each
+/// sample estimates it anew. A sample whose estimate is not finite is left
+/// out and reported in `stats`.
+fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3] {
+    let Context {
+        scene,
+        options,
+        size,
+        ..
+    } = *context;
     let step = pixel_size(scene, size);
     let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
+    let pixel_index = y as u64 * size.0 as u64 + x as u64;
+    let mut direct = Rgb::ZERO;
+    if options.memo.enabled {
+        let grid = floor_grid(&options.memo, options.samples);
+        let mut sum = Rgb::ZERO;
+        for k in 0..grid * grid {
+            let mut stream = Stream::new(options.seed, pixel_index, FLOOR_STREAMS + k as u64);
+            let cell = DVec2::new((k % grid) as f64, (k / grid) as f64);
+            let jitter = (cell + DVec2::new(stream.uniform(), stream.uniform())) / grid as f64;
+            let p = corner + jitter * step;
+            let value = direct_light(scene, p, Receiver::FLOOR, &mut stream, stats);
+            if value.is_finite() {
+                sum += value;
+            } else {
+                stats.record_nonfinite(x, y, FLOOR_STREAMS as u32);
+            }
+        }
+        direct = sum / (grid * grid) as f64;
+        stats.floor_memo_reuses += options.samples as u64;
+    }
     let mut sum = Rgb::ZERO;
     for sample in 0..options.samples {
-        let value = pixel_sample(scene, options, size, x, y, sample, stats);
+        let value = sample_with(context, x, y, sample, stats);
         if value.is_finite() {
             sum += value;
         } else {
             stats.record_nonfinite(x, y, sample);
         }
     }
-    let mean = sum / options.samples.max(1) as f64;
+    let mean = direct + sum / options.samples.max(1) as f64;
     let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
     let value = mean * albedo * options.exposure;
     [value.x as f32, value.y as f32, value.z as f32]
 }
 
-/// One sample of the fluence averaged over pixel `(x, y)`: the receiver is
-/// jittered uniformly inside the pixel (the box filter). Deterministic in
-/// `(seed, pixel, sample)`, so it can be re-run alone for debugging.
-pub fn pixel_sample(
-    scene: &Scene,
-    options: &RenderOptions,
-    size: (u32, u32),
-    x: u32,
-    y: u32,
-    sample: u32,
-    stats: &mut Stats,
-) -> Rgb {
+/// One sample of pixel `(x, y)`: the receiver is jittered uniformly inside
+/// the pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
+fn sample_with(context: &Context, x: u32, y: u32, sample: u32, stats: &mut Stats) -> Rgb {
+    let Context {
+        scene,
+        options,
+        size,
+        memo,
+    } = *context;
     let step = pixel_size(scene, size);
     let pixel_index = y as u64 * size.0 as u64 + x as u64;
     let mut stream = Stream::new(options.seed, pixel_index, sample as u64);
@@ -201,7 +252,37 @@ pub fn pixel_sample(
         p,
         options.bounces,
         options.integrator,
+        !options.memo.enabled,
+        memo,
         &mut stream,
         stats,
     )
+}
+
+/// One sample of the fluence averaged over pixel `(x, y)` of an image of
+/// `size`, without the memo, exactly as a render with the memo off draws
+/// it: it can be re-run alone for debugging.
+pub fn pixel_sample(
+    scene: &Scene,
+    options: &RenderOptions,
+    size: (u32, u32),
+    x: u32,
+    y: u32,
+    sample: u32,
+    stats: &mut Stats,
+) -> Rgb {
+    let options = RenderOptions {
+        memo: MemoOptions {
+            enabled: false,
+            ..options.memo
+        },
+        ..*options
+    };
+    let context = Context {
+        scene,
+        options: &options,
+        size,
+        memo: None,
+    };
+    sample_with(&context, x, y, sample, stats)
 }

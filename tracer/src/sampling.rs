@@ -5,7 +5,7 @@
 //! it: an image is bit-identical for any number of threads, and one pixel
 //! and sample can be re-rendered alone.
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 
 use flatray_geometry::{DVec2, Ray, Segment, cross, line_crossing};
 use rand::rngs::Xoshiro256PlusPlus;
@@ -38,11 +38,21 @@ fn mix(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// A uniform direction on the circle (pdf `1 / 2pi` per radian).
+/// A uniform direction on the circle (pdf `1 / 2pi` per radian), by
+/// rejection from the square: a point uniform in the unit disk has a
+/// uniform angle, and this costs no trigonometry (1.27 draws of two
+/// numbers on average).
 #[inline]
-pub fn uniform_circle(u: f64) -> DVec2 {
-    let (s, c) = (TAU * u).sin_cos();
-    DVec2::new(c, s)
+pub fn uniform_circle(stream: &mut Stream) -> DVec2 {
+    loop {
+        let p = DVec2::new(2.0 * stream.uniform() - 1.0, 2.0 * stream.uniform() - 1.0);
+        let r2 = p.length_squared();
+        // Reject outside the disk, and so close to the centre that the
+        // direction would lose precision.
+        if r2 <= 1.0 && r2 > 1e-12 {
+            return p / r2.sqrt();
+        }
+    }
 }
 
 /// A cosine-weighted direction on the half circle around unit normal `n`:
@@ -119,6 +129,7 @@ mod tests {
     //! with fixed seeds, so each run is the same.
 
     use super::*;
+    use std::f64::consts::TAU;
 
     /// The 0.1 % critical value of the chi-square distribution with 19
     /// degrees of freedom: a correct sampler exceeds it once in 1000 seeds.
@@ -192,7 +203,7 @@ mod tests {
         let mut stream = Stream::new(4, 5, 6);
         let mut counts = [0usize; BINS];
         for _ in 0..DRAWS {
-            let d = uniform_circle(stream.uniform());
+            let d = uniform_circle(&mut stream);
             let a = d.y.atan2(d.x).rem_euclid(TAU);
             counts[((a / TAU * BINS as f64) as usize).min(BINS - 1)] += 1;
         }

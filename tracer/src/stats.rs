@@ -19,6 +19,16 @@ pub struct Stats {
     pub paths_bounce_limit: u64,
     /// Paths whose throughput became exactly zero.
     pub paths_absorbed: u64,
+    /// Entries of the wall memo: (wall, side, bin, light) keys.
+    pub memo_entries: u64,
+    /// Bytes held by the wall memo.
+    pub memo_bytes: u64,
+    /// Shadow rays cast to fill the wall memo (not in `shadow_rays`).
+    pub memo_fill_rays: u64,
+    /// Wall-memo reads, each replacing one shadow ray per light.
+    pub memo_lookups: u64,
+    /// Path samples that reused their pixel's memoised direct light.
+    pub floor_memo_reuses: u64,
     /// Samples whose estimate was NaN or infinite, left out of the image.
     pub nonfinite_samples: u64,
     /// The first such sample in tile order: (x, y, sample index).
@@ -41,6 +51,11 @@ impl Stats {
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
         self.paths_absorbed += other.paths_absorbed;
+        self.memo_entries += other.memo_entries;
+        self.memo_bytes += other.memo_bytes;
+        self.memo_fill_rays += other.memo_fill_rays;
+        self.memo_lookups += other.memo_lookups;
+        self.floor_memo_reuses += other.floor_memo_reuses;
         self.nonfinite_samples += other.nonfinite_samples;
         if self.first_nonfinite.is_none() {
             self.first_nonfinite = other.first_nonfinite;
@@ -63,6 +78,12 @@ impl fmt::Display for Stats {
         writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;
         writeln!(f, "  absorption       {:>14}", self.paths_absorbed)?;
+        writeln!(f, "memo")?;
+        writeln!(f, "  wall entries     {:>14}", self.memo_entries)?;
+        writeln!(f, "  wall bytes       {:>14}", self.memo_bytes)?;
+        writeln!(f, "  fill rays        {:>14}", self.memo_fill_rays)?;
+        writeln!(f, "  wall hits        {:>14}", self.memo_lookups)?;
+        writeln!(f, "  floor reuses     {:>14}", self.floor_memo_reuses)?;
         write!(f, "non-finite samples {:>14}", self.nonfinite_samples)?;
         if let Some((x, y, s)) = self.first_nonfinite {
             write!(f, " (first: pixel ({x}, {y}), sample {s})")?;

@@ -1,0 +1,153 @@
+//! Property tests of the geometry layer: random segments and rays, fixed
+//! proptest configuration, so each run checks the same cases.
+
+use flatray_geometry::{
+    DVec2, Ray, Segment, SegmentSet, Side, Skip, Strategy as Accel, cross, intersect, reflect,
+};
+use proptest::prelude::*;
+
+fn coord() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        -1000.0..1000.0f64,
+        // Small integers make shared endpoints, axis-aligned and collinear
+        // segments common.
+        (-20i32..20).prop_map(|v| v as f64),
+    ]
+}
+
+fn point() -> impl Strategy<Value = DVec2> {
+    (coord(), coord()).prop_map(|(x, y)| DVec2::new(x, y))
+}
+
+fn segment() -> impl Strategy<Value = Segment> {
+    (point(), point())
+        .prop_filter("non-degenerate", |(a, b)| a != b)
+        .prop_map(|(a, b)| Segment::new(a, b))
+}
+
+fn direction() -> impl Strategy<Value = DVec2> {
+    prop_oneof![
+        (0.0..std::f64::consts::TAU).prop_map(|a| DVec2::new(a.cos(), a.sin())),
+        (-3i32..4, -3i32..4)
+            .prop_filter("non-zero", |(x, y)| *x != 0 || *y != 0)
+            .prop_map(|(x, y)| DVec2::new(x as f64, y as f64)),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(7), ..ProptestConfig::default() })]
+
+    #[test]
+    fn a_hit_lies_on_the_ray_and_on_the_segment(seg in segment(), origin in point(), dir in direction()) {
+        let ray = Ray::new(origin, dir);
+        if let Some(hit) = intersect(&ray, &seg) {
+            prop_assert!(hit.t > 0.0);
+            prop_assert!((0.0..=1.0).contains(&hit.u));
+            let on_ray = ray.at(hit.t);
+            let on_segment = seg.point_at(hit.u);
+            let scale = 1.0 + origin.abs().max_element() + seg.a.abs().max(seg.b.abs()).max_element();
+            prop_assert!(on_ray.distance(on_segment) <= 1e-9 * scale,
+                "{on_ray} vs {on_segment}");
+        }
+    }
+
+    #[test]
+    fn a_miss_is_a_miss_for_the_reversed_segment_too(seg in segment(), origin in point(), dir in direction()) {
+        let ray = Ray::new(origin, dir);
+        let reversed = Segment::new(seg.b, seg.a);
+        let forward = intersect(&ray, &seg);
+        let backward = intersect(&ray, &reversed);
+        prop_assert_eq!(forward.is_some(), backward.is_some());
+        if let (Some(f), Some(b)) = (forward, backward) {
+            prop_assert!((f.u - (1.0 - b.u)).abs() <= 1e-9);
+        }
+    }
+
+    #[test]
+    fn reflection_preserves_length_and_angle(seg in segment(), dir in direction()) {
+        let n = seg.normal();
+        let r = reflect(dir, n);
+        prop_assert!((r.length() - dir.length()).abs() <= 1e-12 * dir.length());
+        // Same angle to the wall on the other side of it.
+        prop_assert!((r.dot(n) + dir.dot(n)).abs() <= 1e-12 * dir.length());
+        prop_assert!((r.dot(seg.edge()) - dir.dot(seg.edge())).abs() <= 1e-9 * dir.length() * seg.length());
+    }
+
+    #[test]
+    fn side_tests_agree_with_the_cross_product(seg in segment(), p in point()) {
+        let c = cross(seg.b - seg.a, p - seg.a);
+        let expected = if c > 0.0 { Some(Side::Positive) } else if c < 0.0 { Some(Side::Negative) } else { None };
+        prop_assert_eq!(seg.side_of(p), expected);
+    }
+
+    #[test]
+    fn the_bvh_returns_exactly_what_brute_force_returns(
+        segments in prop::collection::vec(segment(), 1..200),
+        rays in prop::collection::vec((point(), direction(), 0.1..3000.0f64), 20),
+        skip in 0u32..200,
+    ) {
+        let brute = SegmentSet::with_strategy(segments.clone(), Accel::BruteForce);
+        let bvh = SegmentSet::with_strategy(segments.clone(), Accel::Bvh);
+        for (origin, dir, t_max) in rays {
+            let ray = Ray::new(origin, dir);
+            for (t_max, skip) in [(f64::INFINITY, Skip::NONE), (t_max, Skip::one(skip))] {
+                // The definition: the nearest `intersect` below t_max, the
+                // lower index on a tie.
+                let mut reference: Option<(u32, flatray_geometry::Hit)> = None;
+                for (i, seg) in segments.iter().enumerate() {
+                    if skip.contains(i as u32) {
+                        continue;
+                    }
+                    if let Some(h) = intersect(&ray, seg)
+                        && h.t < t_max
+                        && reference.is_none_or(|(_, b)| h.t < b.t)
+                    {
+                        reference = Some((i as u32, h));
+                    }
+                }
+                prop_assert_eq!(brute.closest_hit(&ray, t_max, skip), reference);
+                prop_assert_eq!(brute.closest_hit(&ray, t_max, skip), bvh.closest_hit(&ray, t_max, skip));
+                let mut a = Vec::new();
+                brute.for_each_crossing(&ray, t_max, skip, |i, h| { a.push((i, h.t.to_bits(), h.u.to_bits())); true });
+                let mut b = Vec::new();
+                bvh.for_each_crossing(&ray, t_max, skip, |i, h| { b.push((i, h.t.to_bits(), h.u.to_bits())); true });
+                a.sort_unstable();
+                b.sort_unstable();
+                prop_assert_eq!(a, b);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_long_corridor_of_segments_builds_a_tree_the_stack_can_walk() {
+    // Exponentially spaced segments push a surface-area split towards a
+    // deep, list-like tree; the depth bound must keep queries exact.
+    let segments: Vec<Segment> = (0..3000)
+        .map(|k| {
+            let x = 1.001f64.powi(k);
+            Segment::new(DVec2::new(x, -1.0), DVec2::new(x, 1.0))
+        })
+        .collect();
+    let brute = SegmentSet::with_strategy(segments.clone(), Accel::BruteForce);
+    let bvh = SegmentSet::with_strategy(segments, Accel::Bvh);
+    for k in 0..50 {
+        let ray = Ray::new(
+            DVec2::new(-5.0 + k as f64 * 0.5, 0.3),
+            DVec2::new(1.0, 0.001 * k as f64),
+        );
+        assert_eq!(
+            brute.closest_hit(&ray, f64::INFINITY, Skip::NONE),
+            bvh.closest_hit(&ray, f64::INFINITY, Skip::NONE)
+        );
+        let count = |set: &SegmentSet| {
+            let mut n = 0;
+            set.for_each_crossing(&ray, f64::INFINITY, Skip::NONE, |_, _| {
+                n += 1;
+                true
+            });
+            n
+        };
+        assert_eq!(count(&brute), count(&bvh));
+    }
+}

@@ -1,0 +1,108 @@
+//! Filling and reading the direct-light memo (`flatray-cache`): wall
+//! irradiance per (wall, side, bin, light), and the floor's direct fluence
+//! once per pixel.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use flatray_cache::{Value, WallMemo};
+use flatray_geometry::Side;
+
+use crate::light::{Receiver, light_contribution};
+use crate::scene::{LightShape, Material, Scene};
+use crate::{Rgb, Stats};
+
+/// How the memo is used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MemoOptions {
+    /// Whether a render uses the memo at all.
+    pub enabled: bool,
+    /// Length of a wall bin, in pixels of the rendered image.
+    pub bin_length: f64,
+    /// Stratified receiver points per pixel for the floor's direct light
+    /// (at most the number of samples, rounded down to a square).
+    pub floor_samples: u32,
+    /// Stratified points per line light for a wall bin's irradiance.
+    pub line_samples: u32,
+}
+
+impl Default for MemoOptions {
+    fn default() -> MemoOptions {
+        MemoOptions {
+            enabled: true,
+            bin_length: 1.0,
+            floor_samples: 64,
+            line_samples: 64,
+        }
+    }
+}
+
+/// Fills the wall memo for `scene` rendered at `scale` pixels per unit.
+/// Only diffuse walls get real bins; the others hold one unused zero bin.
+pub(crate) fn build_wall_memo(
+    scene: &Scene,
+    options: &MemoOptions,
+    scale: f64,
+    stats: &mut Stats,
+) -> WallMemo {
+    let lengths: Vec<f64> = scene
+        .walls
+        .iter()
+        .map(|w| match w.material {
+            Material::Diffuse { .. } => w.segment.length(),
+            _ => 0.0,
+        })
+        .collect();
+    let bin_length = options.bin_length / scale;
+    let rays = AtomicU64::new(0);
+    let line_samples = options.line_samples.max(1);
+    let memo = WallMemo::build(
+        &lengths,
+        bin_length,
+        scene.lights.len(),
+        |wall, side, u, light_index| {
+            let w = &scene.walls[wall as usize];
+            if !matches!(w.material, Material::Diffuse { .. }) {
+                return [0.0; 3];
+            }
+            let side = if side == 0 {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            let x = w.segment.point_at(u);
+            let receiver = Receiver {
+                normal: Some(w.segment.normal_on(side)),
+                wall: Some(wall),
+            };
+            let light = &scene.lights[light_index];
+            let mut local = Stats::default();
+            let value = match light.shape {
+                LightShape::Line { .. } => {
+                    let mut sum = Rgb::ZERO;
+                    for k in 0..line_samples {
+                        let v = (k as f64 + 0.5) / line_samples as f64;
+                        sum += light_contribution(scene, light, x, receiver, v, &mut local);
+                    }
+                    sum / line_samples as f64
+                }
+                _ => light_contribution(scene, light, x, receiver, 0.0, &mut local),
+            };
+            rays.fetch_add(local.shadow_rays, Ordering::Relaxed);
+            to_value(value)
+        },
+    );
+    stats.memo_entries += memo.entries() as u64;
+    stats.memo_bytes += memo.memory_bytes() as u64;
+    stats.memo_fill_rays += rays.load(Ordering::Relaxed);
+    memo
+}
+
+fn to_value(v: Rgb) -> Value {
+    [v.x as f32, v.y as f32, v.z as f32]
+}
+
+/// The side of the floor's stratified grid for `samples` samples per pixel.
+pub(crate) fn floor_grid(options: &MemoOptions, samples: u32) -> u32 {
+    let n = samples.min(options.floor_samples).max(1);
+    ((n as f64).sqrt().floor() as u32).max(1)
+}
