@@ -43,6 +43,8 @@ enum Command {
         /// The scene file (RON).
         scene: PathBuf,
     },
+    /// Measure error against seconds and samples for each way of rendering.
+    Converge(converge::ConvergeArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -123,6 +125,7 @@ where
     let result = match cli.command {
         Command::Render(args) => render(args, out),
         Command::Check { scene } => check(&scene, out),
+        Command::Converge(args) => converge::converge(args, out),
     };
     match result {
         Ok(()) => EXIT_OK,
@@ -133,8 +136,10 @@ where
     }
 }
 
+mod converge;
+
 /// A failure with its exit code.
-struct Failure {
+pub(crate) struct Failure {
     code: i32,
     message: String,
 }
@@ -155,7 +160,7 @@ impl Failure {
     }
 }
 
-fn load(path: &Path) -> Result<Loaded, Failure> {
+pub(crate) fn load(path: &Path) -> Result<Loaded, Failure> {
     flatray_io::load(path).map_err(|e| match e {
         flatray_io::SceneError::Read { .. } if path.exists() => Failure::other(e),
         _ => Failure::usage(e),
@@ -232,17 +237,7 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
     let loaded_at = Instant::now();
 
     let total = pixels * options.samples as u64;
-    let bar = if args.quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-        if let Ok(style) = ProgressStyle::with_template(
-            "{spinner} rendering [{bar:40}] {percent:>3}%  {elapsed_precise} elapsed, ETA {eta}",
-        ) {
-            bar.set_style(style.progress_chars("=> "));
-        }
-        bar
-    };
+    let bar = progress_bar(total, args.quiet, "rendering");
     let progress = |n: u64| bar.inc(n);
 
     let rendered = match args.threads {
@@ -295,6 +290,22 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// A progress bar with an ETA on stderr, hidden with `--quiet` or when
+/// stderr is not a terminal.
+pub(crate) fn progress_bar(total: u64, quiet: bool, what: &str) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    let template = format!(
+        "{{spinner}} {what} [{{bar:40}}] {{percent:>3}}%  {{elapsed_precise}} elapsed, ETA {{eta}}"
+    );
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
 }
 
 fn default_output(scene: &Path) -> PathBuf {

@@ -13,6 +13,7 @@ mod error;
 pub mod format;
 mod load;
 mod output;
+pub mod report;
 
 pub use error::{SceneError, WriteError};
 pub use format::ToneMap;

@@ -144,7 +144,7 @@ pub fn read_exr(path: &Path) -> Result<Image, String> {
 /// Runs `write` into a temporary file beside `path`, then renames it over
 /// `path`. On any failure the temporary file is removed and `path` is
 /// untouched.
-fn write_atomically(
+pub(crate) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), String>,
 ) -> Result<(), WriteError> {

@@ -13,6 +13,7 @@
 
 mod light;
 mod memo;
+pub mod metrics;
 mod path;
 mod render;
 pub mod sampling;

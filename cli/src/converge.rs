@@ -1,0 +1,327 @@
+//! `flatray converge`: what accuracy costs in time. Renders a reference,
+//! then a ladder of sample counts for each configuration, and writes the
+//! error of every run against the reference (CSV, Markdown, chart).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use flatray_io::report::{ReferenceInfo, StudyRow, slope, write_study};
+use flatray_tracer::metrics::compare;
+use flatray_tracer::{Image, Integrator, MemoOptions, RenderOptions, Scene, image_size};
+
+use crate::{Failure, load, progress_bar};
+
+/// The ways of rendering a study can compare.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum Config {
+    /// Path tracing with the direct-light memo.
+    PathMemo,
+    /// Path tracing, every shadow ray cast.
+    Path,
+    /// The original project's estimator: uniform bounces aimed at the lights.
+    Original,
+}
+
+impl Config {
+    fn name(self) -> &'static str {
+        match self {
+            Config::PathMemo => "path+memo",
+            Config::Path => "path",
+            Config::Original => "original",
+        }
+    }
+
+    fn options(self, base: &RenderOptions) -> RenderOptions {
+        let (integrator, memo) = match self {
+            Config::PathMemo => (Integrator::Path, true),
+            Config::Path => (Integrator::Path, false),
+            Config::Original => (Integrator::Original, false),
+        };
+        RenderOptions {
+            integrator,
+            memo: MemoOptions {
+                enabled: memo,
+                ..base.memo
+            },
+            ..*base
+        }
+    }
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ConvergeArgs {
+    /// The scene file (RON).
+    scene: PathBuf,
+    /// The folder for the reference and the report (created if missing).
+    /// Default: `converge-<scene name>`.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// A reference image (linear EXR of the same size) instead of
+    /// rendering one.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Samples per pixel of the rendered reference (path tracing, memo
+    /// off, its own seeds). It is saved in the output folder and reused.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(2..=(1 << 20)))]
+    reference_spp: u32,
+    /// The ladder's last sample count (powers of two from 1).
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)))]
+    max_spp: u32,
+    /// Seconds per configuration after which its ladder stops.
+    #[arg(long, default_value_t = 120.0)]
+    budget: f64,
+    /// The configurations to compare (comma-separated).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathMemo, Config::Path, Config::Original])]
+    configs: Vec<Config>,
+    /// Pixels per world unit, as for `render`.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Most wall reflections (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    bounces: Option<u32>,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+pub(crate) fn converge(args: ConvergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
+    if !(args.scale.is_finite() && args.scale > 0.0) {
+        return Err(Failure::usage(format!(
+            "--scale: expected a finite number > 0, found {}",
+            args.scale
+        )));
+    }
+    if !(args.budget.is_finite() && args.budget > 0.0) {
+        return Err(Failure::usage(format!(
+            "--budget: expected seconds > 0, found {}",
+            args.budget
+        )));
+    }
+    let loaded = load(&args.scene)?;
+    let base = RenderOptions {
+        scale: args.scale,
+        bounces: args.bounces.unwrap_or(loaded.options.bounces),
+        ..loaded.options
+    };
+    let (width, height) = image_size(&loaded.scene, base.scale);
+    let pixels = width as u64 * height as u64;
+    let stem = args
+        .scene
+        .file_stem()
+        .map_or("scene".to_string(), |s| s.to_string_lossy().into_owned());
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("converge-{stem}")));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| Failure::other(format!("{}: cannot create the folder: {e}", dir.display())))?;
+
+    let ladder: Vec<u32> = (0..=20)
+        .map(|k| 1u32 << k)
+        .take_while(|&n| n <= args.max_spp)
+        .collect();
+    let ladder_work: u64 =
+        ladder.iter().map(|&n| n as u64).sum::<u64>() * pixels * args.configs.len() as u64;
+    let cached = dir.join(format!("reference-{}spp.exr", args.reference_spp));
+    let needs_reference = args.reference.is_none() && !reference_matches(&cached, width, height);
+    let reference_work = if needs_reference {
+        args.reference_spp as u64 * pixels
+    } else {
+        0
+    };
+    let bar = progress_bar(reference_work + ladder_work, args.quiet, "converging");
+    let progress = |n: u64| bar.inc(n);
+
+    let (reference, info) = match &args.reference {
+        Some(path) => {
+            let image = flatray_io::read_exr(path).map_err(Failure::usage)?;
+            if (image.width, image.height) != (width, height) {
+                return Err(Failure::usage(format!(
+                    "{}: the reference is {} x {}, the render {width} x {height}",
+                    path.display(),
+                    image.width,
+                    image.height
+                )));
+            }
+            let info = ReferenceInfo {
+                description: format!("`{}` (given)", path.display()),
+                relative_noise: 0.0,
+            };
+            (image, info)
+        }
+        None => reference(
+            &loaded.scene,
+            &base,
+            args.reference_spp,
+            &cached,
+            needs_reference,
+            &progress,
+        )?,
+    };
+
+    let mut rows = Vec::new();
+    for (k, config) in args.configs.iter().enumerate() {
+        let mut spent = 0.0;
+        for &samples in &ladder {
+            if spent > args.budget {
+                bar.inc(samples as u64 * pixels);
+                continue;
+            }
+            let options = RenderOptions {
+                samples,
+                seed: base
+                    .seed
+                    .wrapping_add(1 + 7919 * (k as u64 * 64 + samples as u64)),
+                ..config.options(&base)
+            };
+            let started = Instant::now();
+            let rendered = flatray_tracer::render(&loaded.scene, &options, &progress);
+            let seconds = started.elapsed().as_secs_f64();
+            spent += seconds;
+            let Some(error) = compare(&rendered.image, &reference) else {
+                return Err(Failure::other(
+                    "the reference is black: there is no relative error to measure",
+                ));
+            };
+            // The reference's own noise is independent of the run's error
+            // and adds to it in quadrature: take it out.
+            let raw = error.relative_rmse;
+            let relative_rmse = (raw * raw - info.relative_noise * info.relative_noise)
+                .max(0.0)
+                .sqrt();
+            rows.push(StudyRow {
+                config: config.name().to_string(),
+                samples,
+                seconds,
+                rays: rendered.stats.rays() + rendered.stats.memo_fill_rays,
+                rmse: error.rmse,
+                raw_relative_rmse: raw,
+                relative_rmse,
+                mean_error: error.mean_error,
+            });
+        }
+    }
+    bar.finish_and_clear();
+    let scene_name = args.scene.display().to_string();
+    write_study(&dir, &rows, &info, &scene_name).map_err(Failure::other)?;
+
+    let _ = writeln!(
+        out,
+        "wrote {}/convergence.{{csv,md,png}} ({} runs)",
+        dir.display(),
+        rows.len()
+    );
+    let _ = writeln!(
+        out,
+        "reference: {} (relative noise {:.3} %)",
+        info.description,
+        info.relative_noise * 100.0
+    );
+    for config in &args.configs {
+        let name = config.name();
+        let last = rows.iter().rev().find(|r| r.config == name);
+        let fitted = slope(&rows, name).map_or("—".to_string(), |s| format!("{s:.2}"));
+        if let Some(last) = last {
+            let _ = writeln!(
+                out,
+                "  {name:<10} slope {fitted:>5}   {} spp: {:.3} % in {:.2} s",
+                last.samples,
+                last.relative_rmse * 100.0,
+                last.seconds
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Whether `path` holds an EXR of the given size.
+fn reference_matches(path: &Path, width: u32, height: u32) -> bool {
+    path.exists()
+        && flatray_io::read_exr(path).is_ok_and(|i| (i.width, i.height) == (width, height))
+}
+
+/// The reference: two independent half renders, averaged. Half their
+/// difference estimates the reference's own error. Saved (with its noise in
+/// a text file beside it) and reused when present.
+fn reference(
+    scene: &Scene,
+    base: &RenderOptions,
+    samples: u32,
+    cached: &Path,
+    render: bool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<(Image, ReferenceInfo), Failure> {
+    let noise_path = cached.with_extension("noise.txt");
+    let description = format!(
+        "path tracing without the memo, {samples} spp, saved as `{}`",
+        cached.display()
+    );
+    if !render {
+        let image = flatray_io::read_exr(cached).map_err(Failure::other)?;
+        let relative_noise = std::fs::read_to_string(&noise_path)
+            .ok()
+            .and_then(|t| t.trim().parse::<f64>().ok())
+            .unwrap_or(0.0);
+        return Ok((
+            image,
+            ReferenceInfo {
+                description,
+                relative_noise,
+            },
+        ));
+    }
+    let half = |seed: u64| {
+        let options = RenderOptions {
+            samples: samples / 2,
+            seed,
+            ..Config::Path.options(base)
+        };
+        flatray_tracer::render(scene, &options, progress).image
+    };
+    let a = half(base.seed.wrapping_add(0x5eed_0001));
+    let b = half(base.seed.wrapping_add(0x5eed_0002));
+    let mean = Image {
+        pixels: a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .map(|(x, y)| {
+                [
+                    (x[0] + y[0]) * 0.5,
+                    (x[1] + y[1]) * 0.5,
+                    (x[2] + y[2]) * 0.5,
+                ]
+            })
+            .collect(),
+        ..a.clone()
+    };
+    // Each half's error against the truth has RMS e; their difference has
+    // RMS e * sqrt(2), and their mean's error is e / sqrt(2): half the
+    // difference's RMS.
+    let rms_mean = rms(&mean);
+    let relative_noise = match compare(&a, &b) {
+        Some(difference) if rms_mean > 0.0 => difference.rmse * 0.5 / rms_mean,
+        _ => 0.0,
+    };
+    flatray_io::write_exr(&mean, cached).map_err(Failure::other)?;
+    std::fs::write(&noise_path, format!("{relative_noise}\n"))
+        .map_err(|e| Failure::other(format!("{}: {e}", noise_path.display())))?;
+    Ok((
+        mean,
+        ReferenceInfo {
+            description,
+            relative_noise,
+        },
+    ))
+}
+
+fn rms(image: &Image) -> f64 {
+    let sum: f64 = image
+        .pixels
+        .iter()
+        .flatten()
+        .map(|&v| (v as f64).powi(2))
+        .sum();
+    (sum / (image.pixels.len() * 3).max(1) as f64).sqrt()
+}

@@ -1,0 +1,294 @@
+//! The files of a convergence study: a CSV of every run, a Markdown
+//! summary, and a log-log chart of error against seconds.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+
+use flatray_tracer::metrics::{log_log_slope, reach};
+use plotters::prelude::*;
+
+use crate::error::WriteError;
+use crate::output::write_atomically;
+
+/// One render of a convergence study.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StudyRow {
+    pub config: String,
+    pub samples: u32,
+    /// Wall-clock seconds of the render, memo fill included.
+    pub seconds: f64,
+    /// Rays cast, memo fill included.
+    pub rays: u64,
+    /// RMSE against the reference, as measured.
+    pub rmse: f64,
+    /// `rmse` relative to the reference's RMS value, as measured.
+    pub raw_relative_rmse: f64,
+    /// The relative RMSE with the reference's own noise taken out in
+    /// quadrature: the run's error against the truth.
+    pub relative_rmse: f64,
+    /// Mean of (run - reference): the bias estimate.
+    pub mean_error: f64,
+}
+
+/// What the report says about its reference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceInfo {
+    pub description: String,
+    /// The reference's own estimated relative RMSE.
+    pub relative_noise: f64,
+}
+
+/// The accuracy targets of the summary table.
+pub const TARGETS: [f64; 3] = [0.10, 0.03, 0.01];
+
+/// The configurations in `rows`, in order of first appearance.
+pub fn configs(rows: &[StudyRow]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for row in rows {
+        if !out.contains(&row.config) {
+            out.push(row.config.clone());
+        }
+    }
+    out
+}
+
+fn rows_of<'a>(rows: &'a [StudyRow], config: &str) -> Vec<&'a StudyRow> {
+    rows.iter().filter(|r| r.config == config).collect()
+}
+
+/// The fitted slope of relative RMSE against samples, for one
+/// configuration.
+pub fn slope(rows: &[StudyRow], config: &str) -> Option<f64> {
+    let points: Vec<(f64, f64)> = rows_of(rows, config)
+        .iter()
+        .map(|r| (r.samples as f64, r.relative_rmse))
+        .collect();
+    log_log_slope(&points)
+}
+
+/// The CSV text of `rows`.
+pub fn csv(rows: &[StudyRow]) -> String {
+    let mut out = String::from(
+        "config,samples,seconds,rays,rmse,raw_relative_rmse,relative_rmse,mean_error\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            out,
+            "{},{},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e}",
+            r.config,
+            r.samples,
+            r.seconds,
+            r.rays,
+            r.rmse,
+            r.raw_relative_rmse,
+            r.relative_rmse,
+            r.mean_error
+        );
+    }
+    out
+}
+
+/// The Markdown summary: the reference, each configuration's fitted slope,
+/// and the seconds and samples it needs to reach each target.
+pub fn markdown(rows: &[StudyRow], reference: &ReferenceInfo, scene: &str) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "# Convergence of `{scene}`\n");
+    let _ = writeln!(
+        out,
+        "Reference: {}; its own estimated relative RMSE is {:.3} %. Every error below has that noise taken out in quadrature (`relative_rmse` in the CSV; `raw_relative_rmse` is as measured), so errors well below it are uncertain.\n",
+        reference.description,
+        reference.relative_noise * 100.0
+    );
+    let _ = writeln!(
+        out,
+        "Seconds (wall clock) and samples per pixel needed to reach a relative RMSE, by log-log interpolation between measured runs (— where no run reached it).\n"
+    );
+    let mut header = String::from("| configuration | slope |");
+    let mut rule = String::from("|---|---|");
+    for t in TARGETS {
+        let _ = write!(header, " {:.0} %: s | {:.0} %: spp |", t * 100.0, t * 100.0);
+        rule.push_str("---|---|");
+    }
+    let _ = writeln!(out, "{header}\n{rule}");
+    for config in configs(rows) {
+        let mine = rows_of(rows, &config);
+        let by_seconds: Vec<(f64, f64)> =
+            mine.iter().map(|r| (r.seconds, r.relative_rmse)).collect();
+        let by_samples: Vec<(f64, f64)> = mine
+            .iter()
+            .map(|r| (r.samples as f64, r.relative_rmse))
+            .collect();
+        let slope = slope(rows, &config).map_or("—".to_string(), |s| format!("{s:.2}"));
+        let _ = write!(out, "| {config} | {slope} |");
+        for t in TARGETS {
+            let s = reach(&by_seconds, t).map_or("—".to_string(), |v| format!("{v:.3}"));
+            let n = reach(&by_samples, t).map_or("—".to_string(), |v| format!("{v:.0}"));
+            let _ = write!(out, " {s} | {n} |");
+        }
+        out.push('\n');
+    }
+    let _ = writeln!(
+        out,
+        "\nThe slope is the least-squares slope of log(relative RMSE) against log(samples): -0.5 for an unbiased estimator whose error is all noise; flatter where a bias floor is reached."
+    );
+    out
+}
+
+/// Writes the CSV, the Markdown summary and the chart into `dir`.
+pub fn write_study(
+    dir: &Path,
+    rows: &[StudyRow],
+    reference: &ReferenceInfo,
+    scene: &str,
+) -> Result<(), WriteError> {
+    let text = csv(rows);
+    write_atomically(&dir.join("convergence.csv"), |w| {
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })?;
+    let text = markdown(rows, reference, scene);
+    write_atomically(&dir.join("convergence.md"), |w| {
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })?;
+    let png = chart_png(rows, reference, scene).map_err(|message| WriteError::Io {
+        path: dir.join("convergence.png"),
+        message,
+    })?;
+    write_atomically(&dir.join("convergence.png"), |w| {
+        w.write_all(&png).map_err(|e| e.to_string())
+    })
+}
+
+const FONT: &str = "flatray-sans";
+
+fn register_font() -> Result<(), String> {
+    plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular())
+        .map_err(|_| "the embedded DejaVu font did not load".to_string())
+}
+
+/// The chart: relative RMSE against seconds, log-log, a line per
+/// configuration, a slope -1/2 guide and the reference's noise level.
+pub fn chart_png(
+    rows: &[StudyRow],
+    reference: &ReferenceInfo,
+    scene: &str,
+) -> Result<Vec<u8>, String> {
+    register_font()?;
+    let (width, height) = (900u32, 600u32);
+    let mut buffer = vec![0u8; (width * height * 3) as usize];
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    let xs: Vec<f64> = rows
+        .iter()
+        .map(|r| r.seconds)
+        .filter(|v| positive(*v))
+        .collect();
+    let ys: Vec<f64> = rows
+        .iter()
+        .map(|r| r.relative_rmse)
+        .chain([reference.relative_noise])
+        .filter(|v| positive(*v))
+        .collect();
+    if xs.is_empty() || ys.is_empty() {
+        return Err("no run with a positive time and error to plot".to_string());
+    }
+    let fold = |v: &[f64]| {
+        (
+            v.iter().copied().fold(f64::INFINITY, f64::min),
+            v.iter().copied().fold(0.0, f64::max),
+        )
+    };
+    let (x0, x1) = fold(&xs);
+    let (y0, y1) = fold(&ys);
+    let (x0, x1) = (x0 / 1.5, x1 * 1.5);
+    let (y0, y1) = (y0 / 1.5, y1 * 1.5);
+    {
+        let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("Error against time: {scene}"), (FONT, 24))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(70)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("seconds (wall clock)")
+            .y_desc("relative RMSE")
+            .label_style((FONT, 15))
+            .axis_desc_style((FONT, 17))
+            .x_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| format!("{v:.3}"))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let palette = [
+            RGBColor(31, 119, 180),
+            RGBColor(214, 39, 40),
+            RGBColor(44, 160, 44),
+            RGBColor(148, 103, 189),
+            RGBColor(255, 127, 14),
+        ];
+        for (k, config) in configs(rows).iter().enumerate() {
+            let color = palette[k % palette.len()];
+            let points: Vec<(f64, f64)> = rows_of(rows, config)
+                .iter()
+                .map(|r| (r.seconds, r.relative_rmse))
+                .filter(|(x, y)| positive(*x) && positive(*y))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(config.as_str())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(|e| e.to_string())?;
+        }
+        // A slope -1/2 guide through the first run of the first config.
+        if let Some(first) = rows
+            .iter()
+            .find(|r| positive(r.seconds) && positive(r.relative_rmse))
+        {
+            let guide = |x: f64| first.relative_rmse * (x / first.seconds).powf(-0.5);
+            chart
+                .draw_series(LineSeries::new(
+                    [(x0, guide(x0)), (x1, guide(x1))],
+                    BLACK.mix(0.4).stroke_width(1),
+                ))
+                .map_err(|e| e.to_string())?
+                .label("slope -1/2")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.4)));
+        }
+        if positive(reference.relative_noise) {
+            let level = reference.relative_noise;
+            chart
+                .draw_series(LineSeries::new(
+                    [(x0, level), (x1, level)],
+                    RGBColor(120, 120, 120).stroke_width(1),
+                ))
+                .map_err(|e| e.to_string())?
+                .label("reference noise")
+                .legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], RGBColor(120, 120, 120))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 15))
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&buffer, width, height, image::ExtendedColorType::Rgb8)
+        .map_err(|e| e.to_string())?;
+    Ok(png)
+}
+
+use image::ImageEncoder as _;

@@ -1,0 +1,104 @@
+//! `flatray converge` on a small scene: the files exist and agree with each
+//! other, and the unbiased configurations' error falls as 1/sqrt(samples).
+
+use flatray_tests::{TempDir, flatray};
+
+const SCENE: &str = "Scene(canvas: (48, 40), floor: Color((0.9, 0.9, 0.9)),
+    walls: [
+        Wall(a: (5, 5), b: (43, 5), material: Diffuse(albedo: (0.9, 0.2, 0.2))),
+        Wall(a: (43, 5), b: (43, 35)),
+        Wall(a: (12, 14), b: (22, 22), material: Mirror()),
+        Wall(a: (4, 33), b: (24, 35)),
+    ],
+    lights: [
+        Point(at: (10.5, 11.2), intensity: 5.0),
+        Line(a: (25, 9), b: (35, 9), intensity: 0.5),
+    ],
+    render: (bounces: 2))";
+
+#[test]
+fn converge_writes_agreeing_files_and_measures_a_half_slope() {
+    let dir = TempDir::new("converge");
+    let scene = dir.write("small.ron", SCENE);
+    let out = dir.path().join("study");
+    let run = flatray(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--reference-spp",
+        "2048",
+        "--max-spp",
+        "64",
+        "--quiet",
+    ]);
+    assert_eq!(run.code, 0, "{run:?}");
+
+    let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+    let markdown = std::fs::read_to_string(out.join("convergence.md")).unwrap();
+    let png = std::fs::read(out.join("convergence.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"), "the chart is a PNG");
+    let chart = image::load_from_memory(&png).unwrap();
+    assert_eq!((chart.width(), chart.height()), (900, 600));
+
+    // CSV: one row per configuration and rung of the ladder 1..64.
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * 7, "{csv}");
+    for config in ["path+memo", "path", "original"] {
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r[0] == config)
+            .map(|r| (r[1].parse().unwrap(), r[6].parse().unwrap()))
+            .collect();
+        assert_eq!(points.len(), 7);
+        let slope = flatray_tracer::metrics::log_log_slope(&points).unwrap();
+        // The Markdown table shows the same fitted slope as the CSV gives.
+        let line = markdown
+            .lines()
+            .find(|l| l.starts_with(&format!("| {config} |")))
+            .unwrap();
+        assert!(
+            line.contains(&format!("| {slope:.2} |")),
+            "{line} vs {slope:.2}"
+        );
+        // And stdout prints it too.
+        assert!(
+            run.stdout.contains(&format!("slope {slope:>5.2}")),
+            "{}",
+            run.stdout
+        );
+        if config != "path+memo" {
+            // Unbiased: error falls as samples^(-1/2).
+            assert!((-0.6..=-0.4).contains(&slope), "{config}: slope {slope}");
+        } else {
+            // The memo's bias may flatten it, never steepen it.
+            assert!((-0.6..=-0.2).contains(&slope), "{config}: slope {slope}");
+        }
+    }
+
+    // A second run reuses the saved reference instead of rendering it.
+    let reference = out.join("reference-2048spp.exr");
+    let before = std::fs::metadata(&reference).unwrap().modified().unwrap();
+    let again = flatray(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--reference-spp",
+        "2048",
+        "--max-spp",
+        "2",
+        "--configs",
+        "path",
+        "--quiet",
+    ]);
+    assert_eq!(again.code, 0, "{again:?}");
+    assert_eq!(
+        std::fs::metadata(&reference).unwrap().modified().unwrap(),
+        before
+    );
+}
