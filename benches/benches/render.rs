@@ -77,5 +77,39 @@ fn room_render(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, closest_hit, room_render);
+/// Each scene rendered with its plan and with every effect forced on: what
+/// skipping buys.
+fn plan(c: &mut Criterion) {
+    let direct_only = "Scene(canvas: (200, 200), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (20, 20), b: (180, 20), material: Transparent()), Wall(a: (180, 20), b: (180, 180), material: Transparent())],
+        lights: [Point(at: (60, 60), intensity: 3.0), Line(a: (100, 150), b: (150, 160), intensity: 0.1)],
+        render: (bounces: 1))";
+    let no_mirror = "Scene(canvas: (200, 200), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (20, 20), b: (180, 20), material: Diffuse(albedo: (0.9, 0.2, 0.2))), Wall(a: (180, 20), b: (180, 180)),
+                Wall(a: (40, 120), b: (90, 140))],
+        lights: [Point(at: (60, 60), intensity: 3.0), Line(a: (100, 150), b: (150, 160), intensity: 0.1)],
+        render: (bounces: 2))";
+    let mut group = c.benchmark_group("plan");
+    group.sample_size(10);
+    for (name, text) in [("direct-only", direct_only), ("no-mirror", no_mirror)] {
+        let loaded = match flatray_io::parse(text, Path::new("bench.ron"), Path::new(".")) {
+            Ok(l) => l,
+            Err(e) => panic!("{e}"),
+        };
+        for force in [false, true] {
+            let options = RenderOptions {
+                samples: 16,
+                force_all_effects: force,
+                ..loaded.options
+            };
+            let label = if force { "forced" } else { "planned" };
+            group.bench_function(BenchmarkId::new(name, label), |b| {
+                b.iter(|| flatray_tracer::render(&loaded.scene, &options, &|_| {}))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, closest_hit, room_render, plan);
 criterion_main!(benches);

@@ -43,6 +43,18 @@ enum Command {
         /// The scene file (RON).
         scene: PathBuf,
     },
+    /// Print the render plan: which effects the scene calls for, which are
+    /// skipped and why.
+    Plan {
+        /// The scene file (RON).
+        scene: PathBuf,
+        /// Most wall reflections (overrides the scene).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
+        bounces: Option<u32>,
+        /// The direct-light memo (overrides the scene).
+        #[arg(long, value_enum)]
+        cache: Option<Switch>,
+    },
     /// Measure error against seconds and samples for each way of rendering.
     Converge(converge::ConvergeArgs),
 }
@@ -86,6 +98,10 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Debugging and benchmarking: run every effect even where the plan
+    /// would skip it (only where that cannot change the image).
+    #[arg(long, hide = true)]
+    force_all_effects: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -125,6 +141,11 @@ where
     let result = match cli.command {
         Command::Render(args) => render(args, out),
         Command::Check { scene } => check(&scene, out),
+        Command::Plan {
+            scene,
+            bounces,
+            cache,
+        } => plan(&scene, bounces, cache, out),
         Command::Converge(args) => converge::converge(args, out),
     };
     match result {
@@ -181,6 +202,30 @@ fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
     Ok(())
 }
 
+fn plan(
+    scene: &Path,
+    bounces: Option<u32>,
+    cache: Option<Switch>,
+    out: &mut dyn Write,
+) -> Result<(), Failure> {
+    let loaded = load(scene)?;
+    let options = RenderOptions {
+        bounces: bounces.unwrap_or(loaded.options.bounces),
+        memo: MemoOptions {
+            enabled: match cache {
+                None => loaded.options.memo.enabled,
+                Some(Switch::On) => true,
+                Some(Switch::Off) => false,
+            },
+            ..loaded.options.memo
+        },
+        ..loaded.options
+    };
+    let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
+    let _ = writeln!(out, "{}", plan);
+    Ok(())
+}
+
 fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
     let started = Instant::now();
     let output = match &args.output {
@@ -222,6 +267,7 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
             },
             ..loaded.options.memo
         },
+        force_all_effects: args.force_all_effects,
     };
     let (width, height) = image_size(&loaded.scene, options.scale);
     let pixels = width as u64 * height as u64;
@@ -271,6 +317,11 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
         );
     }
     if args.stats {
+        let _ = writeln!(
+            out,
+            "plan\n{}",
+            flatray_tracer::Plan::new(&loaded.scene, &options)
+        );
         let _ = writeln!(out, "{}", rendered.stats);
         let _ = writeln!(out, "seconds");
         let _ = writeln!(

@@ -260,6 +260,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             floor_samples: file.render.cache_floor_samples.0,
             ..MemoOptions::default()
         },
+        force_all_effects: false,
     };
     Ok(Loaded {
         scene,

@@ -15,6 +15,7 @@ mod light;
 mod memo;
 pub mod metrics;
 mod path;
+pub mod plan;
 mod render;
 pub mod sampling;
 pub mod scene;
@@ -24,6 +25,7 @@ mod stats;
 pub type Rgb = glam::DVec3;
 
 pub use memo::MemoOptions;
+pub use plan::Plan;
 pub use render::{
     Image, Integrator, RenderOptions, Rendered, TILE, image_size, pixel_sample, render,
 };

@@ -46,6 +46,7 @@ pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
     receiver: Receiver,
+    shadows: bool,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
@@ -55,22 +56,31 @@ pub(crate) fn direct_light(
             LightShape::Line { .. } => stream.uniform(),
             _ => 0.0,
         };
-        sum += light_contribution(scene, light, x, receiver, u, stats);
+        sum += light_contribution(scene, light, x, receiver, u, shadows, stats);
     }
     sum
 }
 
 /// The light that reaches `x` from one light, coloured, with one shadow
-/// ray. `u` in `[0, 1)` picks the point on a line light (uniform in the
-/// angle it subtends); other lights ignore it.
+/// ray (none when `shadows` is off: the plan found nothing that occludes).
+/// `u` in `[0, 1)` picks the point on a line light (uniform in the angle
+/// it subtends); other lights ignore it.
 pub(crate) fn light_contribution(
     scene: &Scene,
     light: &Light,
     x: DVec2,
     receiver: Receiver,
     u: f64,
+    shadows: bool,
     stats: &mut Stats,
 ) -> Rgb {
+    let transmittance = |ray: &Ray, t_max: f64, skip: Skip, stats: &mut Stats| {
+        if shadows {
+            transmittance(scene, ray, t_max, skip, stats)
+        } else {
+            Rgb::ONE
+        }
+    };
     let r0 = scene.small_radius;
     let value = match light.shape {
         LightShape::Point { at } | LightShape::Spot { at, .. } => {
@@ -89,7 +99,7 @@ pub(crate) fn light_contribution(
                 if weight == 0.0 {
                     return Rgb::ZERO;
                 }
-                let vis = transmittance(scene, &Ray::new(x, to), 1.0, receiver.skip(None), stats);
+                let vis = transmittance(&Ray::new(x, to), 1.0, receiver.skip(None), stats);
                 Rgb::splat(light.intensity * light.falloff.g(r, r0) * weight) * vis
             }
         }
@@ -108,13 +118,7 @@ pub(crate) fn light_contribution(
             if weight == 0.0 {
                 return Rgb::ZERO;
             }
-            let vis = transmittance(
-                scene,
-                &Ray::new(x, s.point - x),
-                1.0,
-                receiver.skip(wall),
-                stats,
-            );
+            let vis = transmittance(&Ray::new(x, s.point - x), 1.0, receiver.skip(wall), stats);
             let per_angle = light.intensity * light.falloff.per_radian(s.distance, r0);
             Rgb::splat(per_angle * s.subtended * weight) * vis
         }
@@ -125,7 +129,6 @@ pub(crate) fn light_contribution(
                 return Rgb::ZERO;
             }
             let vis = transmittance(
-                scene,
                 &Ray::new(x, to_light),
                 f64::INFINITY,
                 receiver.skip(None),

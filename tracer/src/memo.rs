@@ -42,6 +42,7 @@ pub(crate) fn build_wall_memo(
     scene: &Scene,
     options: &MemoOptions,
     scale: f64,
+    shadows: bool,
     stats: &mut Stats,
 ) -> WallMemo {
     let lengths: Vec<f64> = scene
@@ -81,11 +82,12 @@ pub(crate) fn build_wall_memo(
                     let mut sum = Rgb::ZERO;
                     for k in 0..line_samples {
                         let v = (k as f64 + 0.5) / line_samples as f64;
-                        sum += light_contribution(scene, light, x, receiver, v, &mut local);
+                        sum +=
+                            light_contribution(scene, light, x, receiver, v, shadows, &mut local);
                     }
                     sum / line_samples as f64
                 }
-                _ => light_contribution(scene, light, x, receiver, 0.0, &mut local),
+                _ => light_contribution(scene, light, x, receiver, 0.0, shadows, &mut local),
             };
             rays.fetch_add(local.shadow_rays, Ordering::Relaxed);
             to_value(value)

@@ -17,19 +17,19 @@ use crate::{Integrator, Rgb, Stats};
 /// With `floor_direct` false the floor's own direct light is left out (the
 /// render loop has it from the memo). With a `memo`, next-event estimation
 /// at a diffuse wall reads it instead of casting shadow rays.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn path_sample(
-    scene: &Scene,
-    p: DVec2,
-    bounces: u32,
-    integrator: Integrator,
-    floor_direct: bool,
-    memo: Option<&WallMemo>,
-    stream: &mut Stream,
-    stats: &mut Stats,
-) -> Rgb {
+pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &mut Stats) -> Rgb {
+    let Trace {
+        scene,
+        bounces,
+        integrator,
+        floor_direct,
+        memo,
+        shadows,
+        mirror_emission,
+        force,
+    } = *trace;
     let mut fluence = if floor_direct {
-        direct_light(scene, p, Receiver::FLOOR, stream, stats)
+        direct_light(scene, p, Receiver::FLOOR, shadows, stream, stats)
     } else {
         Rgb::ZERO
     };
@@ -53,8 +53,12 @@ pub(crate) fn path_sample(
         stats.bounce_rays += 1;
         let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        if after_mirror {
-            fluence += throughput * emission_crossed(scene, &ray, hit_t, unfolded);
+        if mirror_emission && (after_mirror || force) {
+            stats.emission_tests += 1;
+            let emitted = emission_crossed(scene, &ray, hit_t, unfolded);
+            if after_mirror {
+                fluence += throughput * emitted;
+            }
         }
         let Some((index, h)) = hit else {
             stats.paths_escaped += 1;
@@ -76,6 +80,7 @@ pub(crate) fn path_sample(
         let normal = wall.segment.normal_on(side);
         match wall.material {
             Material::Transparent { tint } => {
+                stats.transparent_passes += 1;
                 throughput *= tint;
                 if throughput == Rgb::ZERO {
                     stats.paths_absorbed += 1;
@@ -86,6 +91,7 @@ pub(crate) fn path_sample(
                 continue;
             }
             Material::Mirror { tint } => {
+                stats.mirror_reflections += 1;
                 bounce += 1;
                 if bounce > bounces {
                     stats.paths_bounce_limit += 1;
@@ -106,7 +112,13 @@ pub(crate) fn path_sample(
                     stats.paths_bounce_limit += 1;
                     break;
                 }
-                let rho = scene.wall_albedo(albedo, x);
+                let rho = match albedo {
+                    Some(rho) => rho,
+                    None => {
+                        stats.floor_albedo_reads += 1;
+                        scene.floor.albedo_at(&scene.canvas, x)
+                    }
+                };
                 // 2pi L_o = 2pi (rho / 2) E, with 2pi already in throughput.
                 let irradiance = match memo {
                     Some(memo) => {
@@ -123,7 +135,7 @@ pub(crate) fn path_sample(
                             normal: Some(normal),
                             wall: Some(index),
                         };
-                        direct_light(scene, x, receiver, stream, stats)
+                        direct_light(scene, x, receiver, shadows, stream, stats)
                     }
                 };
                 fluence += throughput * rho * 0.5 * irradiance;
@@ -156,6 +168,26 @@ pub(crate) fn path_sample(
         }
     }
     fluence
+}
+
+/// What one path sample needs to know beyond its position: the scene and
+/// the switches of the render plan.
+#[derive(Clone, Copy)]
+pub(crate) struct Trace<'a> {
+    pub scene: &'a Scene,
+    /// Most reflections; 0 when the plan skips indirect light.
+    pub bounces: u32,
+    pub integrator: Integrator,
+    /// Whether the sample includes the floor's own direct light.
+    pub floor_direct: bool,
+    /// The wall memo, read instead of shadow rays at diffuse walls.
+    pub memo: Option<&'a WallMemo>,
+    /// Whether shadow rays are cast (otherwise every light is visible).
+    pub shadows: bool,
+    /// Whether path rays look for line lights after a mirror.
+    pub mirror_emission: bool,
+    /// Forced mode: look for them after every bounce (adding nothing).
+    pub force: bool,
 }
 
 /// Radiance-like emission of non-solid line lights that `ray` crosses

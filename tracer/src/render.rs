@@ -8,9 +8,10 @@ use flatray_cache::WallMemo;
 
 use crate::light::{Receiver, direct_light};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
-use crate::path::path_sample;
+use crate::path::{Trace, path_sample};
+use crate::plan::Plan;
 use crate::sampling::Stream;
-use crate::scene::{Material, Scene};
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Which estimator a render uses.
@@ -41,6 +42,9 @@ pub struct RenderOptions {
     pub integrator: Integrator,
     /// The direct-light memo.
     pub memo: MemoOptions,
+    /// Run every effect wherever doing so cannot change the image, even
+    /// when the plan would skip it: a debugging and benchmarking aid.
+    pub force_all_effects: bool,
 }
 
 impl Default for RenderOptions {
@@ -53,6 +57,7 @@ impl Default for RenderOptions {
             scale: 1.0,
             integrator: Integrator::Path,
             memo: MemoOptions::default(),
+            force_all_effects: false,
         }
     }
 }
@@ -102,13 +107,22 @@ pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
 /// depend on the number of threads or on their scheduling.
 pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + Sync)) -> Rendered {
     let (width, height) = image_size(scene, options.scale);
+    let plan = Plan::new(scene, options);
     let mut memo_stats = Stats::default();
-    let memo = wall_memo_for(scene, options, &mut memo_stats);
+    let memo = plan.wall_memo.then(|| {
+        build_wall_memo(
+            scene,
+            &options.memo,
+            options.scale,
+            plan.shadows,
+            &mut memo_stats,
+        )
+    });
     let context = Context {
-        scene,
         options,
         size: (width, height),
-        memo: memo.as_ref(),
+        floor_memo: plan.floor_memo,
+        trace: trace_for(scene, options, &plan, memo.as_ref()),
     };
     let tiles_x = width.div_ceil(TILE);
     let tiles_y = height.div_ceil(TILE);
@@ -160,23 +174,30 @@ fn pixel_size(scene: &Scene, (width, height): (u32, u32)) -> DVec2 {
 
 /// What every pixel of one render shares.
 struct Context<'a> {
-    scene: &'a Scene,
     options: &'a RenderOptions,
     size: (u32, u32),
-    memo: Option<&'a WallMemo>,
+    /// Whether the floor's direct light is estimated once per pixel.
+    floor_memo: bool,
+    trace: Trace<'a>,
 }
 
-/// The wall memo, when the options ask for it and a path can read it: with
-/// at least one bounce, a diffuse wall and a light.
-fn wall_memo_for(scene: &Scene, options: &RenderOptions, stats: &mut Stats) -> Option<WallMemo> {
-    let useful = options.memo.enabled
-        && options.bounces > 0
-        && !scene.lights.is_empty()
-        && scene
-            .walls
-            .iter()
-            .any(|w| matches!(w.material, Material::Diffuse { .. }));
-    useful.then(|| build_wall_memo(scene, &options.memo, options.scale, stats))
+/// The switches of a path sample, from the plan.
+fn trace_for<'a>(
+    scene: &'a Scene,
+    options: &RenderOptions,
+    plan: &Plan,
+    memo: Option<&'a WallMemo>,
+) -> Trace<'a> {
+    Trace {
+        scene,
+        bounces: if plan.indirect { options.bounces } else { 0 },
+        integrator: options.integrator,
+        floor_direct: !plan.floor_memo,
+        memo,
+        shadows: plan.shadows,
+        mirror_emission: plan.mirror_emission,
+        force: options.force_all_effects,
+    }
 }
 
 /// Stream sample indices from here up key the floor memo's strata, apart
@@ -184,22 +205,23 @@ fn wall_memo_for(scene: &Scene, options: &RenderOptions, stats: &mut Stats) -> O
 const FLOOR_STREAMS: u64 = 1 << 40;
 
 /// One pixel's value: exposure times floor albedo times its mean fluence.
-/// With the memo, the floor's direct light is estimated once per pixel
-/// over a stratified grid and every path sample reuses it; without, each
-/// sample estimates it anew. A sample whose estimate is not finite is left
-/// out and reported in `stats`.
+/// With the floor memo, the floor's direct light is estimated once per
+/// pixel over a stratified grid and every path sample reuses it; without,
+/// each sample estimates it anew. A sample whose estimate is not finite is
+/// left out and reported in `stats`.
 fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3] {
     let Context {
-        scene,
         options,
         size,
-        ..
+        floor_memo,
+        ref trace,
     } = *context;
+    let scene = trace.scene;
     let step = pixel_size(scene, size);
     let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
     let pixel_index = y as u64 * size.0 as u64 + x as u64;
     let mut direct = Rgb::ZERO;
-    if options.memo.enabled {
+    if floor_memo {
         let grid = floor_grid(&options.memo, options.samples);
         let mut sum = Rgb::ZERO;
         for k in 0..grid * grid {
@@ -207,11 +229,11 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
             let cell = DVec2::new((k % grid) as f64, (k / grid) as f64);
             let jitter = (cell + DVec2::new(stream.uniform(), stream.uniform())) / grid as f64;
             let p = corner + jitter * step;
-            let value = direct_light(scene, p, Receiver::FLOOR, &mut stream, stats);
+            let value = direct_light(scene, p, Receiver::FLOOR, trace.shadows, &mut stream, stats);
             if value.is_finite() {
                 sum += value;
             } else {
-                stats.record_nonfinite(x, y, FLOOR_STREAMS as u32);
+                stats.record_nonfinite(x, y, u32::MAX);
             }
         }
         direct = sum / (grid * grid) as f64;
@@ -236,27 +258,19 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
 /// the pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
 fn sample_with(context: &Context, x: u32, y: u32, sample: u32, stats: &mut Stats) -> Rgb {
     let Context {
-        scene,
         options,
         size,
-        memo,
+        ref trace,
+        ..
     } = *context;
+    let scene = trace.scene;
     let step = pixel_size(scene, size);
     let pixel_index = y as u64 * size.0 as u64 + x as u64;
     let mut stream = Stream::new(options.seed, pixel_index, sample as u64);
     let jitter = DVec2::new(stream.uniform(), stream.uniform());
     let p = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + jitter) * step;
     stats.camera_samples += 1;
-    path_sample(
-        scene,
-        p,
-        options.bounces,
-        options.integrator,
-        !options.memo.enabled,
-        memo,
-        &mut stream,
-        stats,
-    )
+    path_sample(trace, p, &mut stream, stats)
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of
@@ -278,11 +292,12 @@ pub fn pixel_sample(
         },
         ..*options
     };
+    let plan = Plan::new(scene, &options);
     let context = Context {
-        scene,
         options: &options,
         size,
-        memo: None,
+        floor_memo: false,
+        trace: trace_for(scene, &options, &plan, None),
     };
     sample_with(&context, x, y, sample, stats)
 }

@@ -29,6 +29,14 @@ pub struct Stats {
     pub memo_lookups: u64,
     /// Path samples that reused their pixel's memoised direct light.
     pub floor_memo_reuses: u64,
+    /// Reflections off mirrors.
+    pub mirror_reflections: u64,
+    /// Passes of a path through a transparent wall.
+    pub transparent_passes: u64,
+    /// Diffuse hits whose albedo was read from the floor.
+    pub floor_albedo_reads: u64,
+    /// Path rays tested against line lights (after a mirror).
+    pub emission_tests: u64,
     /// Samples whose estimate was NaN or infinite, left out of the image.
     pub nonfinite_samples: u64,
     /// The first such sample in tile order: (x, y, sample index).
@@ -56,6 +64,10 @@ impl Stats {
         self.memo_fill_rays += other.memo_fill_rays;
         self.memo_lookups += other.memo_lookups;
         self.floor_memo_reuses += other.floor_memo_reuses;
+        self.mirror_reflections += other.mirror_reflections;
+        self.transparent_passes += other.transparent_passes;
+        self.floor_albedo_reads += other.floor_albedo_reads;
+        self.emission_tests += other.emission_tests;
         self.nonfinite_samples += other.nonfinite_samples;
         if self.first_nonfinite.is_none() {
             self.first_nonfinite = other.first_nonfinite;
@@ -78,6 +90,11 @@ impl fmt::Display for Stats {
         writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;
         writeln!(f, "  absorption       {:>14}", self.paths_absorbed)?;
+        writeln!(f, "events")?;
+        writeln!(f, "  mirror bounces   {:>14}", self.mirror_reflections)?;
+        writeln!(f, "  transparent      {:>14}", self.transparent_passes)?;
+        writeln!(f, "  floor albedo     {:>14}", self.floor_albedo_reads)?;
+        writeln!(f, "  emission tests   {:>14}", self.emission_tests)?;
         writeln!(f, "memo")?;
         writeln!(f, "  wall entries     {:>14}", self.memo_entries)?;
         writeln!(f, "  wall bytes       {:>14}", self.memo_bytes)?;

@@ -1,0 +1,132 @@
+//! The render plan: snapshots of what each scene runs and skips, counts
+//! that prove a skipped effect costs nothing, and images that do not change
+//! when every effect is forced on where it contributes nothing.
+
+use flatray_tests::{render, scene, workspace_root};
+use flatray_tracer::{Plan, RenderOptions, Stats};
+
+fn plan_of_file(name: &str) -> String {
+    let loaded = flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
+    Plan::new(&loaded.scene, &loaded.options).to_string()
+}
+
+#[test]
+fn plans_of_the_example_scenes() {
+    for name in ["room", "colour-bleed", "soft-shadow"] {
+        insta::assert_snapshot!(format!("plan-{name}"), plan_of_file(name));
+    }
+}
+
+/// Test scenes, each missing something.
+const DIRECT_ONLY: &str = "Scene(canvas: (40, 30), floor: Color((0.8, 0.8, 0.8)),
+    lights: [Point(at: (10, 10), intensity: 3.0), Line(a: (20, 5), b: (30, 8), intensity: 0.5)],
+    render: (bounces: 2))";
+const CLEAR_PANES: &str = "Scene(canvas: (40, 30), floor: Color((0.8, 0.8, 0.8)),
+    walls: [Wall(a: (5, 5), b: (35, 5), material: Transparent()), Wall(a: (35, 5), b: (35, 25), material: Transparent())],
+    lights: [Point(at: (20, 15), intensity: 3.0)],
+    render: (bounces: 3))";
+const BLACK_WALLS: &str = "Scene(canvas: (40, 30), floor: Color((0.8, 0.8, 0.8)),
+    walls: [Wall(a: (5, 5), b: (35, 5), material: Diffuse(albedo: (0, 0, 0))), Wall(a: (35, 5), b: (35, 25), material: Mirror(tint: (0, 0, 0)))],
+    lights: [Point(at: (20, 15), intensity: 3.0), Line(a: (2, 28), b: (12, 28))],
+    render: (bounces: 2))";
+const NO_MIRROR: &str = "Scene(canvas: (40, 30), floor: Color((0.8, 0.8, 0.8)),
+    walls: [Wall(a: (5, 5), b: (35, 5), material: Diffuse(albedo: (0.9, 0.2, 0.2))), Wall(a: (35, 5), b: (35, 25))],
+    lights: [Point(at: (20, 15), intensity: 3.0), Line(a: (2, 28), b: (12, 28))],
+    render: (bounces: 2))";
+
+#[test]
+fn plans_of_test_scenes() {
+    for (name, text) in [
+        ("direct-only", DIRECT_ONLY),
+        ("clear-panes", CLEAR_PANES),
+        ("black-walls", BLACK_WALLS),
+        ("no-mirror", NO_MIRROR),
+    ] {
+        let loaded = scene(text);
+        insta::assert_snapshot!(
+            format!("plan-{name}"),
+            Plan::new(&loaded.scene, &loaded.options).to_string()
+        );
+    }
+}
+
+fn stats_of(text: &str, force: bool) -> (flatray_tracer::Image, Stats) {
+    let loaded = scene(text);
+    let rendered = render(
+        &loaded.scene,
+        &RenderOptions {
+            samples: 4,
+            force_all_effects: force,
+            ..loaded.options
+        },
+    );
+    (rendered.image, rendered.stats)
+}
+
+#[test]
+fn skipped_effects_cast_no_rays_and_count_no_events() {
+    // No wall at all: no shadow ray, no bounce, no memo.
+    let (_, s) = stats_of(DIRECT_ONLY, false);
+    assert_eq!(
+        (
+            s.shadow_rays,
+            s.bounce_rays,
+            s.memo_entries,
+            s.memo_lookups,
+            s.floor_memo_reuses
+        ),
+        (0, 0, 0, 0, 0)
+    );
+    assert!(s.camera_samples > 0);
+    // Clear panes occlude nothing and reflect nothing.
+    let (_, s) = stats_of(CLEAR_PANES, false);
+    assert_eq!(
+        (
+            s.shadow_rays,
+            s.bounce_rays,
+            s.transparent_passes,
+            s.memo_entries
+        ),
+        (0, 0, 0, 0)
+    );
+    // Black walls occlude but reflect nothing: shadows, no paths.
+    let (_, s) = stats_of(BLACK_WALLS, false);
+    assert!(s.shadow_rays > 0);
+    assert_eq!(
+        (
+            s.bounce_rays,
+            s.mirror_reflections,
+            s.emission_tests,
+            s.memo_lookups
+        ),
+        (0, 0, 0, 0)
+    );
+    // No mirror: paths run, but nothing looks for line lights in mirrors.
+    let (_, s) = stats_of(NO_MIRROR, false);
+    assert!(s.bounce_rays > 0 && s.memo_lookups > 0);
+    assert_eq!(
+        (s.mirror_reflections, s.emission_tests, s.transparent_passes),
+        (0, 0, 0)
+    );
+    // Its second wall takes the floor's albedo: colour bleeding runs.
+    assert!(s.floor_albedo_reads > 0);
+    // The same scenes forced: the skipped work is there to be skipped.
+    for text in [DIRECT_ONLY, CLEAR_PANES, BLACK_WALLS] {
+        let (_, forced) = stats_of(text, true);
+        assert!(
+            forced.shadow_rays > 0 && forced.bounce_rays > 0,
+            "{forced:?}"
+        );
+    }
+    let (_, forced) = stats_of(NO_MIRROR, true);
+    assert!(forced.emission_tests > 0);
+}
+
+#[test]
+fn images_are_bit_identical_with_and_without_the_plan() {
+    for text in [DIRECT_ONLY, CLEAR_PANES, BLACK_WALLS, NO_MIRROR] {
+        let (planned, _) = stats_of(text, false);
+        let (forced, _) = stats_of(text, true);
+        assert!(planned == forced, "the plan changed the image of {text}");
+    }
+}

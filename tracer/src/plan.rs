@@ -1,0 +1,262 @@
+//! The render plan: which effects a scene and its settings call for, which
+//! are skipped and why. The integrators read the plan's switches, so a
+//! skipped effect costs no rays; `Stats` counts prove it.
+
+use std::fmt;
+
+use crate::render::RenderOptions;
+use crate::scene::{LightShape, Material, Scene};
+use crate::{Floor, Rgb};
+
+/// One effect: whether it runs, and a reason in plain words.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Effect {
+    pub name: &'static str,
+    pub runs: bool,
+    pub why: String,
+}
+
+/// What a render of a scene does.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Plan {
+    /// Shadow rays towards lights (otherwise every light is visible).
+    pub shadows: bool,
+    /// Indirect paths from the floor.
+    pub indirect: bool,
+    /// Line lights met by a path ray after a mirror.
+    pub mirror_emission: bool,
+    /// The wall half of the memo.
+    pub wall_memo: bool,
+    /// The floor half of the memo: direct light once per pixel.
+    pub floor_memo: bool,
+    /// Every effect with its reason, in a fixed order, for printing.
+    pub effects: Vec<Effect>,
+}
+
+impl Plan {
+    /// The plan for `scene` rendered with `options`. With
+    /// `options.force_all_effects`, every switch is on wherever it cannot
+    /// change the image (a debugging and benchmarking aid).
+    pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
+        let count =
+            |f: &dyn Fn(&LightShape) -> bool| scene.lights.iter().filter(|l| f(&l.shape)).count();
+        let points = count(&|s| matches!(s, LightShape::Point { .. }));
+        let spots = count(&|s| matches!(s, LightShape::Spot { .. }));
+        let lines = count(&|s| matches!(s, LightShape::Line { .. }));
+        let suns = count(&|s| matches!(s, LightShape::Directional { .. }));
+        let mirrors = scene
+            .walls
+            .iter()
+            .filter(|w| matches!(w.material, Material::Mirror { .. }))
+            .count();
+        let panes = scene
+            .walls
+            .iter()
+            .filter(|w| matches!(w.material, Material::Transparent { .. }))
+            .count();
+        let diffuse = scene
+            .walls
+            .iter()
+            .filter(|w| matches!(w.material, Material::Diffuse { .. }))
+            .count();
+        let floor_albedo_walls = scene
+            .walls
+            .iter()
+            .filter(|w| matches!(w.material, Material::Diffuse { albedo: None }))
+            .count();
+        let occluders = scene
+            .walls
+            .iter()
+            .filter(|w| !matches!(w.material, Material::Transparent { tint } if tint == Rgb::ONE))
+            .count();
+        let floor_black = matches!(scene.floor, Floor::Color(c) if c == Rgb::ZERO);
+        let reflectors = scene
+            .walls
+            .iter()
+            .filter(|w| match w.material {
+                Material::Diffuse { albedo: Some(a) } => a != Rgb::ZERO,
+                Material::Diffuse { albedo: None } => !floor_black,
+                Material::Mirror { tint } => tint != Rgb::ZERO,
+                Material::Transparent { .. } => false,
+            })
+            .count();
+        let force = options.force_all_effects;
+        let no_lights = scene.lights.is_empty();
+
+        let shadows = force || (occluders > 0 && !no_lights);
+        let indirect_possible = options.bounces > 0 && !no_lights;
+        let indirect = indirect_possible && (force || reflectors > 0);
+        let mirror_emission = indirect && (force || (mirrors > 0 && lines > 0));
+        let wall_memo =
+            indirect && options.memo.enabled && (force || (diffuse > 0 && reflectors > 0));
+        // Forcing never changes how the floor's direct light is estimated:
+        // that would change the image.
+        let floor_memo = indirect_possible && reflectors > 0 && options.memo.enabled;
+
+        let mut effects = Vec::new();
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = |k: usize, what: &str| format!("{k} {what}{}", if k == 1 { "" } else { "s" });
+        add(
+            "direct light: points and spots",
+            points + spots > 0,
+            if points + spots > 0 {
+                format!("{}, {}", n(points, "point light"), n(spots, "spot light"))
+            } else {
+                "no point or spot light in the scene".into()
+            },
+        );
+        add(
+            "direct light: line lights",
+            lines > 0,
+            if lines > 0 {
+                n(lines, "line light")
+            } else {
+                "no line light in the scene".into()
+            },
+        );
+        add(
+            "direct light: sunlight",
+            suns > 0,
+            if suns > 0 {
+                n(suns, "directional light")
+            } else {
+                "no directional light in the scene".into()
+            },
+        );
+        add(
+            "shadow rays",
+            shadows,
+            if no_lights {
+                "no light in the scene".into()
+            } else if occluders > 0 {
+                format!("{} can occlude", n(occluders, "wall"))
+            } else if force {
+                "forced on (nothing occludes)".into()
+            } else {
+                "nothing occludes: no wall, or only clear transparent walls".into()
+            },
+        );
+        add(
+            "indirect bounces",
+            indirect,
+            if no_lights {
+                "no light in the scene".into()
+            } else if options.bounces == 0 {
+                "bounces = 0".into()
+            } else if reflectors == 0 && !force {
+                "no wall reflects light (none, all transparent, or all black)".into()
+            } else {
+                format!(
+                    "up to {} bounce{}",
+                    options.bounces,
+                    if options.bounces == 1 { "" } else { "s" }
+                )
+            },
+        );
+        add(
+            "mirrors",
+            indirect && mirrors > 0,
+            if mirrors == 0 {
+                "no mirror in the scene".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else {
+                n(mirrors, "mirror")
+            },
+        );
+        add(
+            "line lights seen in mirrors",
+            mirror_emission,
+            if mirror_emission && !(mirrors > 0 && lines > 0) {
+                "forced on".into()
+            } else if mirror_emission {
+                "mirrors and line lights in the scene".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else if mirrors == 0 {
+                "no mirror in the scene".into()
+            } else {
+                "no line light in the scene".into()
+            },
+        );
+        add(
+            "transparency",
+            panes > 0,
+            if panes > 0 {
+                n(panes, "transparent wall")
+            } else {
+                "no transparent wall in the scene".into()
+            },
+        );
+        add(
+            "colour bleeding from the floor",
+            indirect && floor_albedo_walls > 0,
+            if floor_albedo_walls == 0 {
+                "every diffuse wall has its own albedo".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else {
+                format!("{} take the floor's albedo", n(floor_albedo_walls, "wall"))
+            },
+        );
+        add(
+            "memo: wall irradiance",
+            wall_memo,
+            if !options.memo.enabled {
+                "the memo is switched off".into()
+            } else if !indirect {
+                "no indirect light is traced, so no path reads it".into()
+            } else if diffuse == 0 && !force {
+                "no diffuse wall to cache".into()
+            } else {
+                format!(
+                    "{} binned every {} pixel",
+                    n(diffuse, "diffuse wall"),
+                    options.memo.bin_length
+                )
+            },
+        );
+        add(
+            "memo: floor direct light per pixel",
+            floor_memo,
+            if !options.memo.enabled {
+                "the memo is switched off".into()
+            } else if !indirect {
+                "no indirect path would reuse it".into()
+            } else {
+                format!(
+                    "up to {} stratified points per pixel",
+                    options.memo.floor_samples
+                )
+            },
+        );
+        add(
+            "glass",
+            false,
+            "no glass in the scene (glass is not yet a material)".into(),
+        );
+        Plan {
+            shadows,
+            indirect,
+            mirror_emission,
+            wall_memo,
+            floor_memo,
+            effects,
+        }
+    }
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let width = self.effects.iter().map(|e| e.name.len()).max().unwrap_or(0);
+        for (k, e) in self.effects.iter().enumerate() {
+            if k > 0 {
+                writeln!(f)?;
+            }
+            let mark = if e.runs { "runs   " } else { "skipped" };
+            write!(f, "{mark}  {:<width$}  {}", e.name, e.why)?;
+        }
+        Ok(())
+    }
+}
