@@ -21,6 +21,8 @@ pub(crate) enum Config {
     Path,
     /// The original project's estimator: uniform bounces aimed at the lights.
     Original,
+    /// Light tracing from the lights.
+    Light,
 }
 
 impl Config {
@@ -29,6 +31,7 @@ impl Config {
             Config::PathMemo => "path+memo",
             Config::Path => "path",
             Config::Original => "original",
+            Config::Light => "light",
         }
     }
 
@@ -37,6 +40,7 @@ impl Config {
             Config::PathMemo => (Integrator::Path, true),
             Config::Path => (Integrator::Path, false),
             Config::Original => (Integrator::Original, false),
+            Config::Light => (Integrator::Light, false),
         };
         RenderOptions {
             integrator,
@@ -72,7 +76,7 @@ pub(crate) struct ConvergeArgs {
     #[arg(long, default_value_t = 120.0)]
     budget: f64,
     /// The configurations to compare (comma-separated).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathMemo, Config::Path, Config::Original])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathMemo, Config::Path, Config::Original, Config::Light])]
     configs: Vec<Config>,
     /// Pixels per world unit, as for `render`.
     #[arg(long, default_value_t = 1.0)]

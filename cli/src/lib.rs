@@ -116,6 +116,8 @@ enum IntegratorArg {
     Path,
     /// The original project's uniform bounce, aimed at the lights.
     Original,
+    /// Light tracing: paths from the lights, spp x pixels of them.
+    Light,
 }
 
 /// Runs flatray with `args` (the program name first), writing messages to
@@ -258,6 +260,7 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
             None => loaded.options.integrator,
             Some(IntegratorArg::Path) => Integrator::Path,
             Some(IntegratorArg::Original) => Integrator::Original,
+            Some(IntegratorArg::Light) => Integrator::Light,
         },
         memo: MemoOptions {
             enabled: match args.cache {

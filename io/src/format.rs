@@ -465,6 +465,7 @@ pub enum IntegratorSpec {
     #[default]
     Path,
     Original,
+    Light,
 }
 
 /// How PNG output maps linear values to `[0, 1]` before sRGB encoding.

@@ -253,6 +253,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         integrator: match file.render.integrator {
             IntegratorSpec::Path => Integrator::Path,
             IntegratorSpec::Original => Integrator::Original,
+            IntegratorSpec::Light => Integrator::Light,
         },
         memo: MemoOptions {
             enabled: file.render.cache,

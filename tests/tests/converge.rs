@@ -1,5 +1,8 @@
 //! `flatray converge` on a small scene: the files exist and agree with each
 //! other, and the unbiased configurations' error falls as 1/sqrt(samples).
+//! The scene has no mirror, so light tracing and the path-traced reference
+//! estimate the same image (with a mirror, light tracing also sees point
+//! lights in it, which the reference cannot).
 
 use flatray_tests::{TempDir, flatray};
 
@@ -7,7 +10,7 @@ const SCENE: &str = "Scene(canvas: (48, 40), floor: Color((0.9, 0.9, 0.9)),
     walls: [
         Wall(a: (5, 5), b: (43, 5), material: Diffuse(albedo: (0.9, 0.2, 0.2))),
         Wall(a: (43, 5), b: (43, 35)),
-        Wall(a: (12, 14), b: (22, 22), material: Mirror()),
+        Wall(a: (12, 14), b: (22, 22), material: Transparent(tint: (0.5, 0.8, 1.0))),
         Wall(a: (4, 33), b: (24, 35)),
     ],
     lights: [
@@ -47,8 +50,8 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
         .skip(1)
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
-    assert_eq!(rows.len(), 3 * 7, "{csv}");
-    for config in ["path+memo", "path", "original"] {
+    assert_eq!(rows.len(), 4 * 7, "{csv}");
+    for config in ["path+memo", "path", "original", "light"] {
         let points: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r[0] == config)
@@ -71,12 +74,13 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
             "{}",
             run.stdout
         );
-        if config != "path+memo" {
+        if config != "path+memo" && config != "light" {
             // Unbiased: error falls as samples^(-1/2).
             assert!((-0.6..=-0.4).contains(&slope), "{config}: slope {slope}");
         } else {
-            // The memo's bias may flatten it, never steepen it.
-            assert!((-0.6..=-0.2).contains(&slope), "{config}: slope {slope}");
+            // The memo's bias, and the light tracer's different estimate of
+            // the pixel holding the point light, may flatten it a little.
+            assert!((-0.6..=-0.3).contains(&slope), "{config}: slope {slope}");
         }
     }
 

@@ -12,6 +12,7 @@
 //! ([`Image`]); progress goes out through a callback.
 
 mod light;
+mod light_tracer;
 mod memo;
 pub mod metrics;
 mod path;

@@ -148,7 +148,8 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
                     break;
                 }
                 let dir = match integrator {
-                    Integrator::Path => {
+                    // The light tracer never calls this function.
+                    Integrator::Path | Integrator::Light => {
                         // BRDF rho/2 times cos over pdf cos/2: exactly rho.
                         throughput *= rho;
                         cosine_half_circle(normal, stream.uniform())

@@ -25,6 +25,10 @@ pub enum Integrator {
     /// random bounce directions, each diffuse vertex aimed at the lights
     /// (for one bounce, exactly its light-directed last bounce).
     Original,
+    /// Light tracing: photon paths from the lights, each free flight added
+    /// to the pixels it crosses by its track length. Sees point lights in
+    /// mirrors, which path tracing cannot.
+    Light,
 }
 
 /// Everything about a render that is not the scene.
@@ -106,6 +110,9 @@ pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
 /// number of pixel samples each finished tile took; the image does not
 /// depend on the number of threads or on their scheduling.
 pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + Sync)) -> Rendered {
+    if options.integrator == Integrator::Light {
+        return crate::light_tracer::render_light(scene, options, progress);
+    }
     let (width, height) = image_size(scene, options.scale);
     let plan = Plan::new(scene, options);
     let mut memo_stats = Stats::default();

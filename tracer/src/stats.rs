@@ -10,6 +10,8 @@ pub struct Stats {
     pub camera_samples: u64,
     /// Visibility tests towards a light.
     pub shadow_rays: u64,
+    /// Photon paths emitted by the light tracer.
+    pub light_paths: u64,
     /// Closest-hit rays of indirect paths (the first from the floor, then
     /// one after every reflection or pass through a transparent wall).
     pub bounce_rays: u64,
@@ -55,6 +57,7 @@ impl Stats {
     pub fn merge(&mut self, other: &Stats) {
         self.camera_samples += other.camera_samples;
         self.shadow_rays += other.shadow_rays;
+        self.light_paths += other.light_paths;
         self.bounce_rays += other.bounce_rays;
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
@@ -86,6 +89,7 @@ impl fmt::Display for Stats {
         writeln!(f, "  camera samples   {:>14}", self.camera_samples)?;
         writeln!(f, "  shadow rays      {:>14}", self.shadow_rays)?;
         writeln!(f, "  bounce rays      {:>14}", self.bounce_rays)?;
+        writeln!(f, "  light paths      {:>14}", self.light_paths)?;
         writeln!(f, "paths ended by")?;
         writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;

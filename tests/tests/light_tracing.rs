@@ -1,0 +1,286 @@
+//! The light tracer against the path tracer and the closed forms. Light
+//! tracing spreads one photon's flight over many pixels, so pixels are not
+//! independent: every tolerance here uses the spread of block totals over
+//! independent runs (fixed seeds), stated in standard errors.
+
+use std::f64::consts::TAU;
+
+use flatray_geometry::DVec2;
+use flatray_tests::{render, scene, workspace_root};
+use flatray_tracer::{Image, Integrator, MemoOptions, RenderOptions, Scene};
+
+const BLOCK: u32 = 8;
+
+/// Totals of channel-summed values over `BLOCK`-pixel squares.
+fn blocks(image: &Image) -> Vec<f64> {
+    let (bw, bh) = (image.width / BLOCK, image.height / BLOCK);
+    let mut totals = vec![0.0; (bw * bh) as usize];
+    for y in 0..bh * BLOCK {
+        for x in 0..bw * BLOCK {
+            let p = image.get(x, y);
+            totals[(y / BLOCK * bw + x / BLOCK) as usize] += (p[0] + p[1] + p[2]) as f64;
+        }
+    }
+    totals
+}
+
+/// Mean and standard error of each block total over `runs` seeds.
+fn block_stats(scene: &Scene, options: RenderOptions, runs: u64) -> Vec<(f64, f64)> {
+    let all: Vec<Vec<f64>> = (0..runs)
+        .map(|seed| {
+            blocks(
+                &render(
+                    scene,
+                    &RenderOptions {
+                        seed: 1000 + seed,
+                        ..options
+                    },
+                )
+                .image,
+            )
+        })
+        .collect();
+    (0..all[0].len())
+        .map(|b| {
+            let v: Vec<f64> = all.iter().map(|r| r[b]).collect();
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            (mean, (var / n).sqrt())
+        })
+        .collect()
+}
+
+fn options(integrator: Integrator, samples: u32, bounces: u32) -> RenderOptions {
+    RenderOptions {
+        samples,
+        bounces,
+        integrator,
+        memo: MemoOptions {
+            enabled: false,
+            ..MemoOptions::default()
+        },
+        ..RenderOptions::default()
+    }
+}
+
+/// Independent runs per integrator, and the tolerance in standard errors.
+/// With standard errors estimated from 24 runs, the statistic follows a
+/// t distribution with 23 degrees of freedom: beyond 5, once in 25,000
+/// blocks.
+const RUNS: u64 = 24;
+const K: f64 = 5.0;
+
+/// Light and path tracing agree on every kept block within `K` combined
+/// standard errors.
+fn assert_agree(name: &str, scene: &Scene, scale: f64, bounces: u32, keep: impl Fn(usize) -> bool) {
+    let at = |integrator| RenderOptions {
+        scale,
+        ..options(integrator, 8, bounces)
+    };
+    let light = block_stats(scene, at(Integrator::Light), RUNS);
+    let path = block_stats(scene, at(Integrator::Path), RUNS);
+    let k = K;
+    let mut checked = 0;
+    for (b, ((ml, sl), (mp, sp))) in light.iter().zip(&path).enumerate() {
+        if !keep(b) {
+            continue;
+        }
+        let se = (sl * sl + sp * sp).sqrt();
+        assert!(
+            (ml - mp).abs() <= k * se + 1e-9 * mp.abs(),
+            "{name}, block {b}: light {ml}, path {mp}, {k} SE = {}",
+            k * se
+        );
+        checked += 1;
+    }
+    assert!(checked >= 10, "{name}: only {checked} blocks");
+}
+
+fn polygon(n: usize, centre: DVec2, radius: f64, extra: &str) -> String {
+    (0..n)
+        .map(|k| {
+            let (a0, a1) = (TAU * k as f64 / n as f64, TAU * (k + 1) as f64 / n as f64);
+            let a = centre + radius * DVec2::new(a0.cos(), a0.sin());
+            let b = centre + radius * DVec2::new(a1.cos(), a1.sin());
+            format!(
+                "Wall(a: ({:?}, {:?}), b: ({:?}, {:?}){extra})",
+                a.x, a.y, b.x, b.y
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+#[test]
+fn light_and_path_tracing_agree_in_the_circle_room() {
+    let text = format!(
+        "Scene(canvas: (64, 64), floor: Color((1, 1, 1)), walls: [{}],
+               lights: [Point(at: (32.3, 31.6), intensity: 2.0)])",
+        polygon(
+            48,
+            DVec2::new(32.0, 32.0),
+            28.0,
+            ", material: Diffuse(albedo: (0.7, 0.5, 0.3))"
+        )
+    );
+    let loaded = scene(&text);
+    // The block holding the light differs by definition (the path tracer
+    // clamps 1/r below r0 at the light, the light tracer integrates it).
+    let light_block = (31 / BLOCK * (64 / BLOCK) + 32 / BLOCK) as usize;
+    assert_agree("circle room", &loaded.scene, 1.0, 2, |b| b != light_block);
+}
+
+#[test]
+fn light_tracing_meets_the_flatland_furnace() {
+    let (l_e, rho): (f64, f64) = (0.25, 0.5);
+    let text = format!(
+        "Scene(canvas: (64, 64), floor: Color((1, 1, 1)), walls: [{}])",
+        polygon(
+            7,
+            DVec2::new(32.0, 32.0),
+            30.0,
+            &format!(
+                ", material: Diffuse(albedo: ({rho}, {rho}, {rho})), emit: (intensity: {l_e})"
+            )
+        )
+    );
+    let loaded = scene(&text);
+    for bounces in [0, 2] {
+        let expected = TAU * l_e * (0..=bounces).map(|k| rho.powi(k)).sum::<f64>();
+        let stats = block_stats(
+            &loaded.scene,
+            options(Integrator::Light, 8, bounces as u32),
+            RUNS,
+        );
+        // Blocks well inside the heptagon (inradius 27).
+        let mut checked = 0;
+        for (b, (mean, se)) in stats.iter().enumerate() {
+            let (bx, by) = ((b as u32 % 8) * BLOCK, (b as u32 / 8) * BLOCK);
+            let centre = DVec2::new(bx as f64 + 4.0, by as f64 + 4.0);
+            if centre.distance(DVec2::new(32.0, 32.0)) > 20.0 {
+                continue;
+            }
+            let per_pixel = mean / (3.0 * (BLOCK * BLOCK) as f64);
+            let se = se / (3.0 * (BLOCK * BLOCK) as f64);
+            assert!(
+                (per_pixel - expected).abs() <= K * se,
+                "D = {bounces}, block {b}: {per_pixel}, expected {expected}, {K} SE = {}",
+                K * se
+            );
+            checked += 1;
+        }
+        assert!(checked >= 12);
+    }
+}
+
+#[test]
+fn light_and_path_tracing_agree_on_the_room_without_its_mirror() {
+    // The room's own kernel (Window), lights and floor, at a fifth of its
+    // resolution, the mirror made an ordinary wall: every path is seen by
+    // both integrators.
+    let text = std::fs::read_to_string(workspace_root().join("scenes/room.ron"))
+        .unwrap()
+        .replace("material: Mirror()", "material: Diffuse()");
+    let loaded = scene(&text);
+    assert_agree("room without mirror", &loaded.scene, 0.2, 1, |_| true);
+}
+
+/// A point light facing a mirror: the light tracer lights the patch that
+/// the mirror image of the light sees through the mirror; path tracing
+/// cannot find that light and leaves the patch at the direct value.
+#[test]
+fn the_light_tracer_sees_a_point_light_in_a_mirror() {
+    let text = "Scene(canvas: (160, 120), floor: Color((1, 1, 1)),
+        walls: [Wall(a: (120, 50), b: (120, 70), material: Mirror())],
+        lights: [Point(at: (80.0, 60.0), intensity: 4.0)],
+        render: (bounces: 1))";
+    let loaded = scene(text);
+    let light = DVec2::new(80.0, 60.0);
+    let virtual_light = DVec2::new(160.0, 60.0);
+    let lt = render(&loaded.scene, &options(Integrator::Light, 64, 1)).image;
+    let pt = render(&loaded.scene, &options(Integrator::Path, 64, 1)).image;
+    // Where does the geometry say the reflection lands? The segment from a
+    // floor point to the virtual light must cross the mirror.
+    let reflected = |p: DVec2| {
+        let t = (120.0 - p.x) / (virtual_light.x - p.x);
+        let y = p.y + t * (virtual_light.y - p.y);
+        p.x < 120.0 && (50.0..=70.0).contains(&y)
+    };
+    // The mirror is opaque: it shadows the light behind it.
+    let shadowed = |p: DVec2| {
+        let t = (120.0 - p.x) / (light.x - p.x);
+        let y = p.y + t * (light.y - p.y);
+        p.x > 120.0 && (50.0..=70.0).contains(&y)
+    };
+    let (mut inside, mut outside) = (Vec::new(), Vec::new());
+    for y in 2..118 {
+        for x in 2..158 {
+            let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            let near_edge = [(-0.7, -0.7), (0.7, -0.7), (-0.7, 0.7), (0.7, 0.7)]
+                .iter()
+                .any(|&(dx, dy)| shadowed(p + DVec2::new(dx, dy)) != shadowed(p));
+            if p.distance(light) < 4.0 || near_edge || (p.x - 120.0).abs() < 2.0 {
+                continue;
+            }
+            let direct = if shadowed(p) {
+                0.0
+            } else {
+                4.0 / p.distance(light)
+            };
+            let extra = lt.get(x, y)[0] as f64 - direct;
+            // Path tracing shows the direct light only, everywhere: within
+            // 6 standard errors of the jittered mean (the gradient of I / r
+            // across a unit pixel gives a standard deviation of
+            // |grad| / sqrt(6) per sample) and 0.5 % for its curvature.
+            let se = if direct > 0.0 {
+                4.0 / p.distance_squared(light) / 6f64.sqrt() / 8.0
+            } else {
+                0.0
+            };
+            let got = pt.get(x, y)[0] as f64;
+            assert!(
+                (got - direct).abs() <= 6.0 * se + 0.005 * direct,
+                "path tracing at ({x}, {y}): {got} vs {direct}"
+            );
+            // Away from the patch's edges, sort pixels by the geometry.
+            let corners = [(-0.7, -0.7), (0.7, -0.7), (-0.7, 0.7), (0.7, 0.7)]
+                .map(|(dx, dy)| reflected(p + DVec2::new(dx, dy)));
+            if corners.iter().all(|&c| c) {
+                inside.push(extra / (4.0 / p.distance(virtual_light)));
+            } else if corners.iter().all(|&c| !c) {
+                outside.push(extra);
+            }
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    // Inside the patch the extra light is the virtual light's I / r: the
+    // mean ratio is 1 within 2 % (64 photons per pixel, thousands of
+    // pixels); outside it is zero.
+    assert!(inside.len() > 2000 && outside.len() > 2000);
+    assert!(
+        (mean(&inside) - 1.0).abs() < 0.02,
+        "ratio inside the patch {}",
+        mean(&inside)
+    );
+    assert!(
+        mean(&outside).abs() < 0.002,
+        "extra light outside the patch {}",
+        mean(&outside)
+    );
+}
+
+#[test]
+fn light_tracing_is_bit_identical_for_any_thread_count() {
+    let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
+    let options = RenderOptions {
+        samples: 2,
+        scale: 0.2,
+        integrator: Integrator::Light,
+        ..loaded.options
+    };
+    let one = flatray_tests::render_on(&loaded.scene, &options, 1);
+    let three = flatray_tests::render_on(&loaded.scene, &options, 3);
+    assert!(one.image == three.image);
+    assert_eq!(one.stats, three.stats);
+}

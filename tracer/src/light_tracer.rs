@@ -1,0 +1,454 @@
+//! Light tracing from the lights (the original project's proposed future
+//! work): photon paths leave the lights, bounce through the scene, and
+//! every free flight adds its exact track length in each pixel it crosses
+//! to that pixel's fluence.
+
+use std::f64::consts::TAU;
+
+use flatray_geometry::{DVec2, Ray, Side, Skip, reflect};
+use rayon::prelude::*;
+
+use crate::plan::Plan;
+use crate::render::{Image, RenderOptions, Rendered, image_size};
+use crate::sampling::{Stream, cosine_half_circle, uniform_circle};
+use crate::scene::{Falloff, Light, LightShape, Material, Scene, smooth_window};
+use crate::{Rgb, Stats};
+
+/// The number of fixed work chunks: each sums its paths in order into its
+/// own buffer, and the buffers are merged in chunk order, so the image is
+/// the same for any number of threads.
+const MAX_CHUNKS: usize = 16;
+/// Bytes the chunk buffers may take together.
+const CHUNK_BUDGET: usize = 256 << 20;
+
+/// The power of each light (2D: per unit time, integrated over the
+/// circle of directions), before colour.
+pub(crate) fn light_power(light: &Light, beam_width: f64) -> f64 {
+    match light.shape {
+        LightShape::Point { .. } => TAU * light.intensity,
+        LightShape::Spot { cone, softness, .. } => light.intensity * spot_integral(cone, softness),
+        LightShape::Line {
+            segment, one_sided, ..
+        } => {
+            // A Lambertian emitter of radiance I: 2 I per unit length and side.
+            let sides = if one_sided { 1.0 } else { 2.0 };
+            2.0 * light.intensity * segment.length() * sides
+        }
+        LightShape::Directional { .. } => light.intensity * beam_width,
+    }
+}
+
+/// The integral of a spot's window over all directions.
+fn spot_integral(cone: f64, softness: f64) -> f64 {
+    // Full intensity over 2 (cone - softness), and the smoothstep averages
+    // one half over each soft edge of width `softness`.
+    2.0 * (cone - softness) + softness
+}
+
+/// Where sunlight enters: a line across the beam, upstream of everything,
+/// and its width.
+fn sun_line(scene: &Scene, direction: DVec2) -> (DVec2, DVec2, f64) {
+    let mut min = scene.canvas.origin;
+    let mut max =
+        scene.canvas.origin + DVec2::new(scene.canvas.width as f64, scene.canvas.height as f64);
+    for wall in &scene.walls {
+        min = min.min(wall.segment.a).min(wall.segment.b);
+        max = max.max(wall.segment.a).max(wall.segment.b);
+    }
+    let centre = (min + max) * 0.5;
+    let radius = (max - min).length() * 0.5 + 1.0;
+    let across = direction.perp();
+    let start = centre - direction * radius - across * radius;
+    (start, across, 2.0 * radius)
+}
+
+/// Renders `scene` by light tracing with `options.samples` x pixels paths.
+pub fn render_light(
+    scene: &Scene,
+    options: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Rendered {
+    let (width, height) = image_size(scene, options.scale);
+    let pixels = width as usize * height as usize;
+    let plan = Plan::new(scene, options);
+    let bounces = if plan.indirect { options.bounces } else { 0 };
+    let paths = options.samples as u64 * pixels as u64;
+
+    let beam_width = |light: &Light| match light.shape {
+        LightShape::Directional { direction } => sun_line(scene, direction).2,
+        _ => 0.0,
+    };
+    let powers: Vec<f64> = scene
+        .lights
+        .iter()
+        .map(|l| light_power(l, beam_width(l)))
+        .collect();
+    let total: f64 = powers.iter().sum();
+    let mut cumulative = Vec::with_capacity(powers.len());
+    let mut acc = 0.0;
+    for p in &powers {
+        acc += p / total.max(f64::MIN_POSITIVE);
+        cumulative.push(acc);
+    }
+    let mut image = Image::new(width, height);
+    let mut stats = Stats::default();
+    if total <= 0.0 || paths == 0 {
+        return Rendered { image, stats };
+    }
+    let weight = total / paths as f64;
+
+    let chunks = (CHUNK_BUDGET / (pixels.max(1) * 24)).clamp(1, MAX_CHUNKS);
+    let per_chunk = paths.div_ceil(chunks as u64);
+    let grid = Grid::new(scene, options.scale, width, height);
+    let results: Vec<(Vec<Rgb>, Stats)> = (0..chunks)
+        .into_par_iter()
+        .map(|chunk| {
+            let mut buffer = vec![Rgb::ZERO; pixels];
+            let mut stats = Stats::default();
+            let first = chunk as u64 * per_chunk;
+            let last = ((chunk as u64 + 1) * per_chunk).min(paths);
+            let mut done = 0u64;
+            for index in first..last {
+                let mut stream = Stream::new(options.seed, index, 0);
+                let u = stream.uniform();
+                let pick = cumulative
+                    .iter()
+                    .position(|&c| u < c)
+                    .unwrap_or(powers.len() - 1);
+                let light = &scene.lights[pick];
+                trace_photon(
+                    scene,
+                    light,
+                    weight,
+                    bounces,
+                    &grid,
+                    &mut buffer,
+                    &mut stream,
+                    &mut stats,
+                );
+                done += 1;
+                if done.is_multiple_of(4096) {
+                    progress(4096);
+                }
+            }
+            progress(done % 4096);
+            (buffer, stats)
+        })
+        .collect();
+
+    let mut fluence = vec![Rgb::ZERO; pixels];
+    for (buffer, chunk_stats) in &results {
+        stats.merge(chunk_stats);
+        for (f, b) in fluence.iter_mut().zip(buffer) {
+            *f += *b;
+        }
+    }
+    let step = DVec2::new(
+        scene.canvas.width as f64 / width as f64,
+        scene.canvas.height as f64 / height as f64,
+    );
+    for y in 0..height {
+        for x in 0..width {
+            let k = y as usize * width as usize + x as usize;
+            let centre = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
+            let value =
+                fluence[k] * scene.floor.albedo_at(&scene.canvas, centre) * options.exposure;
+            if value.is_finite() {
+                image.pixels[k] = [value.x as f32, value.y as f32, value.z as f32];
+            } else {
+                stats.record_nonfinite(x, y, 0);
+            }
+        }
+    }
+    Rendered { image, stats }
+}
+
+/// Emits one photon from `light` and follows it, depositing into `buffer`.
+#[allow(clippy::too_many_arguments)]
+fn trace_photon(
+    scene: &Scene,
+    light: &Light,
+    weight: f64,
+    bounces: u32,
+    grid: &Grid,
+    buffer: &mut [Rgb],
+    stream: &mut Stream,
+    stats: &mut Stats,
+) {
+    stats.light_paths += 1;
+    let mut power = light.color * weight;
+    // The first flight reproduces the kernel: `shape` says how.
+    let (origin, dir, skip, first) = match light.shape {
+        LightShape::Point { at } => (
+            at,
+            uniform_circle(stream),
+            Skip::NONE,
+            Kernel::Point(light.falloff),
+        ),
+        LightShape::Spot {
+            at,
+            direction,
+            cone,
+            softness,
+        } => {
+            // Uniform in the cone's angle, weighted by the window so that
+            // the mean weight is one.
+            let theta = cone * (2.0 * stream.uniform() - 1.0);
+            let (s, c) = theta.sin_cos();
+            let dir = direction * c + direction.perp() * s;
+            power *= smooth_window(theta.abs(), cone, softness) * 2.0 * cone
+                / spot_integral(cone, softness);
+            (at, dir, Skip::NONE, Kernel::Point(light.falloff))
+        }
+        LightShape::Line {
+            segment,
+            one_sided,
+            wall,
+        } => {
+            let at = segment.point_at(stream.uniform());
+            let side = if one_sided || stream.uniform() < 0.5 {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            let dir = cosine_half_circle(segment.normal_on(side), stream.uniform());
+            let skip = wall.map_or(Skip::NONE, Skip::one);
+            (at, dir, skip, Kernel::Line(light.falloff))
+        }
+        LightShape::Directional { direction } => {
+            let (start, across, width) = sun_line(scene, direction);
+            (
+                start + across * (width * stream.uniform()),
+                direction,
+                Skip::NONE,
+                Kernel::None,
+            )
+        }
+    };
+    let r0 = scene.small_radius;
+    let mut ray = Ray::new(origin, dir);
+    let mut skip = skip;
+    let mut kernel = first;
+    // Distance along the first flight, unfolded through transparent walls
+    // and mirrors: the kernel applies until the first diffuse reflection,
+    // as for a mirror image of the light.
+    let mut travelled = 0.0;
+    let mut bounce = 0;
+    loop {
+        stats.bounce_rays += 1;
+        let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
+        let t_end = hit.map_or(f64::INFINITY, |(_, h)| h.t);
+        grid.deposit(&ray, t_end, power, kernel, travelled, r0, buffer);
+        let Some((index, h)) = hit else {
+            stats.paths_escaped += 1;
+            return;
+        };
+        travelled += h.t;
+        let wall = &scene.walls[index as usize];
+        let x = wall.segment.point_at(h.u);
+        let Some(side) = wall.segment.arrival_side(ray.dir) else {
+            stats.paths_escaped += 1;
+            return;
+        };
+        match wall.material {
+            Material::Transparent { tint } => {
+                stats.transparent_passes += 1;
+                power *= tint;
+                ray = Ray::new(x, ray.dir);
+            }
+            Material::Mirror { tint } => {
+                stats.mirror_reflections += 1;
+                bounce += 1;
+                if bounce > bounces {
+                    stats.paths_bounce_limit += 1;
+                    return;
+                }
+                power *= tint;
+                ray = Ray::new(x, reflect(ray.dir, wall.segment.normal_on(side)));
+            }
+            Material::Diffuse { albedo } => {
+                bounce += 1;
+                if bounce > bounces {
+                    stats.paths_bounce_limit += 1;
+                    return;
+                }
+                let rho = match albedo {
+                    Some(rho) => rho,
+                    None => {
+                        stats.floor_albedo_reads += 1;
+                        scene.floor.albedo_at(&scene.canvas, x)
+                    }
+                };
+                // Power arriving at the wall, with the kernel's share.
+                power *= kernel.factor(travelled, r0) * rho;
+                kernel = Kernel::None;
+                ray = Ray::new(
+                    x,
+                    cosine_half_circle(wall.segment.normal_on(side), stream.uniform()),
+                );
+            }
+        }
+        if power == Rgb::ZERO {
+            stats.paths_absorbed += 1;
+            return;
+        }
+        skip = Skip::one(index);
+    }
+}
+
+/// How the first flight of a photon reproduces its light's kernel: the
+/// photon density of a point light in the plane already falls as `1 / r`
+/// (`Flatland`), so a flight at distance `r` is weighted by `G(r') r`
+/// (`r' = max(r, r0)`) for a point and `G(r') r'` for a line light, the
+/// per-radian term of `Falloff::per_radian`. Both are 1 for `Flatland`
+/// beyond `r0`.
+#[derive(Clone, Copy, Debug)]
+enum Kernel {
+    None,
+    Point(Falloff),
+    Line(Falloff),
+}
+
+impl Kernel {
+    #[inline]
+    fn factor(self, r: f64, r0: f64) -> f64 {
+        match self {
+            Kernel::None => 1.0,
+            Kernel::Point(falloff) => falloff.g(r, r0) * r,
+            Kernel::Line(falloff) => falloff.per_radian(r, r0),
+        }
+    }
+
+    /// Whether the factor is 1 everywhere beyond `r0`, so a flight needs no
+    /// per-pixel evaluation there.
+    fn is_flat_beyond_r0(self) -> bool {
+        match self {
+            Kernel::None => true,
+            Kernel::Point(f) | Kernel::Line(f) => f == Falloff::Flatland,
+        }
+    }
+}
+
+/// The pixel grid over the canvas, in pixel units.
+struct Grid {
+    origin: DVec2,
+    scale: DVec2,
+    width: u32,
+    height: u32,
+    /// Fluence per unit of world track length: 1 / pixel area.
+    per_length: f64,
+}
+
+impl Grid {
+    fn new(scene: &Scene, _scale: f64, width: u32, height: u32) -> Grid {
+        let scale = DVec2::new(
+            width as f64 / scene.canvas.width as f64,
+            height as f64 / scene.canvas.height as f64,
+        );
+        Grid {
+            origin: scene.canvas.origin,
+            scale,
+            width,
+            height,
+            per_length: scale.x * scale.y,
+        }
+    }
+
+    /// Adds `power * length / area` to every pixel that `ray` crosses for
+    /// `0 <= t < t_end` (Amanatides-Woo), with the kernel factor at the
+    /// middle of each crossing, `offset + t` from the light.
+    #[allow(clippy::too_many_arguments)]
+    fn deposit(
+        &self,
+        ray: &Ray,
+        t_end: f64,
+        power: Rgb,
+        kernel: Kernel,
+        offset: f64,
+        r0: f64,
+        buffer: &mut [Rgb],
+    ) {
+        // In pixel coordinates: p(t) = o + t d, t still in world units.
+        let o = (ray.origin - self.origin) * self.scale;
+        let d = ray.dir * self.scale;
+        let (w, h) = (self.width as f64, self.height as f64);
+        // Clip t to the canvas rectangle (Liang-Barsky).
+        let (mut t0, mut t1) = (0.0f64, t_end);
+        for (p, q) in [(-d.x, o.x), (d.x, w - o.x), (-d.y, o.y), (d.y, h - o.y)] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return;
+                }
+            } else {
+                let r = q / p;
+                if p < 0.0 {
+                    t0 = t0.max(r);
+                } else {
+                    t1 = t1.min(r);
+                }
+            }
+        }
+        if t0.is_nan() || t0 >= t1 || !t1.is_finite() {
+            return;
+        }
+        let start = o + d * t0;
+        let mut ix = (start.x.floor() as i64).clamp(0, self.width as i64 - 1);
+        let mut iy = (start.y.floor() as i64).clamp(0, self.height as i64 - 1);
+        let step_x: i64 = if d.x > 0.0 { 1 } else { -1 };
+        let step_y: i64 = if d.y > 0.0 { 1 } else { -1 };
+        let next_boundary = |i: i64, s: i64| (if s > 0 { i + 1 } else { i }) as f64;
+        let mut t_next_x = if d.x != 0.0 {
+            (next_boundary(ix, step_x) - o.x) / d.x
+        } else {
+            f64::INFINITY
+        };
+        let mut t_next_y = if d.y != 0.0 {
+            (next_boundary(iy, step_y) - o.y) / d.y
+        } else {
+            f64::INFINITY
+        };
+        let dt_x = if d.x != 0.0 {
+            1.0 / d.x.abs()
+        } else {
+            f64::INFINITY
+        };
+        let dt_y = if d.y != 0.0 {
+            1.0 / d.y.abs()
+        } else {
+            f64::INFINITY
+        };
+        let flat = kernel.is_flat_beyond_r0();
+        let scaled = power * self.per_length;
+        let mut t = t0;
+        while t < t1 {
+            let t_exit = t_next_x.min(t_next_y).min(t1);
+            if t_exit > t {
+                let length = t_exit - t;
+                let factor = if flat && offset + t >= r0 {
+                    1.0
+                } else {
+                    kernel.factor(offset + 0.5 * (t + t_exit), r0)
+                };
+                buffer[(iy as usize) * self.width as usize + ix as usize] +=
+                    scaled * (length * factor);
+            }
+            t = t_exit;
+            if t >= t1 {
+                break;
+            }
+            if t_next_x <= t_next_y {
+                ix += step_x;
+                t_next_x += dt_x;
+                if ix < 0 || ix >= self.width as i64 {
+                    break;
+                }
+            } else {
+                iy += step_y;
+                t_next_y += dt_y;
+                if iy < 0 || iy >= self.height as i64 {
+                    break;
+                }
+            }
+        }
+    }
+}
