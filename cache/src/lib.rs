@@ -19,18 +19,32 @@ use rayon::prelude::*;
 pub type Value = [f32; 3];
 
 /// The memo of direct irradiance on walls.
+///
+/// Each wall is cut into spans at the points where other walls meet or
+/// cross it (a T-junction, a crossing), and each span into bins. A bin
+/// never straddles a junction and a lookup never interpolates across one:
+/// the two sides of a junction can see different light (one may be inside
+/// a closed room, the other outside), and blending them would leak light.
 #[derive(Clone, Debug, Default)]
 pub struct WallMemo {
     lights: usize,
-    /// For each wall, its number of bins.
-    bins: Vec<u32>,
-    /// For each wall, the index of its first entry in `total`.
-    offsets: Vec<usize>,
-    /// Per (wall, side, bin, light), laid out wall by wall, then side,
-    /// bin, light.
+    /// For each wall, its first span and its number of spans.
+    walls: Vec<(u32, u32)>,
+    spans: Vec<Span>,
+    /// Per (span, side, bin, light), laid out span by span.
     per_light: Vec<Value>,
-    /// Per (wall, side, bin): the sum over lights, what a lookup reads.
+    /// Per (span, side, bin): the sum over lights, what a lookup reads.
     total: Vec<Value>,
+}
+
+/// A stretch of a wall between junctions: `[u0, u1]` along the wall, cut
+/// into `bins` bins whose entries start at `offset` (side 0, then side 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Span {
+    u0: f64,
+    u1: f64,
+    bins: u32,
+    offset: usize,
 }
 
 /// Where a lookup lands: a wall, a side (0 or 1) and a position `u` in
@@ -43,71 +57,109 @@ pub struct Key {
 }
 
 impl WallMemo {
-    /// Builds the memo for walls of the given lengths, each cut into
-    /// `ceil(length / bin_length)` bins (at least one), for `lights`
-    /// lights. `fill(wall, side, u, light)` gives the value at the centre
-    /// `u` of a bin; it is called once per entry, from several threads.
+    /// Builds the memo for walls of the given lengths, each cut at the
+    /// positions `junctions[wall]` (in `(0, 1)`, any order) into spans, and
+    /// each span into `ceil(span length / bin_length)` bins (at least one),
+    /// for `lights` lights. `fill(wall, side, u, light)` gives the value at
+    /// the centre `u` of a bin; it is called once per entry, from several
+    /// threads.
     pub fn build(
         lengths: &[f64],
+        junctions: &[Vec<f64>],
         bin_length: f64,
         lights: usize,
         fill: impl Fn(u32, usize, f64, usize) -> Value + Sync,
     ) -> WallMemo {
-        let bins: Vec<u32> = lengths
-            .iter()
-            .map(|&len| {
-                let n = (len / bin_length).ceil();
-                if n.is_finite() && n >= 1.0 {
+        let mut walls = Vec::with_capacity(lengths.len());
+        let mut spans = Vec::new();
+        let mut next = 0usize;
+        for (wall, &length) in lengths.iter().enumerate() {
+            let mut cuts: Vec<f64> = junctions
+                .get(wall)
+                .map(|j| j.iter().copied().filter(|u| *u > 0.0 && *u < 1.0).collect())
+                .unwrap_or_default();
+            cuts.sort_by(f64::total_cmp);
+            cuts.dedup();
+            let first = spans.len() as u32;
+            let bounds: Vec<f64> = std::iter::once(0.0)
+                .chain(cuts)
+                .chain(std::iter::once(1.0))
+                .collect();
+            for pair in bounds.windows(2) {
+                let n = ((pair[1] - pair[0]) * length / bin_length).ceil();
+                let bins = if n.is_finite() && n >= 1.0 {
                     n.min(u32::MAX as f64) as u32
                 } else {
                     1
-                }
-            })
-            .collect();
-        let mut offsets = Vec::with_capacity(bins.len());
-        let mut next = 0usize;
-        for &n in &bins {
-            offsets.push(next);
-            next += 2 * n as usize;
+                };
+                spans.push(Span {
+                    u0: pair[0],
+                    u1: pair[1],
+                    bins,
+                    offset: next,
+                });
+                next += 2 * bins as usize;
+            }
+            walls.push((first, spans.len() as u32 - first));
         }
-        let per_light: Vec<Value> = (0..bins.len())
-            .into_par_iter()
-            .flat_map_iter(|wall| {
-                let n = bins[wall];
+        let owner: Vec<u32> = walls
+            .iter()
+            .enumerate()
+            .flat_map(|(w, &(_, count))| std::iter::repeat_n(w as u32, count as usize))
+            .collect();
+        let per_light: Vec<Value> = spans
+            .par_iter()
+            .zip(owner.par_iter())
+            .flat_map_iter(|(span, &wall)| {
                 let fill = &fill;
+                let span = *span;
                 (0..2usize).flat_map(move |side| {
-                    (0..n).flat_map(move |bin| {
-                        let u = (bin as f64 + 0.5) / n as f64;
-                        (0..lights).map(move |light| fill(wall as u32, side, u, light))
+                    (0..span.bins).flat_map(move |bin| {
+                        let u =
+                            span.u0 + (span.u1 - span.u0) * (bin as f64 + 0.5) / span.bins as f64;
+                        (0..lights).map(move |light| fill(wall, side, u, light))
                     })
                 })
             })
             .collect();
-        let total = per_light
-            .chunks(lights.max(1))
-            .map(|chunk| {
-                chunk.iter().fold([0.0f32; 3], |acc, v| {
-                    [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
+        let total = if lights == 0 {
+            vec![[0.0f32; 3]; next]
+        } else {
+            per_light
+                .chunks(lights)
+                .map(|chunk| {
+                    chunk.iter().fold([0.0f32; 3], |acc, v| {
+                        [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
+                    })
                 })
-            })
-            .collect();
+                .collect()
+        };
         WallMemo {
             lights,
-            bins,
-            offsets,
-            per_light: if lights == 0 { Vec::new() } else { per_light },
+            walls,
+            spans,
+            per_light,
             total,
         }
     }
 
     /// The number of walls.
     pub fn walls(&self) -> usize {
-        self.bins.len()
+        self.walls.len()
     }
 
-    /// The number of bins of `wall`.
+    /// The number of bins of `wall`, over all its spans.
     pub fn bins(&self, wall: u32) -> u32 {
-        self.bins[wall as usize]
+        let (first, count) = self.walls[wall as usize];
+        self.spans[first as usize..(first + count) as usize]
+            .iter()
+            .map(|s| s.bins)
+            .sum()
+    }
+
+    /// The number of spans of `wall`.
+    pub fn spans(&self, wall: u32) -> u32 {
+        self.walls[wall as usize].1
     }
 
     /// Entries stored per light: (wall, side, bin, light) keys.
@@ -118,24 +170,34 @@ impl WallMemo {
     /// Bytes held by the tables.
     pub fn memory_bytes(&self) -> usize {
         (self.per_light.len() + self.total.len()) * std::mem::size_of::<Value>()
-            + self.bins.len() * (std::mem::size_of::<u32>() + std::mem::size_of::<usize>())
+            + self.spans.len() * std::mem::size_of::<Span>()
+            + self.walls.len() * std::mem::size_of::<(u32, u32)>()
     }
 
-    /// The value stored for one light at bin `bin`.
-    pub fn entry(&self, wall: u32, side: usize, bin: u32, light: usize) -> Value {
-        let base =
-            self.offsets[wall as usize] + side * self.bins[wall as usize] as usize + bin as usize;
+    /// The value stored for one light in bin `bin` of span `span` of
+    /// `wall`.
+    pub fn entry(&self, wall: u32, span: u32, side: usize, bin: u32, light: usize) -> Value {
+        let s = self.spans[(self.walls[wall as usize].0 + span) as usize];
+        let base = s.offset + side * s.bins as usize + bin as usize;
         self.per_light[base * self.lights + light]
     }
 
     /// The summed value over all lights at `key`, linearly interpolated
-    /// between the centres of the two nearest bins (constant beyond the
-    /// first and last centre).
+    /// between the centres of the two nearest bins of its span (constant
+    /// beyond the span's first and last centre).
     #[inline]
     pub fn lookup(&self, key: Key) -> Value {
-        let n = self.bins[key.wall as usize] as usize;
-        let base = self.offsets[key.wall as usize] + key.side * n;
-        let x = (key.u * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+        let (first, count) = self.walls[key.wall as usize];
+        let spans = &self.spans[first as usize..(first + count) as usize];
+        // Spans are few: a linear scan finds the one holding u.
+        let span = spans
+            .iter()
+            .find(|s| key.u <= s.u1)
+            .unwrap_or(&spans[spans.len() - 1]);
+        let n = span.bins as usize;
+        let base = span.offset + key.side * n;
+        let local = (key.u - span.u0) / (span.u1 - span.u0);
+        let x = (local * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
         let i = (x as usize).min(n - 1);
         let j = (i + 1).min(n - 1);
         let f = (x - i as f64) as f32;
@@ -154,19 +216,22 @@ mod tests {
 
     #[test]
     fn bins_are_about_one_length_unit_and_keyed_exactly() {
-        let memo = WallMemo::build(&[10.0, 2.5, 0.1], 1.0, 2, |w, s, u, l| {
+        let memo = WallMemo::build(&[10.0, 2.5, 0.1], &[], 1.0, 2, |w, s, u, l| {
             [w as f32, s as f32 + u as f32, l as f32]
         });
         assert_eq!((memo.bins(0), memo.bins(1), memo.bins(2)), (10, 3, 1));
         assert_eq!(memo.entries(), (10 + 3 + 1) * 2 * 2);
-        assert_eq!(memo.entry(1, 1, 2, 1), [1.0, 1.0 + (2.5 / 3.0) as f32, 1.0]);
-        assert_eq!(memo.entry(0, 0, 0, 0), [0.0, 0.05, 0.0]);
+        assert_eq!(
+            memo.entry(1, 0, 1, 2, 1),
+            [1.0, 1.0 + (2.5 / 3.0) as f32, 1.0]
+        );
+        assert_eq!(memo.entry(0, 0, 0, 0, 0), [0.0, 0.05, 0.0]);
     }
 
     #[test]
     fn lookups_interpolate_between_bin_centres_and_sum_lights() {
         // Value = u at the bin centre, for each of 3 lights.
-        let memo = WallMemo::build(&[4.0], 1.0, 3, |_, _, u, _| [u as f32, 1.0, 0.0]);
+        let memo = WallMemo::build(&[4.0], &[], 1.0, 3, |_, _, u, _| [u as f32, 1.0, 0.0]);
         for u in [0.125, 0.3, 0.5, 0.61, 0.875] {
             let v = memo.lookup(Key {
                 wall: 0,
@@ -200,6 +265,48 @@ mod tests {
     }
 
     #[test]
+    fn lookups_never_interpolate_across_a_junction() {
+        // Value 1 left of the junction at u = 0.37, 0 right of it: a lookup
+        // just right of the junction reads 0, just left reads 1.
+        let memo = WallMemo::build(&[10.0], &[vec![0.37]], 1.0, 1, |_, _, u, _| {
+            [if u < 0.37 { 1.0 } else { 0.0 }; 3]
+        });
+        assert_eq!(memo.spans(0), 2);
+        assert_eq!(
+            memo.lookup(Key {
+                wall: 0,
+                side: 0,
+                u: 0.3700001
+            }),
+            [0.0; 3]
+        );
+        assert_eq!(
+            memo.lookup(Key {
+                wall: 0,
+                side: 0,
+                u: 0.3699999
+            }),
+            [1.0; 3]
+        );
+        assert_eq!(
+            memo.lookup(Key {
+                wall: 0,
+                side: 1,
+                u: 0.99
+            }),
+            [0.0; 3]
+        );
+        assert_eq!(
+            memo.lookup(Key {
+                wall: 0,
+                side: 1,
+                u: 0.0
+            }),
+            [1.0; 3]
+        );
+    }
+
+    #[test]
     fn the_table_does_not_depend_on_the_thread_count() {
         let lengths: Vec<f64> = (0..200).map(|k| 1.0 + k as f64 * 0.37).collect();
         let fill = |w: u32, s: usize, u: f64, l: usize| [(w as f64 * u) as f32, s as f32, l as f32];
@@ -211,8 +318,9 @@ mod tests {
             .num_threads(4)
             .build()
             .unwrap();
-        let a = one.install(|| WallMemo::build(&lengths, 0.5, 2, fill));
-        let b = four.install(|| WallMemo::build(&lengths, 0.5, 2, fill));
+        let junctions: Vec<Vec<f64>> = (0..200).map(|k| vec![0.3 + k as f64 * 1e-3]).collect();
+        let a = one.install(|| WallMemo::build(&lengths, &junctions, 0.5, 2, fill));
+        let b = four.install(|| WallMemo::build(&lengths, &junctions, 0.5, 2, fill));
         assert_eq!(a.per_light, b.per_light);
         assert_eq!(a.total, b.total);
     }
@@ -220,9 +328,9 @@ mod tests {
     #[test]
     fn memory_is_proportional_to_wall_length_times_lights() {
         let fill = |_: u32, _: usize, _: f64, _: usize| [0.0; 3];
-        let small = WallMemo::build(&[100.0; 10], 1.0, 2, fill);
-        let long = WallMemo::build(&[100.0; 20], 1.0, 2, fill);
-        let lit = WallMemo::build(&[100.0; 10], 1.0, 4, fill);
+        let small = WallMemo::build(&[100.0; 10], &[], 1.0, 2, fill);
+        let long = WallMemo::build(&[100.0; 20], &[], 1.0, 2, fill);
+        let lit = WallMemo::build(&[100.0; 10], &[], 1.0, 4, fill);
         assert_eq!(small.entries() * 2, long.entries());
         assert_eq!(small.entries() * 2, lit.entries());
         let per_entry = small.memory_bytes() as f64 / small.entries() as f64;

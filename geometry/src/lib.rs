@@ -19,6 +19,8 @@
 //! or through it, and in every case at least one of the two walls is
 //! crossed. No epsilon is involved. A ray that lies exactly along a segment
 //! (both signs zero) does not cross it: a grazing ray slides along the wall.
+//! Crossings count for `t > 0`: a ray never meets a wall at its own origin,
+//! so a wall drawn twice does not trap a ray that leaves one copy.
 
 pub use glam::DVec2;
 

@@ -3,7 +3,7 @@
 use flatray_geometry::{DVec2, Ray, Skip};
 
 use crate::sampling::{Stream, sample_subtended_angle};
-use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
+use crate::scene::{EMITTING_SIDE, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
 /// Who receives the light: the floor (no cosine, every direction) or one
@@ -51,12 +51,12 @@ pub(crate) fn direct_light(
     stats: &mut Stats,
 ) -> Rgb {
     let mut sum = Rgb::ZERO;
-    for light in &scene.lights {
-        let u = match light.shape {
+    for index in 0..scene.lights.len() {
+        let u = match scene.lights[index].shape {
             LightShape::Line { .. } => stream.uniform(),
             _ => 0.0,
         };
-        sum += light_contribution(scene, light, x, receiver, u, shadows, stats);
+        sum += light_contribution(scene, index, x, receiver, u, shadows, stats);
     }
     sum
 }
@@ -67,7 +67,7 @@ pub(crate) fn direct_light(
 /// it subtends); other lights ignore it.
 pub(crate) fn light_contribution(
     scene: &Scene,
-    light: &Light,
+    index: usize,
     x: DVec2,
     receiver: Receiver,
     u: f64,
@@ -81,6 +81,10 @@ pub(crate) fn light_contribution(
             Rgb::ONE
         }
     };
+    let light = &scene.lights[index];
+    // A light that sits on a wall shines past it: its shadow rays ignore
+    // that wall (for a solid line light, its own wall).
+    let light_wall = scene.light_wall[index];
     let r0 = scene.small_radius;
     let value = match light.shape {
         LightShape::Point { at } | LightShape::Spot { at, .. } => {
@@ -99,14 +103,12 @@ pub(crate) fn light_contribution(
                 if weight == 0.0 {
                     return Rgb::ZERO;
                 }
-                let vis = transmittance(&Ray::new(x, to), 1.0, receiver.skip(None), stats);
+                let vis = transmittance(&Ray::new(x, to), 1.0, receiver.skip(light_wall), stats);
                 Rgb::splat(light.intensity * light.falloff.g(r, r0) * weight) * vis
             }
         }
         LightShape::Line {
-            segment,
-            one_sided,
-            wall,
+            segment, one_sided, ..
         } => {
             if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
                 return Rgb::ZERO;
@@ -118,7 +120,12 @@ pub(crate) fn light_contribution(
             if weight == 0.0 {
                 return Rgb::ZERO;
             }
-            let vis = transmittance(&Ray::new(x, s.point - x), 1.0, receiver.skip(wall), stats);
+            let vis = transmittance(
+                &Ray::new(x, s.point - x),
+                1.0,
+                receiver.skip(light_wall),
+                stats,
+            );
             let per_angle = light.intensity * light.falloff.per_radian(s.distance, r0);
             Rgb::splat(per_angle * s.subtended * weight) * vis
         }

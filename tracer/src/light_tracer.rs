@@ -244,6 +244,11 @@ fn trace_photon(
             return;
         };
         travelled += h.t;
+        if h.u == 0.0 || h.u == 1.0 {
+            // The corner rule (see the path tracer).
+            stats.paths_absorbed += 1;
+            return;
+        }
         let wall = &scene.walls[index as usize];
         let x = wall.segment.point_at(h.u);
         let Some(side) = wall.segment.arrival_side(ray.dir) else {

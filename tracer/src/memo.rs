@@ -5,7 +5,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use flatray_cache::{Value, WallMemo};
-use flatray_geometry::Side;
+use flatray_geometry::{Ray, Side, Skip};
 
 use crate::light::{Receiver, light_contribution};
 use crate::scene::{LightShape, Material, Scene};
@@ -53,11 +53,34 @@ pub(crate) fn build_wall_memo(
             _ => 0.0,
         })
         .collect();
+    // Where other walls meet or cross each diffuse wall: bins and
+    // interpolation stop there.
+    let junctions: Vec<Vec<f64>> = scene
+        .walls
+        .iter()
+        .enumerate()
+        .map(|(index, w)| {
+            let mut cuts = Vec::new();
+            if matches!(w.material, Material::Diffuse { .. }) {
+                let along = Ray::new(w.segment.a, w.segment.edge());
+                scene
+                    .segments
+                    .for_each_crossing(&along, 1.0, Skip::one(index as u32), |_, hit| {
+                        if hit.t > 0.0 {
+                            cuts.push(hit.t);
+                        }
+                        true
+                    });
+            }
+            cuts
+        })
+        .collect();
     let bin_length = options.bin_length / scale;
     let rays = AtomicU64::new(0);
     let line_samples = options.line_samples.max(1);
     let memo = WallMemo::build(
         &lengths,
+        &junctions,
         bin_length,
         scene.lights.len(),
         |wall, side, u, light_index| {
@@ -82,12 +105,19 @@ pub(crate) fn build_wall_memo(
                     let mut sum = Rgb::ZERO;
                     for k in 0..line_samples {
                         let v = (k as f64 + 0.5) / line_samples as f64;
-                        sum +=
-                            light_contribution(scene, light, x, receiver, v, shadows, &mut local);
+                        sum += light_contribution(
+                            scene,
+                            light_index,
+                            x,
+                            receiver,
+                            v,
+                            shadows,
+                            &mut local,
+                        );
                     }
                     sum / line_samples as f64
                 }
-                _ => light_contribution(scene, light, x, receiver, 0.0, shadows, &mut local),
+                _ => light_contribution(scene, light_index, x, receiver, 0.0, shadows, &mut local),
             };
             rays.fetch_add(local.shadow_rays, Ordering::Relaxed);
             to_value(value)

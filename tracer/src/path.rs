@@ -70,6 +70,13 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
             stats.paths_escaped += 1;
             break;
         };
+        if h.u == 0.0 || h.u == 1.0 {
+            // The corner rule: a path that meets a wall exactly at an end
+            // ends there. Leaving from a corner point, no side test could
+            // tell the room's inside from its outside.
+            stats.paths_absorbed += 1;
+            break;
+        }
         let x = wall.segment.point_at(h.u);
         unfolded += h.t;
         if after_mirror && let Some(light) = scene.light_of_wall(index) {

@@ -244,6 +244,10 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// For each wall, the index of the line light it also is.
     pub(crate) wall_light: Vec<Option<u32>>,
+    /// For each light, the wall it sits on, which its shadow rays ignore:
+    /// a solid line light's own wall, or the first wall that a point or
+    /// spot light lies on (to within rounding).
+    pub(crate) light_wall: Vec<Option<u32>>,
     /// The walls' segments, indexed like `walls`.
     pub(crate) segments: SegmentSet,
 }
@@ -269,6 +273,17 @@ impl Scene {
                 }
             }
         }
+        let light_wall = lights
+            .iter()
+            .map(|light| match light.shape {
+                LightShape::Line { wall, .. } => wall,
+                LightShape::Point { at } | LightShape::Spot { at, .. } => walls
+                    .iter()
+                    .position(|w| lies_on(at, &w.segment))
+                    .map(|i| i as u32),
+                LightShape::Directional { .. } => None,
+            })
+            .collect();
         let segments = SegmentSet::new(walls.iter().map(|w| w.segment).collect());
         Scene {
             canvas,
@@ -277,6 +292,7 @@ impl Scene {
             walls,
             lights,
             wall_light,
+            light_wall,
             segments,
         }
     }
@@ -296,6 +312,24 @@ impl Scene {
     pub fn wall_albedo(&self, albedo: Option<Rgb>, x: DVec2) -> Rgb {
         albedo.unwrap_or_else(|| self.floor.albedo_at(&self.canvas, x))
     }
+}
+
+/// Whether `p` lies on `segment` to within the rounding of the numbers
+/// involved: its distance from the segment's line is below what computing
+/// that distance can resolve, and it lies between the ends.
+pub fn lies_on(p: DVec2, segment: &Segment) -> bool {
+    let e = segment.edge();
+    let magnitude = segment
+        .a
+        .abs()
+        .max(segment.b.abs())
+        .max(p.abs())
+        .max_element();
+    let tolerance = 16.0 * f64::EPSILON * e.length() * magnitude.max(e.length());
+    let along = (p - segment.a).dot(e);
+    segment.side_value(p).abs() <= tolerance
+        && along >= -tolerance
+        && along <= e.length_squared() + tolerance
 }
 
 /// The side of a one-sided line light that emits.

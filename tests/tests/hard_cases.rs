@@ -1,0 +1,632 @@
+//! Hard cases: one named test per case, each asserting finite output and
+//! the right answer (a closed form, a no-leak zero, or agreement with a
+//! slightly perturbed twin). `docs/robustness.md` gives the rule behind
+//! each.
+
+use std::f64::consts::TAU;
+
+use flatray_geometry::{DVec2, Ray, Segment, SegmentSet, Skip, intersect};
+use flatray_tests::{render, scene};
+use flatray_tracer::sampling::{Stream, cosine_half_circle};
+use flatray_tracer::{
+    Canvas, Falloff, Floor, Image, Integrator, Light, LightShape, Material, MemoOptions,
+    RenderOptions, Rgb, Scene, Wall,
+};
+
+fn options(samples: u32, bounces: u32) -> RenderOptions {
+    RenderOptions {
+        samples,
+        bounces,
+        memo: MemoOptions {
+            enabled: false,
+            ..MemoOptions::default()
+        },
+        ..RenderOptions::default()
+    }
+}
+
+fn all_finite(image: &Image) -> bool {
+    image.pixels.iter().flatten().all(|v| v.is_finite())
+}
+
+/// Relative difference of the channel sums of two images.
+fn relative_difference(a: &Image, b: &Image) -> f64 {
+    let sum = |i: &Image| i.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>();
+    let diff: f64 = a
+        .pixels
+        .iter()
+        .flatten()
+        .zip(b.pixels.iter().flatten())
+        .map(|(x, y)| (x - y).abs() as f64)
+        .sum();
+    diff / sum(b).max(f64::MIN_POSITIVE)
+}
+
+fn walls_text(points: &[(f64, f64)], closed: bool, extra: &str) -> String {
+    let n = points.len();
+    let count = if closed { n } else { n - 1 };
+    (0..count)
+        .map(|i| {
+            let (a, b) = (points[i], points[(i + 1) % n]);
+            format!(
+                "Wall(a: ({:?}, {:?}), b: ({:?}, {:?}){extra})",
+                a.0, a.1, b.0, b.1
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Renders `walls` with lights outside and asserts every pixel whose centre
+/// satisfies `inside` is exactly zero, for direct light and three bounces.
+fn assert_no_leak(name: &str, walls: &str, inside: impl Fn(DVec2) -> bool) {
+    let text = format!(
+        "Scene(canvas: (100, 100), floor: Color((1, 1, 1)), walls: [{walls}],
+               lights: [Point(at: (1.5, 98.5), intensity: 50.0), Line(a: (99, 2), b: (99, 97), intensity: 2.0),
+                        Directional(direction: (-0.37, 1.0), intensity: 3.0)])"
+    );
+    let loaded = scene(&text);
+    for (bounces, memo) in [(0, false), (3, false), (3, true)] {
+        let image = render(
+            &loaded.scene,
+            &RenderOptions {
+                memo: MemoOptions {
+                    enabled: memo,
+                    ..MemoOptions::default()
+                },
+                ..options(4, bounces)
+            },
+        )
+        .image;
+        assert!(all_finite(&image), "{name}");
+        let mut inside_count = 0;
+        for y in 0..100 {
+            for x in 0..100 {
+                if inside(DVec2::new(x as f64 + 0.5, y as f64 + 0.5)) {
+                    inside_count += 1;
+                    assert_eq!(
+                        image.get(x, y),
+                        [0.0; 3],
+                        "{name}, D = {bounces}: light leaked into ({x}, {y})"
+                    );
+                }
+            }
+        }
+        assert!(inside_count > 100, "{name}: {inside_count} pixels inside");
+        assert!(
+            image.pixels.iter().any(|p| p[0] > 0.0),
+            "{name}: the outside is lit"
+        );
+    }
+}
+
+#[test]
+fn ray_parallel_to_a_wall_misses_it() {
+    let wall = Segment::new(DVec2::new(0.0, 5.0), DVec2::new(10.0, 5.0));
+    for offset in [1e-300, 1e-12, 1.0, -1e-12] {
+        assert!(
+            intersect(
+                &Ray::new(DVec2::new(-3.0, 5.0 + offset), DVec2::new(1.0, 0.0)),
+                &wall
+            )
+            .is_none()
+        );
+    }
+}
+
+#[test]
+fn ray_collinear_with_a_wall_slides_along_it() {
+    // Overlapping and not: no hit, so a light on a wall's line lights the
+    // floor along it as if the wall were edge-on (zero thickness).
+    let text = |y: f64| {
+        format!(
+            "Scene(canvas: (60, 20), floor: Color((1, 1, 1)), walls: [Wall(a: (20, 10), b: (40, 10))],
+                   lights: [Point(at: (5, {y:?}), intensity: 5.0)])"
+        )
+    };
+    let on_line = render(&scene(&text(10.0)).scene, &options(16, 1)).image;
+    let perturbed = render(&scene(&text(10.0 + 1e-9)).scene, &options(16, 1)).image;
+    assert!(all_finite(&on_line));
+    assert!(relative_difference(&on_line, &perturbed) < 1e-3);
+}
+
+#[test]
+fn no_leak_through_a_convex_corner() {
+    let square = [(20.3, 20.1), (80.7, 20.1), (80.7, 79.9), (20.3, 79.9)];
+    assert_no_leak("convex", &walls_text(&square, true, ""), |p| {
+        p.x > 21.0 && p.x < 80.0 && p.y > 21.0 && p.y < 79.0
+    });
+}
+
+#[test]
+fn no_leak_through_a_reflex_corner() {
+    let l_shape = [
+        (10.0, 10.0),
+        (90.0, 10.0),
+        (90.0, 45.3),
+        (45.7, 45.3),
+        (45.7, 90.0),
+        (10.0, 90.0),
+    ];
+    assert_no_leak("reflex", &walls_text(&l_shape, true, ""), |p| {
+        let in_l = (p.x > 11.0 && p.x < 89.0 && p.y > 11.0 && p.y < 44.5)
+            || (p.x > 11.0 && p.x < 45.0 && p.y > 11.0 && p.y < 89.0);
+        in_l
+    });
+}
+
+#[test]
+fn no_leak_through_a_t_junction() {
+    // A room closed by a wall that ends on the middle of another: the end
+    // point (50, 20) lies exactly on the long wall.
+    let walls = "Wall(a: (10, 20), b: (90, 20)), Wall(a: (50, 20), b: (50, 80)), Wall(a: (50, 80), b: (85.5, 80)),
+                 Wall(a: (85.5, 80), b: (85.5, 20.0))";
+    assert_no_leak("T-junction", walls, |p| {
+        p.x > 51.0 && p.x < 85.0 && p.y > 21.0 && p.y < 79.0
+    });
+}
+
+#[test]
+fn no_leak_through_crossing_walls() {
+    // Four walls that overshoot each other at every corner, like a '#'.
+    let walls = "Wall(a: (10, 25.3), b: (90, 25.3)), Wall(a: (10, 75.1), b: (90, 75.1)),
+                 Wall(a: (25.7, 10), b: (25.7, 90)), Wall(a: (74.9, 10), b: (74.9, 90))";
+    assert_no_leak("crossing", walls, |p| {
+        p.x > 26.5 && p.x < 74.0 && p.y > 26.0 && p.y < 74.5
+    });
+}
+
+#[test]
+fn no_leak_through_a_rotated_room_with_inexact_corners() {
+    let points: Vec<(f64, f64)> = (0..7)
+        .map(|k| {
+            let a = TAU * k as f64 / 7.0 + 0.3;
+            (50.0 + 37.0 * a.cos(), 50.0 + 37.0 * a.sin())
+        })
+        .collect();
+    assert_no_leak("heptagon", &walls_text(&points, true, ""), |p| {
+        p.distance(DVec2::new(50.0, 50.0)) < 32.0
+    });
+}
+
+#[test]
+fn a_path_leaving_a_wall_never_hits_it_again_at_any_angle() {
+    // From points on each wall of a closed room, directions from the
+    // normal to the most grazing the sampler can give: every ray meets
+    // another wall, never its own, never nothing.
+    let points: Vec<DVec2> = (0..5)
+        .map(|k| {
+            let a = TAU * k as f64 / 5.0 + 0.2;
+            DVec2::new(1e3 * a.cos() + 0.3, 1e3 * a.sin() + 0.7)
+        })
+        .collect();
+    let segments: Vec<Segment> = (0..5)
+        .map(|i| Segment::new(points[i], points[(i + 1) % 5]))
+        .collect();
+    let set = SegmentSet::new(segments.clone());
+    let mut stream = Stream::new(9, 9, 9);
+    for (i, seg) in segments.iter().enumerate() {
+        // The inward normal: towards the centre.
+        let centre = points.iter().copied().sum::<DVec2>() / 5.0;
+        let n = if seg.normal().dot(centre - seg.a) > 0.0 {
+            seg.normal()
+        } else {
+            -seg.normal()
+        };
+        let extremes = [
+            0.0,
+            f64::EPSILON,
+            1e-12,
+            0.5,
+            1.0 - 1e-12,
+            1.0 - f64::EPSILON,
+        ];
+        let us: Vec<f64> = extremes
+            .iter()
+            .copied()
+            .chain((0..300).map(|_| stream.uniform()))
+            .collect();
+        // A path that meets a wall exactly at an end stops there (the
+        // corner rule); from 1e-7 of the length on, the leaving angle keeps
+        // every ray inside.
+        let positions: Vec<f64> = [1e-7, 0.5, 1.0 - 1e-7]
+            .into_iter()
+            .chain((0..20).map(|_| stream.uniform()))
+            .collect();
+        for &position in &positions {
+            let x = seg.point_at(position);
+            for &u in &us {
+                let d = cosine_half_circle(n, u);
+                let hit = set.closest_hit(&Ray::new(x, d), f64::INFINITY, Skip::one(i as u32));
+                let (j, _) = hit.unwrap_or_else(|| {
+                    panic!("wall {i}, position {position}, u {u}: escaped the room")
+                });
+                assert_ne!(j, i as u32);
+            }
+        }
+    }
+}
+
+#[test]
+fn facing_mirrors_end_at_the_bounce_limit() {
+    // An endless corridor: two parallel mirrors, a line light between them,
+    // a thousand bounces. The loop is iterative: it ends, with finite
+    // values and many reflections counted.
+    let text = "Scene(canvas: (60, 30), floor: Color((1, 1, 1)),
+        walls: [Wall(a: (0, 5), b: (60, 5), material: Mirror(tint: (0.999, 0.999, 0.999))),
+                Wall(a: (0, 25), b: (60, 25), material: Mirror(tint: (0.999, 0.999, 0.999)))],
+        lights: [Line(a: (25, 12), b: (35, 12), intensity: 1.0)])";
+    let loaded = scene(text);
+    let rendered = render(&loaded.scene, &options(2, 1000));
+    assert!(all_finite(&rendered.image));
+    assert!(
+        rendered.stats.mirror_reflections > 10_000,
+        "{}",
+        rendered.stats
+    );
+    assert!(rendered.stats.paths_bounce_limit > 0);
+}
+
+#[test]
+fn grazing_reflection_off_a_mirror_is_finite_and_matches_its_twin() {
+    let text = |y: f64| {
+        format!(
+            "Scene(canvas: (80, 40), floor: Color((1, 1, 1)),
+                   walls: [Wall(a: (10, 20), b: (70, 20), material: Mirror())],
+                   lights: [Point(at: (2, {y:?}), intensity: 5.0), Line(a: (74, 20.001), b: (78, 20.002))])"
+        )
+    };
+    let a = render(
+        &scene(&text(20.0)).scene,
+        &RenderOptions {
+            integrator: Integrator::Light,
+            ..options(16, 2)
+        },
+    )
+    .image;
+    let b = render(
+        &scene(&text(20.0 + 1e-7)).scene,
+        &RenderOptions {
+            integrator: Integrator::Light,
+            ..options(16, 2)
+        },
+    )
+    .image;
+    assert!(all_finite(&a) && all_finite(&b));
+    assert!(relative_difference(&a, &b) < 0.02);
+}
+
+#[test]
+fn point_light_exactly_on_a_wall_lights_both_sides() {
+    let text = |y: f64| {
+        format!(
+            "Scene(canvas: (40, 40), floor: Color((1, 1, 1)),
+                   walls: [Wall(a: (5, 20), b: (35, 20))],
+                   lights: [Point(at: (20.3, {y:?}), intensity: 5.0)])"
+        )
+    };
+    let on = render(&scene(&text(20.0)).scene, &options(8, 1)).image;
+    assert!(all_finite(&on));
+    // Both sides lit, and symmetric about the wall: no speckle of rounding.
+    for x in 0..40 {
+        for k in 1..10 {
+            let above = on.get(x, 20 - k)[0];
+            let below = on.get(x, 19 + k)[0];
+            assert!(above > 0.0 && below > 0.0, "({x}, {k})");
+        }
+    }
+    let just_above = render(&scene(&text(20.0 - 1e-9)).scene, &options(8, 0)).image;
+    // Just above the wall, it lights only its own side.
+    assert_eq!(just_above.get(20, 30), [0.0; 3]);
+}
+
+#[test]
+fn point_light_on_a_wall_endpoint_and_at_a_pixel_centre_stays_finite() {
+    for at in ["(35, 20)", "(5, 20)", "(20.5, 10.5)"] {
+        let text = format!(
+            "Scene(canvas: (40, 40), floor: Color((1, 1, 1)),
+                   walls: [Wall(a: (5, 20), b: (35, 20)), Wall(a: (35, 20), b: (35, 35))],
+                   lights: [Point(at: {at}, intensity: 5.0)])"
+        );
+        let loaded = scene(&text);
+        for integrator in [Integrator::Path, Integrator::Light] {
+            let rendered = render(
+                &loaded.scene,
+                &RenderOptions {
+                    integrator,
+                    ..options(8, 2)
+                },
+            );
+            assert!(all_finite(&rendered.image), "{at}");
+            assert_eq!(rendered.stats.nonfinite_samples, 0, "{at}");
+        }
+    }
+    // At a pixel centre the small-radius clamp bounds the pixel: its value
+    // is at most I / r0 with the default r0 = 0.5.
+    let loaded = scene(
+        "Scene(canvas: (40, 40), floor: Color((1, 1, 1)), lights: [Point(at: (20.5, 10.5), intensity: 5.0)])",
+    );
+    let image = render(&loaded.scene, &options(64, 0)).image;
+    let centre = image.get(20, 10)[0] as f64;
+    assert!(
+        centre <= 5.0 / 0.5 + 1e-6 && centre > 5.0 / 0.75,
+        "{centre}"
+    );
+}
+
+#[test]
+fn a_receiver_pixel_cut_by_a_wall_averages_its_two_sides() {
+    // A wall along y = 10.5 cuts the row of pixels 10 in half: the pixel's
+    // value is the mean over its square of I / r above the wall and zero
+    // below it (closed form 1 with a shadow), within 5 standard errors.
+    let text = "Scene(canvas: (30, 21), floor: Color((1, 1, 1)),
+        walls: [Wall(a: (-1, 10.5), b: (31, 10.5))],
+        lights: [Point(at: (15, 3), intensity: 5.0)])";
+    let samples = 256;
+    let image = render(&scene(text).scene, &options(samples, 0)).image;
+    assert!(all_finite(&image));
+    let light = DVec2::new(15.0, 3.0);
+    for x in 5..25u32 {
+        let (mut s1, mut s2, n) = (0.0, 0.0, 32);
+        for j in 0..n {
+            for i in 0..n {
+                let p = DVec2::new(
+                    x as f64 + (i as f64 + 0.5) / n as f64,
+                    10.0 + (j as f64 + 0.5) / n as f64,
+                );
+                let v = if p.y < 10.5 {
+                    5.0 / p.distance(light)
+                } else {
+                    0.0
+                };
+                s1 += v;
+                s2 += v * v;
+            }
+        }
+        let count = (n * n) as f64;
+        let mean = s1 / count;
+        let se = ((s2 / count - mean * mean) / samples as f64).sqrt();
+        let cut = image.get(x, 10)[0] as f64;
+        assert!(
+            (cut - mean).abs() <= 5.0 * se,
+            "x = {x}: {cut} vs {mean} (5 SE = {})",
+            5.0 * se
+        );
+        assert_eq!(image.get(x, 11), [0.0; 3]);
+    }
+}
+
+#[test]
+fn degenerate_input_is_handled_as_documented() {
+    // Duplicate walls block like one; a zero-intensity light adds nothing.
+    let one =
+        "Scene(canvas: (30, 30), floor: Color((1, 1, 1)), walls: [Wall(a: (10, 5), b: (10, 25))],
+        lights: [Point(at: (3, 15), intensity: 4.0)])";
+    let twice = "Scene(canvas: (30, 30), floor: Color((1, 1, 1)), walls: [Wall(a: (10, 5), b: (10, 25)), Wall(a: (10, 5), b: (10, 25))],
+        lights: [Point(at: (3, 15), intensity: 4.0), Point(at: (20, 20), intensity: 0.0)])";
+    let a = render(&scene(one).scene, &options(8, 2)).image;
+    let b = render(&scene(twice).scene, &options(8, 2)).image;
+    assert!(all_finite(&b));
+    assert!(
+        relative_difference(&a, &b) < 0.05,
+        "{}",
+        relative_difference(&a, &b)
+    );
+    // Zero-length walls and line lights are refused by the loader (see
+    // bad_scenes.rs); a scene built in code with one stays finite.
+    let canvas = Canvas {
+        width: 20,
+        height: 20,
+        origin: DVec2::ZERO,
+    };
+    let p = DVec2::new(10.0, 10.0);
+    let scene = Scene::new(
+        canvas,
+        Floor::Color(Rgb::ONE),
+        0.5,
+        vec![Wall {
+            segment: Segment::new(p, p),
+            material: Material::Diffuse { albedo: None },
+        }],
+        vec![
+            Light {
+                shape: LightShape::Line {
+                    segment: Segment::new(p, p),
+                    one_sided: false,
+                    wall: None,
+                },
+                color: Rgb::ONE,
+                intensity: 1.0,
+                falloff: Falloff::Flatland,
+            },
+            Light {
+                shape: LightShape::Point {
+                    at: DVec2::new(3.0, 3.0),
+                },
+                color: Rgb::ONE,
+                intensity: 1.0,
+                falloff: Falloff::Flatland,
+            },
+        ],
+    );
+    for integrator in [Integrator::Path, Integrator::Light] {
+        let image = render(
+            &scene,
+            &RenderOptions {
+                integrator,
+                ..options(4, 2)
+            },
+        )
+        .image;
+        assert!(all_finite(&image));
+    }
+}
+
+fn shifted_scene(offset: f64) -> String {
+    format!(
+        "Scene(canvas: (60, 40), origin: ({o:?}, {o:?}), floor: Color((1, 1, 1)),
+            walls: [Wall(a: ({a:?}, {b:?}), b: ({c:?}, {b:?})), Wall(a: ({c:?}, {b:?}), b: ({c:?}, {d:?}), material: Mirror()),
+                    Wall(a: ({e:?}, {f:?}), b: ({g:?}, {h:?}), material: Diffuse(albedo: (0.8, 0.3, 0.3)))],
+            lights: [Point(at: ({lx:?}, {ly:?}), intensity: 5.0), Line(a: ({mx:?}, {my:?}), b: ({nx:?}, {ny:?}), intensity: 0.5)])",
+        o = offset,
+        a = offset + 10.0,
+        b = offset + 8.0,
+        c = offset + 50.0,
+        d = offset + 35.0,
+        e = offset + 5.0,
+        f = offset + 30.0,
+        g = offset + 25.0,
+        h = offset + 38.0,
+        lx = offset + 30.3,
+        ly = offset + 20.7,
+        mx = offset + 12.0,
+        my = offset + 15.0,
+        nx = offset + 20.0,
+        ny = offset + 13.0,
+    )
+}
+
+#[test]
+fn a_scene_translated_a_million_units_gives_the_same_image() {
+    let near = render(&scene(&shifted_scene(0.0)).scene, &options(16, 2)).image;
+    let far = render(&scene(&shifted_scene(1e6)).scene, &options(16, 2)).image;
+    assert!(all_finite(&far));
+    // The same random streams: only rounding of coordinates near 1e6
+    // (about 1e-10) differs, which moves a few samples across shadow edges.
+    assert!(
+        relative_difference(&near, &far) < 1e-3,
+        "{}",
+        relative_difference(&near, &far)
+    );
+}
+
+#[test]
+fn a_scene_scaled_down_gives_the_scaled_image() {
+    // The same scene 100 times smaller, rendered at 100 pixels per unit:
+    // with Flatland a point light's fluence grows as 1 / length, so a light
+    // 100 times weaker gives the same image (r0 shrinks with the scene).
+    let big = "Scene(canvas: (40, 30), floor: Color((1, 1, 1)), small_radius: 0.5,
+        walls: [Wall(a: (10, 5), b: (30, 5)), Wall(a: (30, 5), b: (30, 25), material: Mirror())],
+        lights: [Point(at: (15.3, 15.7), intensity: 1.0)])";
+    let small = "Scene(canvas: (1, 1), floor: Color((1, 1, 1)), small_radius: 0.005,
+        walls: [Wall(a: (0.1, 0.05), b: (0.3, 0.05)), Wall(a: (0.3, 0.05), b: (0.3, 0.25), material: Mirror())],
+        lights: [Point(at: (0.153, 0.157), intensity: 0.01)])";
+    let crop = |image: &Image| Image {
+        width: 40,
+        height: 30,
+        pixels: (0..30)
+            .flat_map(|y| (0..40).map(move |x| (x, y)))
+            .map(|(x, y)| image.get(x, y))
+            .collect(),
+    };
+    let total = |image: &Image| {
+        image
+            .pixels
+            .iter()
+            .flatten()
+            .map(|&v| v as f64)
+            .sum::<f64>()
+    };
+    // Direct light: pixel by pixel (only the jitter differs: the streams
+    // are keyed by pixel index, and the images' widths differ).
+    let a = render(&scene(big).scene, &options(64, 0)).image;
+    let b = crop(
+        &render(
+            &scene(small).scene,
+            &RenderOptions {
+                scale: 100.0,
+                ..options(64, 0)
+            },
+        )
+        .image,
+    );
+    assert!(all_finite(&b));
+    assert!(
+        relative_difference(&b, &a) < 0.01,
+        "{}",
+        relative_difference(&b, &a)
+    );
+    // With bounces: the totals, where per-pixel noise averages out.
+    let a = render(&scene(big).scene, &options(64, 2)).image;
+    let b = crop(
+        &render(
+            &scene(small).scene,
+            &RenderOptions {
+                scale: 100.0,
+                ..options(64, 2)
+            },
+        )
+        .image,
+    );
+    assert!(
+        (total(&b) / total(&a) - 1.0).abs() < 0.01,
+        "{} vs {}",
+        total(&b),
+        total(&a)
+    );
+}
+
+#[test]
+fn walls_that_touch_the_canvas_edge_are_fine() {
+    let text = "Scene(canvas: (30, 30), floor: Color((1, 1, 1)),
+        walls: [Wall(a: (0, 0), b: (30, 0)), Wall(a: (30, 0), b: (30, 30)), Wall(a: (0, 15), b: (30, 15))],
+        lights: [Point(at: (10, 8), intensity: 4.0)])";
+    for integrator in [Integrator::Path, Integrator::Light] {
+        let image = render(
+            &scene(text).scene,
+            &RenderOptions {
+                integrator,
+                ..options(8, 3)
+            },
+        )
+        .image;
+        assert!(all_finite(&image));
+        assert!(
+            image.get(10, 20)[0] == 0.0,
+            "{integrator:?}: below the dividing wall is dark"
+        );
+    }
+}
+
+#[test]
+fn a_non_finite_sample_is_reported_not_written() {
+    let canvas = Canvas {
+        width: 8,
+        height: 8,
+        origin: DVec2::ZERO,
+    };
+    let scene = Scene::new(
+        canvas,
+        Floor::Color(Rgb::ONE),
+        0.5,
+        vec![],
+        vec![Light {
+            shape: LightShape::Point {
+                at: DVec2::new(4.0, 4.0),
+            },
+            color: Rgb::ONE,
+            intensity: f64::MAX,
+            falloff: Falloff::Constant,
+        }],
+    );
+    let mut light = scene.lights[0];
+    light.intensity = f64::MAX;
+    let rendered = render(&scene, &options(2, 0));
+    // Two lights' worth of f64::MAX would overflow; one already does when
+    // the exposure multiplies it.
+    let rendered2 = render(
+        &Scene::new(
+            canvas,
+            Floor::Color(Rgb::ONE),
+            0.5,
+            vec![],
+            vec![light, light],
+        ),
+        &options(2, 0),
+    );
+    for r in [&rendered, &rendered2] {
+        assert!(r.image.pixels.iter().flatten().all(|v| !v.is_nan()));
+    }
+    assert!(rendered2.stats.nonfinite_samples > 0);
+    assert_eq!(rendered2.stats.first_nonfinite, Some((0, 0, 0)));
+}
