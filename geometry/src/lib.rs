@@ -197,17 +197,27 @@ pub struct Hit {
 /// on one side of the line, or the ray lies along the segment.
 #[inline]
 pub fn line_crossing(ray: &Ray, seg: &Segment) -> Option<Hit> {
-    let sa = cross(ray.dir, seg.a - ray.origin);
-    let sb = cross(ray.dir, seg.b - ray.origin);
+    crossing_parts(ray.origin, ray.dir, seg.a, seg.b).map(|(t, sa, sb)| Hit {
+        t,
+        u: sa / (sa - sb),
+    })
+}
+
+/// The arithmetic of the crossing rule, written once: `(t, sa, sb)` where
+/// `sa` and `sb` are the sides of `a` and `b` relative to the line through
+/// `o` along `d`, and `t` the ray parameter of the crossing. The segment
+/// parameter is `sa / (sa - sb)`, in `[0, 1]` without clamping because
+/// the signs differ or exactly one is zero.
+#[inline(always)]
+pub(crate) fn crossing_parts(o: DVec2, d: DVec2, a: DVec2, b: DVec2) -> Option<(f64, f64, f64)> {
+    let (pa, pb) = (a - o, b - o);
+    let sa = d.x * pa.y - d.y * pa.x;
+    let sb = d.x * pb.y - d.y * pb.x;
     if (sa > 0.0 && sb > 0.0) || (sa < 0.0 && sb < 0.0) || (sa == 0.0 && sb == 0.0) {
         return None;
     }
-    // The signs differ or exactly one is zero, so sa - sb is not zero and u
-    // lies in [0, 1] without clamping.
-    let denom = sa - sb;
-    let u = sa / denom;
-    let t = cross(seg.a - ray.origin, seg.edge()) / -denom;
-    Some(Hit { t, u })
+    let e = b - a;
+    Some(((pa.x * e.y - pa.y * e.x) / (sb - sa), sa, sb))
 }
 
 /// The crossing of `ray` with `seg` at `t > 0`, if any.

@@ -2,7 +2,7 @@
 //! force over a structure-of-arrays copy for small sets, a bounding volume
 //! hierarchy for large ones. Both give exactly the same answers.
 
-use crate::{DVec2, Hit, Ray, Segment};
+use crate::{DVec2, Hit, Ray, Segment, crossing_parts};
 
 /// Up to two segment indices that a query ignores: the wall a ray leaves
 /// from, and the wall a light sample lies on. A ray that starts on a
@@ -135,9 +135,26 @@ impl SegmentSet {
         &self.segments
     }
 
+    /// The stored segments in `slots` with their original indices, as an
+    /// iterator over zipped slices (no bounds check per segment).
+    #[inline(always)]
+    fn stored(
+        &self,
+        slots: std::ops::Range<usize>,
+    ) -> impl Iterator<Item = (DVec2, DVec2, u32)> + '_ {
+        let s = slots;
+        self.ax[s.clone()]
+            .iter()
+            .zip(&self.ay[s.clone()])
+            .zip(self.bx[s.clone()].iter().zip(&self.by[s.clone()]))
+            .zip(&self.order[s])
+            .map(|(((&ax, &ay), (&bx, &by)), &index)| {
+                (DVec2::new(ax, ay), DVec2::new(bx, by), index)
+            })
+    }
+
     /// Tests the stored segments in `slots` against `ray` and keeps the
-    /// nearest crossing in `best`. The arithmetic is exactly that of
-    /// [`crate::line_crossing`], over the structure-of-arrays copy. (Two
+    /// nearest crossing in `best`. (Two
     /// branch-free variants, computing every `t` and selecting the least,
     /// measured slower on this scalar-f64 target: the divisions cost more
     /// than the mispredicted branches they avoid.)
@@ -150,30 +167,13 @@ impl SegmentSet {
         skip: Skip,
         best: &mut Best,
     ) {
-        let (o, d) = (ray.origin, ray.dir);
-        let (ax, ay) = (&self.ax[slots.clone()], &self.ay[slots.clone()]);
-        let (bx, by) = (&self.bx[slots.clone()], &self.by[slots.clone()]);
-        let order = &self.order[slots];
-        for k in 0..order
-            .len()
-            .min(ax.len())
-            .min(ay.len())
-            .min(bx.len())
-            .min(by.len())
-        {
-            let (pax, pay) = (ax[k] - o.x, ay[k] - o.y);
-            let (pbx, pby) = (bx[k] - o.x, by[k] - o.y);
-            let sa = d.x * pay - d.y * pax;
-            let sb = d.x * pby - d.y * pbx;
-            if (sa > 0.0 && sb > 0.0) || (sa < 0.0 && sb < 0.0) || (sa == 0.0 && sb == 0.0) {
+        for (a, b, index) in self.stored(slots) {
+            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
                 continue;
-            }
-            let (ex, ey) = (bx[k] - ax[k], by[k] - ay[k]);
-            let t = (pax * ey - pay * ex) / (sb - sa);
+            };
             if !(t > 0.0 && t < t_max) || t > best.t {
                 continue;
             }
-            let index = order[k];
             if skip.contains(index) || (t == best.t && index >= best.index) {
                 continue;
             }
@@ -196,31 +196,15 @@ impl SegmentSet {
         skip: Skip,
         visit: &mut F,
     ) -> bool {
-        let (o, d) = (ray.origin, ray.dir);
-        let (ax, ay) = (&self.ax[slots.clone()], &self.ay[slots.clone()]);
-        let (bx, by) = (&self.bx[slots.clone()], &self.by[slots.clone()]);
-        let order = &self.order[slots];
-        for k in 0..order
-            .len()
-            .min(ax.len())
-            .min(ay.len())
-            .min(bx.len())
-            .min(by.len())
-        {
-            let (pax, pay) = (ax[k] - o.x, ay[k] - o.y);
-            let (pbx, pby) = (bx[k] - o.x, by[k] - o.y);
-            let sa = d.x * pay - d.y * pax;
-            let sb = d.x * pby - d.y * pbx;
-            if (sa > 0.0 && sb > 0.0) || (sa < 0.0 && sb < 0.0) || (sa == 0.0 && sb == 0.0) {
+        for (a, b, index) in self.stored(slots) {
+            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
                 continue;
-            }
-            let (ex, ey) = (bx[k] - ax[k], by[k] - ay[k]);
-            let t = (pax * ey - pay * ex) / (sb - sa);
-            if !(t > 0.0 && t < t_max) || skip.contains(order[k]) {
+            };
+            if !(t > 0.0 && t < t_max) || skip.contains(index) {
                 continue;
             }
             if !visit(
-                order[k],
+                index,
                 Hit {
                     t,
                     u: sa / (sa - sb),

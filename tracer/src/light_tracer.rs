@@ -8,6 +8,7 @@ use std::f64::consts::TAU;
 use flatray_geometry::{DVec2, Ray, Side, Skip, reflect};
 use rayon::prelude::*;
 
+use crate::path::diffuse_albedo;
 use crate::plan::Plan;
 use crate::render::{Image, RenderOptions, Rendered, image_size};
 use crate::sampling::{Stream, cosine_half_circle, uniform_circle};
@@ -277,13 +278,7 @@ fn trace_photon(
                     stats.paths_bounce_limit += 1;
                     return;
                 }
-                let rho = match albedo {
-                    Some(rho) => rho,
-                    None => {
-                        stats.floor_albedo_reads += 1;
-                        scene.floor.albedo_at(&scene.canvas, x)
-                    }
-                };
+                let rho = diffuse_albedo(scene, albedo, x, stats);
                 // Power arriving at the wall, with the kernel's share.
                 power *= kernel.factor(travelled, r0) * rho;
                 kernel = Kernel::None;

@@ -119,13 +119,7 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
                     stats.paths_bounce_limit += 1;
                     break;
                 }
-                let rho = match albedo {
-                    Some(rho) => rho,
-                    None => {
-                        stats.floor_albedo_reads += 1;
-                        scene.floor.albedo_at(&scene.canvas, x)
-                    }
-                };
+                let rho = diffuse_albedo(scene, albedo, x, stats);
                 // 2pi L_o = 2pi (rho / 2) E, with 2pi already in throughput.
                 let irradiance = match memo {
                     Some(memo) => {
@@ -176,6 +170,24 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
         }
     }
     fluence
+}
+
+/// A diffuse wall's albedo at `x`: its own, or the floor's there (colour
+/// bleeding from the floor), counted in `stats`.
+#[inline]
+pub(crate) fn diffuse_albedo(
+    scene: &Scene,
+    albedo: Option<Rgb>,
+    x: DVec2,
+    stats: &mut Stats,
+) -> Rgb {
+    match albedo {
+        Some(rho) => rho,
+        None => {
+            stats.floor_albedo_reads += 1;
+            scene.floor.albedo_at(&scene.canvas, x)
+        }
+    }
 }
 
 /// What one path sample needs to know beyond its position: the scene and

@@ -161,6 +161,18 @@ mod tests {
             .sum()
     }
 
+    /// P(bin) = (sin(hi) - sin(lo)) / 2, the integral of cos / 2 over each
+    /// of `BINS` equal bins of the half circle.
+    fn cosine_bins() -> Vec<f64> {
+        (0..BINS)
+            .map(|k| {
+                let lo = -PI / 2.0 + PI * k as f64 / BINS as f64;
+                let hi = lo + PI / BINS as f64;
+                (hi.sin() - lo.sin()) / 2.0
+            })
+            .collect()
+    }
+
     #[test]
     fn cosine_sampler_draws_cos_over_two() {
         let n = DVec2::new(0.6, -0.8);
@@ -174,15 +186,7 @@ mod tests {
             let bin = ((theta + PI / 2.0) / PI * BINS as f64) as usize;
             counts[bin.min(BINS - 1)] += 1;
         }
-        // P(bin) = (sin(hi) - sin(lo)) / 2, the integral of cos / 2.
-        let expected: Vec<f64> = (0..BINS)
-            .map(|k| {
-                let lo = -PI / 2.0 + PI * k as f64 / BINS as f64;
-                let hi = lo + PI / BINS as f64;
-                (hi.sin() - lo.sin()) / 2.0
-            })
-            .collect();
-        let chi2 = chi_square(&counts, &expected);
+        let chi2 = chi_square(&counts, &cosine_bins());
         assert!(chi2 < CHI2_19_999, "chi-square {chi2}: {counts:?}");
     }
 
@@ -199,14 +203,7 @@ mod tests {
             let bin = ((theta + PI / 2.0) / PI * BINS as f64) as usize;
             counts[bin.min(BINS - 1)] += 1;
         }
-        let expected: Vec<f64> = (0..BINS)
-            .map(|k| {
-                let lo = -PI / 2.0 + PI * k as f64 / BINS as f64;
-                let hi = lo + PI / BINS as f64;
-                (hi.sin() - lo.sin()) / 2.0
-            })
-            .collect();
-        assert!(chi_square(&counts, &expected) > 10.0 * CHI2_19_999);
+        assert!(chi_square(&counts, &cosine_bins()) > 10.0 * CHI2_19_999);
     }
 
     #[test]

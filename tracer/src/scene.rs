@@ -306,12 +306,6 @@ impl Scene {
     pub fn light_of_wall(&self, index: u32) -> Option<u32> {
         self.wall_light.get(index as usize).copied().flatten()
     }
-
-    /// The albedo of a diffuse wall at point `x`, or the floor's there.
-    #[inline]
-    pub fn wall_albedo(&self, albedo: Option<Rgb>, x: DVec2) -> Rgb {
-        albedo.unwrap_or_else(|| self.floor.albedo_at(&self.canvas, x))
-    }
 }
 
 /// Whether `p` lies on `segment` to within the rounding of the numbers
