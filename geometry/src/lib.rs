@@ -44,6 +44,23 @@ pub fn reflect(d: DVec2, n: DVec2) -> DVec2 {
     d - 2.0 * d.dot(n) * n
 }
 
+/// Refraction of unit direction `d` at a surface with unit normal `n`
+/// (either orientation), by Snell's law with `eta = n1 / n2` (the index the
+/// ray leaves over the index it enters). `None` beyond the critical angle:
+/// total internal reflection.
+#[inline]
+pub fn refract(d: DVec2, n: DVec2, eta: f64) -> Option<DVec2> {
+    // Orient the normal against the ray.
+    let n = if d.dot(n) > 0.0 { -n } else { n };
+    let cos_i = -d.dot(n);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t > 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(eta * d + (eta * cos_i - cos_t) * n)
+}
+
 /// A line segment from `a` to `b`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {

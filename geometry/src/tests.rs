@@ -138,3 +138,22 @@ fn closest_hit_skips_and_picks_nearest() {
     });
     assert_eq!(seen, vec![0, 1]);
 }
+
+#[test]
+fn refraction_follows_snell_and_reflects_totally_beyond_the_critical_angle() {
+    let n = v(0.0, 1.0);
+    for degrees in [0.0f64, 10.0, 30.0, 45.0, 60.0] {
+        let a = degrees.to_radians();
+        let d = v(a.sin(), -a.cos());
+        let t = refract(d, n, 1.0 / 1.5).unwrap();
+        assert!((t.length() - 1.0).abs() < 1e-12);
+        // n1 sin(i) = n2 sin(t).
+        assert!((1.0 * a.sin() - 1.5 * t.x).abs() < 1e-12, "{degrees}");
+        assert!(t.y < 0.0, "continues through");
+    }
+    // From glass to air beyond asin(1 / 1.5) = 41.8 degrees: no refraction.
+    let a = 42.0f64.to_radians();
+    assert!(refract(v(a.sin(), -a.cos()), n, 1.5).is_none());
+    let a = 41.0f64.to_radians();
+    assert!(refract(v(a.sin(), -a.cos()), n, 1.5).is_some());
+}

@@ -166,8 +166,50 @@ pub struct SceneFile {
     pub walls: Vec<WallSpec>,
     #[serde(default)]
     pub lights: Vec<LightSpec>,
+    /// Closed polygons of glass.
+    #[serde(default)]
+    pub glass: Vec<GlassSpec>,
     #[serde(default)]
     pub render: RenderSpec,
+}
+
+/// A glass body: a closed polygon (the last point joins the first).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Glass")]
+pub struct GlassSpec {
+    pub points: Vec<Point>,
+    /// Index of refraction at 0.55 micrometres.
+    #[serde(default = "glass_ior")]
+    pub ior: Ior,
+    /// Beer-Lambert absorption per unit length, per channel.
+    #[serde(default)]
+    pub absorption: Option<(NonNegative, NonNegative, NonNegative)>,
+    /// Cauchy's B coefficient in square micrometres (0.004 is flint-like);
+    /// 0 for none.
+    #[serde(default)]
+    pub dispersion: NonNegative,
+}
+
+fn glass_ior() -> Ior {
+    Ior(1.5)
+}
+
+/// An index of refraction, 1 to 4.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Ior(pub f64);
+
+impl TryFrom<f64> for Ior {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Ior, String> {
+        if (1.0..=4.0).contains(&v) {
+            Ok(Ior(v))
+        } else {
+            Err(format!(
+                "expected an index of refraction from 1 to 4, found {v}"
+            ))
+        }
+    }
 }
 
 fn half() -> Positive {

@@ -2,8 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
-use flatray_geometry::{DVec2, Segment};
-use flatray_tracer::scene::{Canvas, Falloff, Floor, Light, LightShape, Material, Scene, Wall};
+use flatray_geometry::{DVec2, Segment, Side};
+use flatray_tracer::scene::{
+    Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall,
+};
 use flatray_tracer::{Integrator, MemoOptions, RenderOptions, Rgb};
 use ron::extensions::Extensions;
 
@@ -243,7 +245,69 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         });
     }
 
-    let scene = Scene::new(canvas, floor, file.small_radius.0, walls, lights);
+    let mut bodies = Vec::with_capacity(file.glass.len());
+    let mut polygons: Vec<Vec<DVec2>> = Vec::with_capacity(file.glass.len());
+    for (k, spec) in file.glass.iter().enumerate() {
+        let points: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
+        let located = |message: String| {
+            let (line, column) = locate_nth(text, "Glass(", k);
+            SceneError::Invalid {
+                path: path.to_path_buf(),
+                line,
+                column,
+                message,
+            }
+        };
+        validate_polygon(&points).map_err(located)?;
+        for (j, other) in polygons.iter().enumerate() {
+            if polygons_cross(&points, other) {
+                return Err(located(format!(
+                    "glass {k} crosses glass {j}: glass bodies must not overlap"
+                )));
+            }
+        }
+        for i in 0..points.len() {
+            let edge = Segment::new(points[i], points[(i + 1) % points.len()]);
+            let along = |w: &Wall| {
+                let s = w.segment;
+                edge.side_value(s.a) == 0.0
+                    && edge.side_value(s.b) == 0.0
+                    && segments_meet(&edge, &s)
+            };
+            if let Some(w) = walls.iter().position(along) {
+                return Err(located(format!(
+                    "glass edge {i} lies along wall {w}: glass may touch a wall at a point, not along an edge"
+                )));
+            }
+        }
+        let area: f64 = (0..points.len())
+            .map(|i| flatray_geometry::cross(points[i], points[(i + 1) % points.len()]))
+            .sum();
+        let inside = if area > 0.0 {
+            Side::Positive
+        } else {
+            Side::Negative
+        };
+        for i in 0..points.len() {
+            walls.push(Wall {
+                segment: Segment::new(points[i], points[(i + 1) % points.len()]),
+                material: Material::Glass {
+                    body: bodies.len() as u32,
+                    inside,
+                },
+            });
+        }
+        bodies.push(GlassBody {
+            ior: spec.ior.0,
+            dispersion: spec.dispersion.0,
+            absorption: spec
+                .absorption
+                .map_or(Rgb::ZERO, |(r, g, b)| Rgb::new(r.0, g.0, b.0)),
+        });
+        polygons.push(points);
+    }
+
+    let scene = Scene::with_glass(canvas, floor, file.small_radius.0, walls, lights, bodies);
     let options = RenderOptions {
         samples: file.render.samples.0,
         bounces: file.render.bounces.0,
@@ -270,6 +334,108 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
     })
 }
 
+/// A closed polygon of at least three points whose edges have length and
+/// meet only at shared corners (no edge crosses or touches another).
+fn validate_polygon(points: &[DVec2]) -> Result<(), String> {
+    let n = points.len();
+    if n < 3 {
+        return Err(format!(
+            "a glass polygon needs at least 3 points, found {n}"
+        ));
+    }
+    let edge = |i: usize| Segment::new(points[i], points[(i + 1) % n]);
+    for i in 0..n {
+        if edge(i).length() == 0.0 {
+            return Err(format!(
+                "glass edge {i} has zero length (point {i} repeats)"
+            ));
+        }
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            let adjacent = j == i + 1 || (i == 0 && j == n - 1);
+            let (a, b) = (edge(i), edge(j));
+            let touch = if adjacent {
+                // Adjacent edges share one corner; they must not fold back
+                // over each other.
+                let shared = if j == i + 1 { a.b } else { a.a };
+                let (u, v) = (
+                    if j == i + 1 {
+                        a.a - shared
+                    } else {
+                        a.b - shared
+                    },
+                    if j == i + 1 {
+                        b.b - shared
+                    } else {
+                        b.a - shared
+                    },
+                );
+                flatray_geometry::cross(u, v) == 0.0 && u.dot(v) > 0.0
+            } else {
+                segments_meet(&a, &b)
+            };
+            if touch {
+                return Err(format!(
+                    "the glass polygon intersects itself (edges {i} and {j}): expected a simple polygon"
+                ));
+            }
+        }
+    }
+    if (0..n)
+        .map(|i| flatray_geometry::cross(points[i], points[(i + 1) % n]))
+        .sum::<f64>()
+        == 0.0
+    {
+        return Err("the glass polygon has no area".to_string());
+    }
+    Ok(())
+}
+
+/// Whether two segments meet (cross or touch), by the crossing rule both
+/// ways.
+fn segments_meet(a: &Segment, b: &Segment) -> bool {
+    let side = |s: &Segment, p: DVec2| s.side_value(p);
+    let straddles = |s: &Segment, t: &Segment| {
+        let (p, q) = (side(s, t.a), side(s, t.b));
+        !((p > 0.0 && q > 0.0) || (p < 0.0 && q < 0.0))
+    };
+    if side(a, b.a) == 0.0 && side(a, b.b) == 0.0 {
+        // Collinear: they meet if their projections overlap.
+        let e = a.edge();
+        let (t0, t1) = ((b.a - a.a).dot(e), (b.b - a.a).dot(e));
+        return t0.max(t1) >= 0.0 && t0.min(t1) <= e.length_squared();
+    }
+    straddles(a, b) && straddles(b, a)
+}
+
+/// Whether any edge of one polygon meets an edge of the other.
+fn polygons_cross(p: &[DVec2], q: &[DVec2]) -> bool {
+    let edges = |v: &[DVec2]| -> Vec<Segment> {
+        (0..v.len())
+            .map(|i| Segment::new(v[i], v[(i + 1) % v.len()]))
+            .collect()
+    };
+    let (ep, eq) = (edges(p), edges(q));
+    ep.iter().any(|a| eq.iter().any(|b| segments_meet(a, b)))
+}
+
+/// The 1-based line and column of the `n`-th (from 0) `needle` in `text`,
+/// or (1, 1).
+fn locate_nth(text: &str, needle: &str, n: usize) -> (usize, usize) {
+    match text.match_indices(needle).nth(n) {
+        None => (1, 1),
+        Some((offset, _)) => position(text, offset),
+    }
+}
+
+fn position(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
 /// The error for a light of kind `kind` (its first occurrence in the text).
 fn at_light(text: &str, path: &Path, kind: &str, message: String) -> SceneError {
     let (line, column) = locate(text, &format!("{kind}("));
@@ -283,15 +449,7 @@ fn at_light(text: &str, path: &Path, kind: &str, message: String) -> SceneError 
 
 /// The 1-based line and column of the first `needle` in `text`, or (1, 1).
 fn locate(text: &str, needle: &str) -> (usize, usize) {
-    match text.find(needle) {
-        None => (1, 1),
-        Some(offset) => {
-            let before = &text[..offset];
-            let line = before.matches('\n').count() + 1;
-            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-            (line, column)
-        }
-    }
+    locate_nth(text, needle, 0)
 }
 
 fn rgb(c: Color) -> Rgb {

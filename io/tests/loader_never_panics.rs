@@ -21,6 +21,9 @@ const VALID: &str = r#"Scene(
         Line(a: (20, 3), b: (30, 3), intensity: 0.2, one_sided: true, solid: true),
         Directional(direction: (1, 2), intensity: 0.1),
     ],
+    glass: [
+        Glass(points: [(20, 15), (28, 15), (24, 22)], ior: 1.5, absorption: (0.1, 0, 0), dispersion: 0.01),
+    ],
     render: (samples: 4, bounces: 2, seed: 3, exposure: 1.5, integrator: Light, tonemap: Clamp, cache: false),
 )"#;
 

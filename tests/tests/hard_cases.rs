@@ -636,3 +636,64 @@ fn a_non_finite_sample_is_reported_not_written() {
     assert!(rendered2.stats.nonfinite_samples > 0);
     assert_eq!(rendered2.stats.first_nonfinite, Some((0, 0, 0)));
 }
+
+/// Renders `text` with both integrators and many bounces: finite, no
+/// sample dropped, glass touched; returns the images.
+fn glass_case(text: &str) -> Vec<Image> {
+    let loaded = scene(text);
+    [Integrator::Path, Integrator::Light]
+        .into_iter()
+        .map(|integrator| {
+            let rendered = render(&loaded.scene, &RenderOptions { integrator, ..options(16, 6) });
+            assert!(all_finite(&rendered.image), "{integrator:?}");
+            assert_eq!(rendered.stats.nonfinite_samples, 0, "{integrator:?}");
+            assert!(rendered.stats.glass_events > 0, "{integrator:?}");
+            rendered.image
+        })
+        .collect()
+}
+
+#[test]
+fn grazing_incidence_on_glass() {
+    // The point light lies on the line of the glass's top edge: its rays
+    // meet that edge at grazing incidence (Fresnel reflectance 1).
+    let images = glass_case(
+        "Scene(canvas: (60, 40), floor: Color((1, 1, 1)),
+            lights: [Point(at: (2, 10), intensity: 3.0), Line(a: (2, 30), b: (6, 34))],
+            glass: [Glass(points: [(10, 10), (40, 10), (38, 20), (12, 22)], ior: 1.7, dispersion: 0.02)])",
+    );
+    let twin = glass_case(
+        "Scene(canvas: (60, 40), floor: Color((1, 1, 1)),
+            lights: [Point(at: (2, 9.999999), intensity: 3.0), Line(a: (2, 30), b: (6, 34))],
+            glass: [Glass(points: [(10, 10), (40, 10), (38, 20), (12, 22)], ior: 1.7, dispersion: 0.02)])",
+    );
+    for (a, b) in images.iter().zip(&twin) {
+        assert!(relative_difference(a, b) < 0.05, "{}", relative_difference(a, b));
+    }
+}
+
+#[test]
+fn rays_through_a_glass_vertex() {
+    // The light is aimed along the diagonal through two opposite vertices
+    // of a glass square: rays through the vertices end there (the corner
+    // rule) and everything stays finite.
+    glass_case(
+        "Scene(canvas: (60, 60), floor: Color((1, 1, 1)),
+            lights: [Point(at: (5, 5), intensity: 3.0)],
+            glass: [Glass(points: [(20, 20), (40, 20), (40, 40), (20, 40)], ior: 1.5)])",
+    );
+}
+
+#[test]
+fn glass_touching_a_wall() {
+    // A glass vertex on a wall: the wall still shadows the far side.
+    let images = glass_case(
+        "Scene(canvas: (60, 40), floor: Color((1, 1, 1)),
+            walls: [Wall(a: (40, 5), b: (40, 35))],
+            lights: [Point(at: (5, 10), intensity: 3.0), Line(a: (2, 30), b: (6, 34))],
+            glass: [Glass(points: [(10, 10), (40, 12), (38, 20), (25, 25)], ior: 1.7, dispersion: 0.02)])",
+    );
+    for image in &images {
+        assert_eq!(image.get(50, 20), [0.0; 3]);
+    }
+}

@@ -11,10 +11,12 @@
 //! come in as plain data ([`Scene`]); images go out as linear floats
 //! ([`Image`]); progress goes out through a callback.
 
+mod glass;
 mod light;
 mod light_tracer;
 mod memo;
 pub mod metrics;
+pub mod optics;
 mod path;
 pub mod plan;
 mod render;
@@ -30,5 +32,5 @@ pub use plan::Plan;
 pub use render::{
     Image, Integrator, RenderOptions, Rendered, TILE, image_size, pixel_sample, render,
 };
-pub use scene::{Canvas, Falloff, Floor, Light, LightShape, Material, Scene, Wall};
+pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
 pub use stats::Stats;

@@ -167,7 +167,8 @@ pub(crate) fn transmittance(
                     through *= tint;
                     through != Rgb::ZERO
                 }
-                Material::Diffuse { .. } | Material::Mirror { .. } => {
+                // Glass refracts: no straight shadow ray gets through it.
+                Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. } => {
                     through = Rgb::ZERO;
                     false
                 }

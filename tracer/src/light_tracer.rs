@@ -8,6 +8,7 @@ use std::f64::consts::TAU;
 use flatray_geometry::{DVec2, Ray, Side, Skip, reflect};
 use rayon::prelude::*;
 
+use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::path::diffuse_albedo;
 use crate::plan::Plan;
 use crate::render::{Image, RenderOptions, Rendered, image_size};
@@ -235,16 +236,29 @@ fn trace_photon(
     // as for a mirror image of the light.
     let mut travelled = 0.0;
     let mut bounce = 0;
+    let mut glass = GlassState::default();
     loop {
         stats.bounce_rays += 1;
         let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
         let t_end = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        grid.deposit(&ray, t_end, power, kernel, travelled, r0, buffer);
+        // The medium of this flight: known exactly when it ends at a glass
+        // edge reached from inside, else the tracked state.
+        let body = match hit {
+            Some((index, _)) => {
+                let wall = &scene.walls[index as usize];
+                let arrival = wall.segment.arrival_side(ray.dir).unwrap_or(Side::Positive);
+                glass.flight_body(&wall.material, arrival)
+            }
+            None => glass.inside,
+        };
+        let absorb = absorption(scene, body);
+        grid.deposit(&ray, t_end, power, kernel, travelled, absorb, r0, buffer);
         let Some((index, h)) = hit else {
             stats.paths_escaped += 1;
             return;
         };
         travelled += h.t;
+        power *= transmit(absorb, h.t);
         if h.u == 0.0 || h.u == 1.0 {
             // The corner rule (see the path tracer).
             stats.paths_absorbed += 1;
@@ -261,6 +275,21 @@ fn trace_photon(
                 stats.transparent_passes += 1;
                 power *= tint;
                 ray = Ray::new(x, ray.dir);
+            }
+            Material::Glass { body, inside } => {
+                bounce += 1;
+                if bounce > bounces {
+                    stats.paths_bounce_limit += 1;
+                    return;
+                }
+                let normal = wall.segment.normal_on(side);
+                // Photons carry power, which refraction conserves: no
+                // radiance scale here.
+                let event = interact(
+                    scene, body, inside, side, ray.dir, normal, &mut glass, stream, stats,
+                );
+                power *= event.colour;
+                ray = Ray::new(x, event.dir);
             }
             Material::Mirror { tint } => {
                 stats.mirror_reflections += 1;
@@ -365,6 +394,7 @@ impl Grid {
         power: Rgb,
         kernel: Kernel,
         offset: f64,
+        absorb: Rgb,
         r0: f64,
         buffer: &mut [Rgb],
     ) {
@@ -429,8 +459,12 @@ impl Grid {
                 } else {
                     kernel.factor(offset + 0.5 * (t + t_exit), r0)
                 };
-                buffer[(iy as usize) * self.width as usize + ix as usize] +=
-                    scaled * (length * factor);
+                let mut deposit = scaled * (length * factor);
+                if absorb != Rgb::ZERO {
+                    // Beer-Lambert along the flight, at the crossing's middle.
+                    deposit *= transmit(absorb, 0.5 * (t + t_exit));
+                }
+                buffer[(iy as usize) * self.width as usize + ix as usize] += deposit;
             }
             t = t_exit;
             if t >= t1 {

@@ -6,6 +6,7 @@ use std::f64::consts::{PI, TAU};
 use flatray_cache::{Key, WallMemo};
 use flatray_geometry::{DVec2, Ray, Skip, intersect, reflect};
 
+use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::light::{Receiver, direct_light};
 use crate::sampling::{Stream, cosine_half_circle, uniform_circle, uniform_half_circle};
 use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
@@ -48,6 +49,7 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
     // Distance travelled since the receiver or the last diffuse vertex:
     // a light seen through mirrors is that far away.
     let mut unfolded = 0.0;
+    let mut glass = GlassState::default();
 
     loop {
         stats.bounce_rays += 1;
@@ -79,6 +81,10 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
         }
         let x = wall.segment.point_at(h.u);
         unfolded += h.t;
+        throughput *= transmit(
+            absorption(scene, glass.flight_body(&wall.material, side)),
+            h.t,
+        );
         if after_mirror && let Some(light) = scene.light_of_wall(index) {
             let light = &scene.lights[light as usize];
             fluence += throughput * line_emission(light, side, unfolded, scene.small_radius);
@@ -96,6 +102,22 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
                 ray = Ray::new(x, ray.dir);
                 skip = Skip::one(index);
                 continue;
+            }
+            Material::Glass { body, inside } => {
+                bounce += 1;
+                if bounce > bounces {
+                    stats.paths_bounce_limit += 1;
+                    break;
+                }
+                let event = interact(
+                    scene, body, inside, side, ray.dir, normal, &mut glass, stream, stats,
+                );
+                throughput *= event.colour * event.radiance_scale;
+                ray = Ray::new(x, event.dir);
+                skip = Skip::one(index);
+                // Like a mirror, glass is specular: no shadow ray, and a
+                // line light met next counts.
+                after_mirror = true;
             }
             Material::Mirror { tint } => {
                 stats.mirror_reflections += 1;

@@ -54,6 +54,12 @@ impl Plan {
             .iter()
             .filter(|w| matches!(w.material, Material::Transparent { .. }))
             .count();
+        let glass_edges = scene
+            .walls
+            .iter()
+            .filter(|w| matches!(w.material, Material::Glass { .. }))
+            .count();
+        let dispersive = scene.glass.iter().filter(|g| g.dispersion != 0.0).count();
         let diffuse = scene
             .walls
             .iter()
@@ -78,6 +84,7 @@ impl Plan {
                 Material::Diffuse { albedo: None } => !floor_black,
                 Material::Mirror { tint } => tint != Rgb::ZERO,
                 Material::Transparent { .. } => false,
+                Material::Glass { .. } => true,
             })
             .count();
         let force = options.force_all_effects;
@@ -86,7 +93,8 @@ impl Plan {
         let shadows = force || (occluders > 0 && !no_lights);
         let indirect_possible = options.bounces > 0 && !no_lights;
         let indirect = indirect_possible && (force || reflectors > 0);
-        let mirror_emission = indirect && (force || (mirrors > 0 && lines > 0));
+        let specular = mirrors + glass_edges;
+        let mirror_emission = indirect && (force || (specular > 0 && lines > 0));
         let wall_memo =
             indirect && options.memo.enabled && (force || (diffuse > 0 && reflectors > 0));
         // Forcing never changes how the floor's direct light is estimated:
@@ -166,16 +174,16 @@ impl Plan {
             },
         );
         add(
-            "line lights seen in mirrors",
+            "line lights seen in mirrors or glass",
             mirror_emission,
-            if mirror_emission && !(mirrors > 0 && lines > 0) {
+            if mirror_emission && !(specular > 0 && lines > 0) {
                 "forced on".into()
             } else if mirror_emission {
-                "mirrors and line lights in the scene".into()
+                "mirrors or glass, and line lights, in the scene".into()
             } else if !indirect {
                 "no indirect light is traced".into()
-            } else if mirrors == 0 {
-                "no mirror in the scene".into()
+            } else if specular == 0 {
+                "no mirror or glass in the scene".into()
             } else {
                 "no line light in the scene".into()
             },
@@ -233,8 +241,29 @@ impl Plan {
         );
         add(
             "glass",
-            false,
-            "no glass in the scene (glass is not yet a material)".into(),
+            indirect && glass_edges > 0,
+            if glass_edges == 0 {
+                "no glass in the scene".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else {
+                format!(
+                    "{} in {} edges",
+                    n(scene.glass.len(), "glass body"),
+                    glass_edges
+                )
+            },
+        );
+        add(
+            "dispersion (wavelength per path)",
+            indirect && glass_edges > 0 && dispersive > 0,
+            if dispersive == 0 {
+                "no dispersive glass in the scene".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else {
+                n(dispersive, "dispersive glass body")
+            },
         );
         Plan {
             shadows,

@@ -155,6 +155,20 @@ pub enum Material {
     Mirror { tint: Rgb },
     /// Light passes straight through, multiplied by `tint`.
     Transparent { tint: Rgb },
+    /// An edge of glass body `body` (an index into `Scene::glass`), whose
+    /// inside is on side `inside`: Fresnel reflection or Snell refraction.
+    Glass { body: u32, inside: Side },
+}
+
+/// A closed polygon of glass; its edges are walls of `Material::Glass`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GlassBody {
+    /// Index of refraction at 0.55 micrometres.
+    pub ior: f64,
+    /// Cauchy's `B` coefficient (square micrometres); 0 for none.
+    pub dispersion: f64,
+    /// Beer-Lambert absorption per unit length inside, per channel.
+    pub absorption: Rgb,
 }
 
 /// A two-sided wall.
@@ -242,6 +256,8 @@ pub struct Scene {
     pub small_radius: f64,
     pub walls: Vec<Wall>,
     pub lights: Vec<Light>,
+    /// Glass bodies, referred to by `Material::Glass` walls.
+    pub glass: Vec<GlassBody>,
     /// For each wall, the index of the line light it also is.
     pub(crate) wall_light: Vec<Option<u32>>,
     /// For each light, the wall it sits on, which its shadow rays ignore:
@@ -260,8 +276,38 @@ impl Scene {
         floor: Floor,
         small_radius: f64,
         walls: Vec<Wall>,
-        mut lights: Vec<Light>,
+        lights: Vec<Light>,
     ) -> Scene {
+        Scene::with_glass(canvas, floor, small_radius, walls, lights, Vec::new())
+    }
+
+    /// Builds a scene with glass bodies. A glass wall whose body is out of
+    /// range is treated as clear glass of index 1.5.
+    pub fn with_glass(
+        canvas: Canvas,
+        floor: Floor,
+        small_radius: f64,
+        mut walls: Vec<Wall>,
+        mut lights: Vec<Light>,
+        mut glass: Vec<GlassBody>,
+    ) -> Scene {
+        if walls.iter().any(
+            |w| matches!(w.material, Material::Glass { body, .. } if body as usize >= glass.len()),
+        ) {
+            glass.push(GlassBody {
+                ior: 1.5,
+                dispersion: 0.0,
+                absorption: Rgb::ZERO,
+            });
+            let fallback = glass.len() as u32 - 1;
+            for w in &mut walls {
+                if let Material::Glass { body, .. } = &mut w.material
+                    && *body >= fallback
+                {
+                    *body = fallback;
+                }
+            }
+        }
         let mut wall_light = vec![None; walls.len()];
         for (index, light) in lights.iter_mut().enumerate() {
             if let LightShape::Line { wall, .. } = &mut light.shape
@@ -291,6 +337,7 @@ impl Scene {
             small_radius,
             walls,
             lights,
+            glass,
             wall_light,
             light_wall,
             segments,

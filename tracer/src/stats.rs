@@ -35,6 +35,8 @@ pub struct Stats {
     pub mirror_reflections: u64,
     /// Passes of a path through a transparent wall.
     pub transparent_passes: u64,
+    /// Reflections and refractions at glass edges.
+    pub glass_events: u64,
     /// Diffuse hits whose albedo was read from the floor.
     pub floor_albedo_reads: u64,
     /// Path rays tested against line lights (after a mirror).
@@ -70,6 +72,7 @@ impl Stats {
         self.mirror_reflections += other.mirror_reflections;
         self.transparent_passes += other.transparent_passes;
         self.floor_albedo_reads += other.floor_albedo_reads;
+        self.glass_events += other.glass_events;
         self.emission_tests += other.emission_tests;
         self.nonfinite_samples += other.nonfinite_samples;
         if self.first_nonfinite.is_none() {
@@ -97,6 +100,7 @@ impl fmt::Display for Stats {
         writeln!(f, "events")?;
         writeln!(f, "  mirror bounces   {:>14}", self.mirror_reflections)?;
         writeln!(f, "  transparent      {:>14}", self.transparent_passes)?;
+        writeln!(f, "  glass            {:>14}", self.glass_events)?;
         writeln!(f, "  floor albedo     {:>14}", self.floor_albedo_reads)?;
         writeln!(f, "  emission tests   {:>14}", self.emission_tests)?;
         writeln!(f, "memo")?;
