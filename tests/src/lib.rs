@@ -119,3 +119,46 @@ pub fn channel_mean(
 pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
+
+/// Channel-summed totals of `block` x `block` pixel squares, row by row.
+pub fn block_totals(image: &flatray_tracer::Image, block: u32) -> Vec<f64> {
+    let (bw, bh) = (image.width / block, image.height / block);
+    let mut totals = vec![0.0; (bw * bh) as usize];
+    for y in 0..bh * block {
+        for x in 0..bw * block {
+            let p = image.get(x, y);
+            totals[(y / block * bw + x / block) as usize] += (p[0] + p[1] + p[2]) as f64;
+        }
+    }
+    totals
+}
+
+/// Mean and standard error of each block total over `runs` renders with
+/// seeds `first_seed..first_seed + runs`. Light tracing spreads one
+/// photon over many pixels, so pixels are not independent; runs are.
+pub fn block_stats(
+    scene: &Scene,
+    options: RenderOptions,
+    block: u32,
+    runs: u64,
+    first_seed: u64,
+) -> Vec<(f64, f64)> {
+    let all: Vec<Vec<f64>> = (0..runs)
+        .map(|k| {
+            let options = RenderOptions {
+                seed: first_seed + k,
+                ..options
+            };
+            block_totals(&render(scene, &options).image, block)
+        })
+        .collect();
+    (0..all[0].len())
+        .map(|b| {
+            let v: Vec<f64> = all.iter().map(|r| r[b]).collect();
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            (mean, (var / n).sqrt())
+        })
+        .collect()
+}

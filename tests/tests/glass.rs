@@ -3,7 +3,7 @@
 //! light.
 
 use flatray_geometry::{DVec2, Ray, Segment, intersect, reflect, refract};
-use flatray_tests::{TempDir, flatray, render, scene};
+use flatray_tests::{TempDir, flatray, scene};
 use flatray_tracer::optics::{cauchy, choose, fresnel};
 use flatray_tracer::sampling::Stream;
 use flatray_tracer::{Integrator, MemoOptions, RenderOptions, Scene};
@@ -129,38 +129,7 @@ const BLOCK: u32 = 8;
 const RUNS: u64 = 24;
 
 fn block_stats(scene: &Scene, options: RenderOptions) -> Vec<(f64, f64)> {
-    let all: Vec<Vec<f64>> = (0..RUNS)
-        .map(|seed| {
-            let image = render(
-                scene,
-                &RenderOptions {
-                    seed: 500 + seed,
-                    ..options
-                },
-            )
-            .image;
-            let (bw, bh) = (image.width / BLOCK, image.height / BLOCK);
-            let mut totals = vec![0.0; (bw * bh) as usize];
-            for y in 0..bh * BLOCK {
-                for x in 0..bw * BLOCK {
-                    let p = image.get(x, y);
-                    totals[(y / BLOCK * bw + x / BLOCK) as usize] += (p[0] + p[1] + p[2]) as f64;
-                }
-            }
-            totals
-        })
-        .collect();
-    (0..all[0].len())
-        .map(|b| {
-            let v: Vec<f64> = all.iter().map(|r| r[b]).collect();
-            let n = v.len() as f64;
-            let mean = v.iter().sum::<f64>() / n;
-            (
-                mean,
-                (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt(),
-            )
-        })
-        .collect()
+    flatray_tests::block_stats(scene, options, BLOCK, RUNS, 500)
 }
 
 /// Glass lit by a line light: no light path is delta at both ends, so path

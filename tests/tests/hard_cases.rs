@@ -644,7 +644,13 @@ fn glass_case(text: &str) -> Vec<Image> {
     [Integrator::Path, Integrator::Light]
         .into_iter()
         .map(|integrator| {
-            let rendered = render(&loaded.scene, &RenderOptions { integrator, ..options(16, 6) });
+            let rendered = render(
+                &loaded.scene,
+                &RenderOptions {
+                    integrator,
+                    ..options(16, 6)
+                },
+            );
             assert!(all_finite(&rendered.image), "{integrator:?}");
             assert_eq!(rendered.stats.nonfinite_samples, 0, "{integrator:?}");
             assert!(rendered.stats.glass_events > 0, "{integrator:?}");
@@ -668,7 +674,11 @@ fn grazing_incidence_on_glass() {
             glass: [Glass(points: [(10, 10), (40, 10), (38, 20), (12, 22)], ior: 1.7, dispersion: 0.02)])",
     );
     for (a, b) in images.iter().zip(&twin) {
-        assert!(relative_difference(a, b) < 0.05, "{}", relative_difference(a, b));
+        assert!(
+            relative_difference(a, b) < 0.05,
+            "{}",
+            relative_difference(a, b)
+        );
     }
 }
 

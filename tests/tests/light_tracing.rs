@@ -7,48 +7,13 @@ use std::f64::consts::TAU;
 
 use flatray_geometry::DVec2;
 use flatray_tests::{render, scene, workspace_root};
-use flatray_tracer::{Image, Integrator, MemoOptions, RenderOptions, Scene};
+use flatray_tracer::{Integrator, MemoOptions, RenderOptions, Scene};
 
 const BLOCK: u32 = 8;
 
-/// Totals of channel-summed values over `BLOCK`-pixel squares.
-fn blocks(image: &Image) -> Vec<f64> {
-    let (bw, bh) = (image.width / BLOCK, image.height / BLOCK);
-    let mut totals = vec![0.0; (bw * bh) as usize];
-    for y in 0..bh * BLOCK {
-        for x in 0..bw * BLOCK {
-            let p = image.get(x, y);
-            totals[(y / BLOCK * bw + x / BLOCK) as usize] += (p[0] + p[1] + p[2]) as f64;
-        }
-    }
-    totals
-}
-
 /// Mean and standard error of each block total over `runs` seeds.
 fn block_stats(scene: &Scene, options: RenderOptions, runs: u64) -> Vec<(f64, f64)> {
-    let all: Vec<Vec<f64>> = (0..runs)
-        .map(|seed| {
-            blocks(
-                &render(
-                    scene,
-                    &RenderOptions {
-                        seed: 1000 + seed,
-                        ..options
-                    },
-                )
-                .image,
-            )
-        })
-        .collect();
-    (0..all[0].len())
-        .map(|b| {
-            let v: Vec<f64> = all.iter().map(|r| r[b]).collect();
-            let n = v.len() as f64;
-            let mean = v.iter().sum::<f64>() / n;
-            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-            (mean, (var / n).sqrt())
-        })
-        .collect()
+    flatray_tests::block_stats(scene, options, BLOCK, runs, 1000)
 }
 
 fn options(integrator: Integrator, samples: u32, bounces: u32) -> RenderOptions {
