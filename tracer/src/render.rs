@@ -224,9 +224,9 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
         ref trace,
     } = *context;
     let scene = trace.scene;
-    let step = pixel_size(scene, size);
+    let pixel = Pixel::new(scene, size, x, y);
+    let (step, pixel_index) = (pixel.step, pixel.index);
     let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
-    let pixel_index = y as u64 * size.0 as u64 + x as u64;
     let mut direct = Rgb::ZERO;
     if floor_memo {
         let grid = floor_grid(&options.memo, options.samples);
@@ -248,7 +248,7 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
     }
     let mut sum = Rgb::ZERO;
     for sample in 0..options.samples {
-        let value = sample_with(context, x, y, sample, stats);
+        let value = sample_with(context, &pixel, sample, stats);
         if value.is_finite() {
             sum += value;
         } else {
@@ -261,21 +261,34 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
     [value.x as f32, value.y as f32, value.z as f32]
 }
 
-/// One sample of pixel `(x, y)`: the receiver is jittered uniformly inside
-/// the pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
-fn sample_with(context: &Context, x: u32, y: u32, sample: u32, stats: &mut Stats) -> Rgb {
+/// A pixel's position, stream index and size, computed once for all its
+/// samples.
+struct Pixel {
+    position: DVec2,
+    index: u64,
+    step: DVec2,
+}
+
+impl Pixel {
+    fn new(scene: &Scene, size: (u32, u32), x: u32, y: u32) -> Pixel {
+        Pixel {
+            position: DVec2::new(x as f64, y as f64),
+            index: y as u64 * size.0 as u64 + x as u64,
+            step: pixel_size(scene, size),
+        }
+    }
+}
+
+/// One sample of a pixel: the receiver is jittered uniformly inside the
+/// pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
+fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats) -> Rgb {
     let Context {
-        options,
-        size,
-        ref trace,
-        ..
+        options, ref trace, ..
     } = *context;
     let scene = trace.scene;
-    let step = pixel_size(scene, size);
-    let pixel_index = y as u64 * size.0 as u64 + x as u64;
-    let mut stream = Stream::new(options.seed, pixel_index, sample as u64);
+    let mut stream = Stream::new(options.seed, pixel.index, sample as u64);
     let jitter = DVec2::new(stream.uniform(), stream.uniform());
-    let p = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + jitter) * step;
+    let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
     stats.camera_samples += 1;
     path_sample(trace, p, &mut stream, stats)
 }
@@ -306,5 +319,5 @@ pub fn pixel_sample(
         floor_memo: false,
         trace: trace_for(scene, &options, &plan, None),
     };
-    sample_with(&context, x, y, sample, stats)
+    sample_with(&context, &Pixel::new(scene, size, x, y), sample, stats)
 }
