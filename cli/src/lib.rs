@@ -54,6 +54,9 @@ enum Command {
         /// The direct-light memo (overrides the scene).
         #[arg(long, value_enum)]
         cache: Option<Switch>,
+        /// The estimator (overrides the scene).
+        #[arg(long, value_enum)]
+        integrator: Option<IntegratorArg>,
     },
     /// Measure error against seconds and samples for each way of rendering.
     Converge(converge::ConvergeArgs),
@@ -110,6 +113,16 @@ enum Switch {
     Off,
 }
 
+impl IntegratorArg {
+    fn integrator(self) -> Integrator {
+        match self {
+            IntegratorArg::Path => Integrator::Path,
+            IntegratorArg::Original => Integrator::Original,
+            IntegratorArg::Light => Integrator::Light,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum IntegratorArg {
     /// Path tracing with next-event estimation at every diffuse vertex.
@@ -147,7 +160,8 @@ where
             scene,
             bounces,
             cache,
-        } => plan(&scene, bounces, cache, out),
+            integrator,
+        } => plan(&scene, bounces, cache, integrator, out),
         Command::Converge(args) => converge::converge(args, out),
     };
     match result {
@@ -208,11 +222,13 @@ fn plan(
     scene: &Path,
     bounces: Option<u32>,
     cache: Option<Switch>,
+    integrator: Option<IntegratorArg>,
     out: &mut dyn Write,
 ) -> Result<(), Failure> {
     let loaded = load(scene)?;
     let options = RenderOptions {
         bounces: bounces.unwrap_or(loaded.options.bounces),
+        integrator: integrator.map_or(loaded.options.integrator, IntegratorArg::integrator),
         memo: MemoOptions {
             enabled: match cache {
                 None => loaded.options.memo.enabled,
@@ -256,12 +272,9 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
         seed: args.seed.unwrap_or(loaded.options.seed),
         exposure: args.exposure.unwrap_or(loaded.options.exposure),
         scale: args.scale,
-        integrator: match args.integrator {
-            None => loaded.options.integrator,
-            Some(IntegratorArg::Path) => Integrator::Path,
-            Some(IntegratorArg::Original) => Integrator::Original,
-            Some(IntegratorArg::Light) => Integrator::Light,
-        },
+        integrator: args
+            .integrator
+            .map_or(loaded.options.integrator, IntegratorArg::integrator),
         memo: MemoOptions {
             enabled: match args.cache {
                 None => loaded.options.memo.enabled,

@@ -123,6 +123,30 @@ fn skipped_effects_cast_no_rays_and_count_no_events() {
 }
 
 #[test]
+fn the_light_tracer_casts_no_shadow_ray_and_reads_no_memo() {
+    let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
+    let options = RenderOptions {
+        samples: 1,
+        scale: 0.2,
+        integrator: flatray_tracer::Integrator::Light,
+        ..loaded.options
+    };
+    let plan = Plan::new(&loaded.scene, &options);
+    assert!(!plan.shadows && !plan.wall_memo && !plan.floor_memo);
+    let stats = render(&loaded.scene, &options).stats;
+    assert_eq!(
+        (
+            stats.shadow_rays,
+            stats.memo_entries,
+            stats.memo_lookups,
+            stats.floor_memo_reuses
+        ),
+        (0, 0, 0, 0)
+    );
+    assert!(stats.light_paths > 0 && stats.mirror_reflections > 0);
+}
+
+#[test]
 fn images_are_bit_identical_with_and_without_the_plan() {
     for text in [DIRECT_ONLY, CLEAR_PANES, BLACK_WALLS, NO_MIRROR] {
         let (planned, _) = stats_of(text, false);

@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use crate::render::RenderOptions;
+use crate::render::{Integrator, RenderOptions};
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Floor, Rgb};
 
@@ -90,16 +90,21 @@ impl Plan {
         let force = options.force_all_effects;
         let no_lights = scene.lights.is_empty();
 
-        let shadows = force || (occluders > 0 && !no_lights);
+        // The light tracer casts no shadow ray and reads no memo.
+        let tracing_light = options.integrator == Integrator::Light;
+        let shadows = !tracing_light && (force || (occluders > 0 && !no_lights));
         let indirect_possible = options.bounces > 0 && !no_lights;
         let indirect = indirect_possible && (force || reflectors > 0);
         let specular = mirrors + glass_edges;
         let mirror_emission = indirect && (force || (specular > 0 && lines > 0));
-        let wall_memo =
-            indirect && options.memo.enabled && (force || (diffuse > 0 && reflectors > 0));
+        let wall_memo = !tracing_light
+            && indirect
+            && options.memo.enabled
+            && (force || (diffuse > 0 && reflectors > 0));
         // Forcing never changes how the floor's direct light is estimated:
         // that would change the image.
-        let floor_memo = indirect_possible && reflectors > 0 && options.memo.enabled;
+        let floor_memo =
+            !tracing_light && indirect_possible && reflectors > 0 && options.memo.enabled;
 
         let mut effects = Vec::new();
         let mut add =
@@ -135,7 +140,9 @@ impl Plan {
         add(
             "shadow rays",
             shadows,
-            if no_lights {
+            if tracing_light {
+                "light tracing casts none".into()
+            } else if no_lights {
                 "no light in the scene".into()
             } else if occluders > 0 {
                 format!("{} can occlude", n(occluders, "wall"))
@@ -211,7 +218,9 @@ impl Plan {
         add(
             "memo: wall irradiance",
             wall_memo,
-            if !options.memo.enabled {
+            if tracing_light {
+                "light tracing does not read it".into()
+            } else if !options.memo.enabled {
                 "the memo is switched off".into()
             } else if !indirect {
                 "no indirect light is traced, so no path reads it".into()
@@ -228,7 +237,9 @@ impl Plan {
         add(
             "memo: floor direct light per pixel",
             floor_memo,
-            if !options.memo.enabled {
+            if tracing_light {
+                "light tracing does not read it".into()
+            } else if !options.memo.enabled {
                 "the memo is switched off".into()
             } else if !indirect {
                 "no indirect path would reuse it".into()
@@ -237,6 +248,21 @@ impl Plan {
                     "up to {} stratified points per pixel",
                     options.memo.floor_samples
                 )
+            },
+        );
+        add(
+            "point lights seen in mirrors or glass",
+            tracing_light && indirect && specular > 0 && points + spots + suns > 0,
+            if specular == 0 {
+                "no mirror or glass in the scene".into()
+            } else if points + spots + suns == 0 {
+                "no point, spot or directional light in the scene".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else if tracing_light {
+                "light tracing follows their light through mirrors and glass".into()
+            } else {
+                "path tracing cannot see them (a path of probability zero): render with --integrator light to see them".into()
             },
         );
         add(
