@@ -42,21 +42,20 @@ fn render_to_exr(text: &str, options: RenderOptions) -> flatray_tracer::Image {
     back
 }
 
-/// Every pixel farther than `min_distance` from `centre` matches `exact`
-/// within 5 standard errors of its mean over `samples` jittered points.
+/// Every pixel whose centre `skip` does not exclude matches `exact` within
+/// 5 standard errors of its mean over `samples` jittered points, and at
+/// least `min_checked` pixels are checked.
 fn assert_matches(
     image: &flatray_tracer::Image,
     samples: u32,
-    centre: DVec2,
-    min_distance: f64,
+    skip: impl Fn(DVec2) -> bool,
+    min_checked: usize,
     exact: impl Fn(DVec2) -> f64,
 ) {
     let mut checked = 0;
-    let mut worst_z: f64 = 0.0;
     for y in 0..image.height {
         for x in 0..image.width {
-            let mid = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-            if mid.distance(centre) < min_distance {
+            if skip(DVec2::new(x as f64 + 0.5, y as f64 + 0.5)) {
                 continue;
             }
             let (mean, sd) = pixel_moments(x, y, 24, &exact);
@@ -64,8 +63,6 @@ fn assert_matches(
             let got = image.get(x, y)[0] as f64;
             // f32 storage and quadrature add a small relative error.
             let tolerance = 5.0 * se + 1e-5 * mean.abs();
-            let z = (got - mean).abs() / tolerance.max(f64::MIN_POSITIVE);
-            worst_z = worst_z.max(z);
             assert!(
                 (got - mean).abs() <= tolerance,
                 "pixel ({x}, {y}): got {got}, exact mean {mean}, 5 SE = {}",
@@ -74,8 +71,7 @@ fn assert_matches(
             checked += 1;
         }
     }
-    assert!(checked > 1000, "only {checked} pixels checked");
-    assert!(worst_z.is_finite());
+    assert!(checked >= min_checked, "only {checked} pixels checked");
 }
 
 #[test]
@@ -91,9 +87,13 @@ fn closed_form_1_point_light_gives_the_mean_of_one_over_r() {
             ..RenderOptions::default()
         },
     );
-    assert_matches(&image, samples, light, 2.0, |p| {
-        2.5 / p.distance(light).max(0.5)
-    });
+    assert_matches(
+        &image,
+        samples,
+        |p| p.distance(light) < 2.0,
+        1000,
+        |p| 2.5 / p.distance(light).max(0.5),
+    );
 }
 
 #[test]
@@ -109,9 +109,13 @@ fn closed_form_1_holds_with_bounces_when_nothing_reflects() {
             ..RenderOptions::default()
         },
     );
-    assert_matches(&image, samples, light, 2.0, |p| {
-        1.0 / p.distance(light).max(0.5)
-    });
+    assert_matches(
+        &image,
+        samples,
+        |p| p.distance(light) < 2.0,
+        1000,
+        |p| 1.0 / p.distance(light).max(0.5),
+    );
 }
 
 #[test]
@@ -127,28 +131,14 @@ fn closed_form_2_line_light_gives_intensity_times_subtended_angle() {
             ..RenderOptions::default()
         },
     );
-    // Exclude pixels the light crosses, where the subtended angle jumps.
-    let mut checked = 0;
-    for y in 0..image.height {
-        for x in 0..image.width {
-            let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-            let along = (centre - light.a).dot(light.edge()) / light.edge().length_squared();
-            let nearest = light.point_at(along.clamp(0.0, 1.0));
-            if centre.distance(nearest) < 2.0 {
-                continue;
-            }
-            let (mean, sd) = pixel_moments(x, y, 24, |p| 0.7 * subtended_angle(p, &light));
-            let se = sd / (samples as f64).sqrt();
-            let got = image.get(x, y)[0] as f64;
-            assert!(
-                (got - mean).abs() <= 5.0 * se + 1e-5 * mean,
-                "pixel ({x}, {y}): got {got}, exact {mean}, 5 SE = {}",
-                5.0 * se
-            );
-            checked += 1;
-        }
-    }
-    assert!(checked > 4000);
+    // Skip pixels the light crosses, where the subtended angle jumps.
+    let near_light = |p: DVec2| {
+        let along = (p - light.a).dot(light.edge()) / light.edge().length_squared();
+        p.distance(light.point_at(along.clamp(0.0, 1.0))) < 2.0
+    };
+    assert_matches(&image, samples, near_light, 4000, |p| {
+        0.7 * subtended_angle(p, &light)
+    });
 }
 
 /// A closed square room whose corners are shared endpoints at coordinates
