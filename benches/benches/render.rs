@@ -10,8 +10,37 @@ use std::path::Path;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use flatray_benches::{Inputs, maze, room_walls};
-use flatray_geometry::{SegmentSet, Skip, Strategy};
+use flatray_geometry::{DVec2, Kernel, Segment, SegmentSet, Skip, Strategy};
 use flatray_tracer::{MemoOptions, RenderOptions};
+
+/// Nanoseconds per query: `rays` closest-hit queries against `set`.
+fn bench_set(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    id: BenchmarkId,
+    set: &SegmentSet,
+    rays: &[flatray_geometry::Ray],
+) {
+    group.bench_with_input(id, set, |b, set| {
+        b.iter(|| {
+            let mut found = 0u32;
+            for ray in rays {
+                if let Some((i, _)) = set.closest_hit(black_box(ray), f64::INFINITY, Skip::NONE) {
+                    found = found.wrapping_add(i);
+                }
+            }
+            found
+        })
+    });
+}
+
+/// The kernels this processor runs: scalar, and AVX where it has it.
+fn kernels() -> Vec<Kernel> {
+    let mut kernels = vec![Kernel::Scalar];
+    if Kernel::detect() != Kernel::Scalar {
+        kernels.push(Kernel::detect());
+    }
+    kernels
+}
 
 fn closest_hit(c: &mut Criterion) {
     let mut group = c.benchmark_group("closest_hit");
@@ -22,27 +51,50 @@ fn closest_hit(c: &mut Criterion) {
         sets.push((format!("maze-{walls}"), maze(walls, 500.0, 2)));
     }
     for (name, segments) in sets {
-        for strategy in [Strategy::BruteForce, Strategy::Bvh] {
-            if strategy == Strategy::BruteForce && segments.len() > 20_000 {
-                continue;
+        // The kernels matter only to brute force (a BVH's leaves are
+        // scalar).
+        if segments.len() <= 20_000 {
+            for kernel in kernels() {
+                let set = SegmentSet::with_strategy(segments.clone(), Strategy::BruteForce)
+                    .with_kernel(kernel);
+                bench_set(
+                    &mut group,
+                    BenchmarkId::new(format!("BruteForce-{kernel:?}"), &name),
+                    &set,
+                    &rays,
+                );
             }
+        }
+        let set = SegmentSet::with_strategy(segments, Strategy::Bvh);
+        bench_set(&mut group, BenchmarkId::new("Bvh", &name), &set, &rays);
+    }
+    group.finish();
+}
+
+/// Where a BVH starts to beat brute force with the fastest kernel: `n`
+/// random walls spread over the rays' square, as a room's are, for small
+/// `n` (sets `BVH_THRESHOLD`).
+fn bvh_threshold(c: &mut Criterion) {
+    let mut group = c.benchmark_group("bvh_threshold");
+    let rays = Inputs::new(1).rays(4096, 500.0);
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    let mut inputs = Inputs::new(3);
+    let walls: Vec<Segment> = (0..64)
+        .map(|_| {
+            let a = DVec2::new(inputs.uniform(), inputs.uniform()) * 500.0;
+            let d = DVec2::new(inputs.uniform() - 0.5, inputs.uniform() - 0.5) * 200.0;
+            Segment::new(a, a + d)
+        })
+        .collect();
+    for n in [8, 12, 16, 24, 32, 48, 64] {
+        let segments = walls[..n].to_vec();
+        for strategy in [Strategy::BruteForce, Strategy::Bvh] {
             let set = SegmentSet::with_strategy(segments.clone(), strategy);
-            group.bench_with_input(
-                BenchmarkId::new(format!("{strategy:?}"), &name),
+            bench_set(
+                &mut group,
+                BenchmarkId::new(format!("{strategy:?}"), n),
                 &set,
-                |b, set| {
-                    b.iter(|| {
-                        let mut found = 0u32;
-                        for ray in &rays {
-                            if let Some((i, _)) =
-                                set.closest_hit(black_box(ray), f64::INFINITY, Skip::NONE)
-                            {
-                                found = found.wrapping_add(i);
-                            }
-                        }
-                        found
-                    })
-                },
+                &rays,
             );
         }
     }
@@ -111,5 +163,5 @@ fn plan(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, closest_hit, room_render, plan);
+criterion_group!(benches, closest_hit, bvh_threshold, room_render, plan);
 criterion_main!(benches);

@@ -24,8 +24,10 @@
 
 pub use glam::DVec2;
 
+mod lanes;
 mod segment_set;
-pub use segment_set::{BVH_THRESHOLD, SegmentSet, Skip, Strategy};
+pub use lanes::Kernel;
+pub use segment_set::{BVH_THRESHOLD, BVH_THRESHOLD_AVX, SegmentSet, Skip, Strategy};
 
 /// The 2D cross product (perp dot product) `a.x * b.y - a.y * b.x`.
 ///

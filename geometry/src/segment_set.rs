@@ -1,8 +1,10 @@
 //! A set of segments with closest-hit and all-crossings queries: brute
 //! force over a structure-of-arrays copy for small sets, a bounding volume
-//! hierarchy for large ones. Both give exactly the same answers.
+//! hierarchy for large ones, each testing segments four at a time where
+//! the processor has AVX. All give exactly the same answers.
 
-use crate::{DVec2, Hit, Ray, Segment, crossing_parts};
+use crate::lanes::{Best, Kernel, Lanes};
+use crate::{DVec2, Hit, Ray, Segment};
 
 /// Up to two segment indices that a query ignores: the wall a ray leaves
 /// from, and the wall a light sample lies on. A ray that starts on a
@@ -36,32 +38,37 @@ pub enum Strategy {
     Bvh,
 }
 
-/// Sets with more segments than this use a BVH by default (measured: see
-/// `docs/performance.md`).
+/// Sets with more segments than this use a BVH by default, when brute
+/// force runs the scalar kernel (measured: see `docs/performance.md`).
 pub const BVH_THRESHOLD: usize = 8;
+/// The same with the AVX kernel, which tests four segments for little more
+/// than the price of one: brute force beats the BVH on a room's 13 walls
+/// by a quarter, and on 32 walls spread over a room by a third (`cargo
+/// bench -p flatray-benches --bench render -- bvh_threshold`).
+pub const BVH_THRESHOLD_AVX: usize = 32;
 
 /// The segments of a scene, stored once, queried by brute force or through
 /// a BVH.
 ///
 /// Segment indices are positions in the vector given to [`SegmentSet::new`].
-/// Ties in the closest hit go to the lower index, so both strategies return
-/// identical answers.
+/// Ties in the closest hit go to the lower index, so both strategies (and
+/// both kernels) return identical answers.
 #[derive(Clone, Debug, Default)]
 pub struct SegmentSet {
     segments: Vec<Segment>,
-    /// Structure-of-arrays copies of the endpoints, in `order`.
-    ax: Vec<f64>,
-    ay: Vec<f64>,
-    bx: Vec<f64>,
-    by: Vec<f64>,
-    /// The original index of each stored segment.
-    order: Vec<u32>,
+    /// The segments as the kernels read them: in index order and padded
+    /// to whole blocks for brute force; in leaf order for the BVH, whose
+    /// leaves are tested one segment at a time (measured: four-wide
+    /// leaves, padded, were slower on mazes of 100,000 walls).
+    lanes: Lanes,
     /// Empty for brute force.
     nodes: Vec<Node>,
+    kernel: Option<Kernel>,
 }
 
 /// A BVH node: its box, and either two children (`count == 0`, children
-/// at `first` and `first + 1`) or a leaf of `count` segments from `first`.
+/// at `first` and `first + 1`) or a leaf of `count` segments from slot
+/// `first`.
 #[derive(Clone, Copy, Debug)]
 struct Node {
     min: DVec2,
@@ -78,9 +85,14 @@ const MAX_SAH_DEPTH: usize = 64;
 const STACK: usize = MAX_SAH_DEPTH + 40;
 
 impl SegmentSet {
-    /// A set that picks its strategy by size.
+    /// A set that picks its strategy by size, and the fastest kernel the
+    /// processor runs.
     pub fn new(segments: Vec<Segment>) -> SegmentSet {
-        let strategy = if segments.len() > BVH_THRESHOLD {
+        let threshold = match detected() {
+            Kernel::Scalar => BVH_THRESHOLD,
+            Kernel::Avx => BVH_THRESHOLD_AVX,
+        };
+        let strategy = if segments.len() > threshold {
             Strategy::Bvh
         } else {
             Strategy::BruteForce
@@ -88,24 +100,37 @@ impl SegmentSet {
         SegmentSet::with_strategy(segments, strategy)
     }
 
-    /// A set with the given strategy.
+    /// A set with the given strategy, and the fastest kernel the processor
+    /// runs.
     pub fn with_strategy(segments: Vec<Segment>, strategy: Strategy) -> SegmentSet {
         let mut order: Vec<u32> = (0..segments.len() as u32).collect();
         let mut nodes = Vec::new();
+        let mut lanes = Lanes::default();
         if strategy == Strategy::Bvh && !segments.is_empty() {
             build(&segments, &mut order, &mut nodes);
+            for &i in &order {
+                lanes.push(&segments[i as usize], i);
+            }
+        } else {
+            for (i, segment) in segments.iter().enumerate() {
+                lanes.push(segment, i as u32);
+            }
+            lanes.pad();
         }
-        let pick =
-            |f: fn(&Segment) -> f64| order.iter().map(|&i| f(&segments[i as usize])).collect();
         SegmentSet {
-            ax: pick(|s| s.a.x),
-            ay: pick(|s| s.a.y),
-            bx: pick(|s| s.b.x),
-            by: pick(|s| s.b.y),
-            order,
-            nodes,
             segments,
+            lanes,
+            nodes,
+            kernel: None,
         }
+    }
+
+    /// The same set, answering with `kernel` if this processor runs it
+    /// (and with the scalar kernel otherwise). For tests and benchmarks:
+    /// every kernel returns the same answers.
+    pub fn with_kernel(mut self, kernel: Kernel) -> SegmentSet {
+        self.kernel = (kernel == Kernel::Scalar || Kernel::detect() == kernel).then_some(kernel);
+        self
     }
 
     pub fn strategy(&self) -> Strategy {
@@ -114,6 +139,13 @@ impl SegmentSet {
         } else {
             Strategy::Bvh
         }
+    }
+
+    /// The kernel that tests blocks of segments in a brute-force set (a
+    /// BVH tests its small leaves with the scalar kernel).
+    #[inline]
+    pub fn kernel(&self) -> Kernel {
+        self.kernel.unwrap_or_else(detected)
     }
 
     #[inline]
@@ -135,98 +167,22 @@ impl SegmentSet {
         &self.segments
     }
 
-    /// The stored segments in `slots` with their original indices, as an
-    /// iterator over zipped slices (no bounds check per segment).
+    /// The slots of a leaf.
     #[inline(always)]
-    fn stored(
-        &self,
-        slots: std::ops::Range<usize>,
-    ) -> impl Iterator<Item = (DVec2, DVec2, u32)> + '_ {
-        let s = slots;
-        self.ax[s.clone()]
-            .iter()
-            .zip(&self.ay[s.clone()])
-            .zip(self.bx[s.clone()].iter().zip(&self.by[s.clone()]))
-            .zip(&self.order[s])
-            .map(|(((&ax, &ay), (&bx, &by)), &index)| {
-                (DVec2::new(ax, ay), DVec2::new(bx, by), index)
-            })
-    }
-
-    /// Tests the stored segments in `slots` against `ray` and keeps the
-    /// nearest crossing in `best`. (Two
-    /// branch-free variants, computing every `t` and selecting the least,
-    /// measured slower on this scalar-f64 target: the divisions cost more
-    /// than the mispredicted branches they avoid.)
-    #[inline(always)]
-    fn closest_in(
-        &self,
-        ray: &Ray,
-        slots: std::ops::Range<usize>,
-        t_max: f64,
-        skip: Skip,
-        best: &mut Best,
-    ) {
-        for (a, b, index) in self.stored(slots) {
-            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
-                continue;
-            };
-            if !(t > 0.0 && t < t_max) || t > best.t {
-                continue;
-            }
-            if skip.contains(index) || (t == best.t && index >= best.index) {
-                continue;
-            }
-            *best = Best {
-                t,
-                index,
-                u: sa / (sa - sb),
-            };
-        }
-    }
-
-    /// Calls `visit` for the crossings with `0 < t < t_max` among `slots`,
-    /// in slot order; `false` when `visit` stopped it.
-    #[inline(always)]
-    fn crossings_in<F: FnMut(u32, Hit) -> bool>(
-        &self,
-        ray: &Ray,
-        slots: std::ops::Range<usize>,
-        t_max: f64,
-        skip: Skip,
-        visit: &mut F,
-    ) -> bool {
-        for (a, b, index) in self.stored(slots) {
-            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
-                continue;
-            };
-            if !(t > 0.0 && t < t_max) || skip.contains(index) {
-                continue;
-            }
-            if !visit(
-                index,
-                Hit {
-                    t,
-                    u: sa / (sa - sb),
-                },
-            ) {
-                return false;
-            }
-        }
-        true
+    fn leaf(node: &Node) -> std::ops::Range<usize> {
+        let first = node.first as usize;
+        first..first + node.count as usize
     }
 
     /// The nearest crossing with `0 < t < t_max`, with its segment index.
     /// Ties are won by the lower index, so the answer is deterministic and
     /// the same for every strategy.
     pub fn closest_hit(&self, ray: &Ray, t_max: f64, skip: Skip) -> Option<(u32, Hit)> {
-        let mut best = Best {
-            t: t_max,
-            index: u32::MAX,
-            u: 0.0,
-        };
+        let mut best = Best::new(t_max);
         if self.nodes.is_empty() {
-            self.closest_in(ray, 0..self.order.len(), t_max, skip, &mut best);
+            let all = 0..self.lanes.order.len();
+            self.lanes
+                .closest(self.kernel(), ray, all, t_max, skip, &mut best);
             return best.found();
         }
         let inv = DVec2::new(1.0 / ray.dir.x, 1.0 / ray.dir.y);
@@ -236,10 +192,10 @@ impl SegmentSet {
         loop {
             let node = self.nodes[node_index as usize];
             if node.count > 0 {
-                let first = node.first as usize;
-                self.closest_in(
+                self.lanes.closest(
+                    Kernel::Scalar,
                     ray,
-                    first..first + node.count as usize,
+                    Self::leaf(&node),
                     t_max,
                     skip,
                     &mut best,
@@ -284,6 +240,23 @@ impl SegmentSet {
         }
     }
 
+    /// `closest_hit` for four rays at once: exactly what four calls return.
+    /// A brute-force set with the AVX kernel tests each segment against
+    /// the four rays together (one ray per lane, nothing to reduce across
+    /// lanes); otherwise it makes the four calls.
+    pub fn closest_hits(
+        &self,
+        rays: &[Ray; 4],
+        t_max: f64,
+        skips: [Skip; 4],
+    ) -> [Option<(u32, Hit)>; 4] {
+        if self.nodes.is_empty() {
+            let best = self.lanes.closest4(self.kernel(), rays, t_max, skips);
+            return best.map(Best::found);
+        }
+        std::array::from_fn(|k| self.closest_hit(&rays[k], t_max, skips[k]))
+    }
+
     /// Calls `visit(index, hit)` for every crossing with `0 < t < t_max`
     /// until `visit` returns `false`. Returns `false` when it was stopped
     /// early. The order of the calls is fixed for a given set, but depends
@@ -296,7 +269,10 @@ impl SegmentSet {
         mut visit: impl FnMut(u32, Hit) -> bool,
     ) -> bool {
         if self.nodes.is_empty() {
-            return self.crossings_in(ray, 0..self.order.len(), t_max, skip, &mut visit);
+            let all = 0..self.lanes.order.len();
+            return self
+                .lanes
+                .crossings(self.kernel(), ray, all, t_max, skip, &mut visit);
         }
         let inv = DVec2::new(1.0 / ray.dir.x, 1.0 / ray.dir.y);
         let mut stack = [0u32; STACK];
@@ -308,10 +284,10 @@ impl SegmentSet {
                 continue;
             }
             if node.count > 0 {
-                let first = node.first as usize;
-                if !self.crossings_in(
+                if !self.lanes.crossings(
+                    Kernel::Scalar,
                     ray,
-                    first..first + node.count as usize,
+                    Self::leaf(&node),
                     t_max,
                     skip,
                     &mut visit,
@@ -328,24 +304,10 @@ impl SegmentSet {
     }
 }
 
-/// The nearest crossing so far.
-#[derive(Clone, Copy, Debug)]
-struct Best {
-    t: f64,
-    index: u32,
-    u: f64,
-}
-
-impl Best {
-    fn found(self) -> Option<(u32, Hit)> {
-        (self.index != u32::MAX).then_some((
-            self.index,
-            Hit {
-                t: self.t,
-                u: self.u,
-            },
-        ))
-    }
+/// The kernel detected once per process.
+fn detected() -> Kernel {
+    static DETECTED: std::sync::OnceLock<Kernel> = std::sync::OnceLock::new();
+    *DETECTED.get_or_init(Kernel::detect)
 }
 
 /// Where `ray` enters `node`'s box within `[0, t_max]`, if it does. The

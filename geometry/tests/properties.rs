@@ -2,7 +2,8 @@
 //! proptest configuration, so each run checks the same cases.
 
 use flatray_geometry::{
-    DVec2, Ray, Segment, SegmentSet, Side, Skip, Strategy as Accel, cross, intersect, reflect,
+    DVec2, Kernel, Ray, Segment, SegmentSet, Side, Skip, Strategy as Accel, cross, intersect,
+    reflect,
 };
 use proptest::prelude::*;
 
@@ -81,13 +82,26 @@ proptest! {
     }
 
     #[test]
-    fn the_bvh_returns_exactly_what_brute_force_returns(
+    fn the_bvh_and_both_kernels_return_exactly_what_brute_force_returns(
         segments in prop::collection::vec(segment(), 1..200),
         rays in prop::collection::vec((point(), direction(), 0.1..3000.0f64), 20),
         skip in 0u32..200,
     ) {
         let brute = SegmentSet::with_strategy(segments.clone(), Accel::BruteForce);
         let bvh = SegmentSet::with_strategy(segments.clone(), Accel::Bvh);
+        // Whatever kernel `brute` detected (AVX on the project's machines),
+        // against the scalar one.
+        let scalar = SegmentSet::with_strategy(segments.clone(), Accel::BruteForce).with_kernel(Kernel::Scalar);
+        prop_assert_eq!(scalar.kernel(), Kernel::Scalar);
+        // Four rays at a time: the same answers as one at a time.
+        for quad in rays.chunks_exact(4) {
+            let skips: [Skip; 4] = std::array::from_fn(|k| if k % 2 == 0 { Skip::NONE } else { Skip::one(skip) });
+            let quad: [Ray; 4] = std::array::from_fn(|k| Ray::new(quad[k].0, quad[k].1));
+            let one_by_one: [_; 4] = std::array::from_fn(|k| scalar.closest_hit(&quad[k], f64::INFINITY, skips[k]));
+            for set in [&brute, &scalar, &bvh] {
+                prop_assert_eq!(set.closest_hits(&quad, f64::INFINITY, skips), one_by_one);
+            }
+        }
         for (origin, dir, t_max) in rays {
             let ray = Ray::new(origin, dir);
             for (t_max, skip) in [(f64::INFINITY, Skip::NONE), (t_max, Skip::one(skip))] {
@@ -107,10 +121,15 @@ proptest! {
                 }
                 prop_assert_eq!(brute.closest_hit(&ray, t_max, skip), reference);
                 prop_assert_eq!(brute.closest_hit(&ray, t_max, skip), bvh.closest_hit(&ray, t_max, skip));
+                prop_assert_eq!(brute.closest_hit(&ray, t_max, skip), scalar.closest_hit(&ray, t_max, skip));
                 let mut a = Vec::new();
                 brute.for_each_crossing(&ray, t_max, skip, |i, h| { a.push((i, h.t.to_bits(), h.u.to_bits())); true });
                 let mut b = Vec::new();
                 bvh.for_each_crossing(&ray, t_max, skip, |i, h| { b.push((i, h.t.to_bits(), h.u.to_bits())); true });
+                let mut c = Vec::new();
+                scalar.for_each_crossing(&ray, t_max, skip, |i, h| { c.push((i, h.t.to_bits(), h.u.to_bits())); true });
+                // Brute force visits in index order with either kernel.
+                prop_assert_eq!(&a, &c);
                 a.sort_unstable();
                 b.sort_unstable();
                 prop_assert_eq!(a, b);
@@ -149,5 +168,46 @@ fn a_long_corridor_of_segments_builds_a_tree_the_stack_can_walk() {
             n
         };
         assert_eq!(count(&brute), count(&bvh));
+    }
+}
+
+#[test]
+fn ties_at_a_shared_corner_go_to_the_lower_index_in_every_set() {
+    // Thirteen walls meet at the origin (so a ray through it crosses them
+    // all at the same `t`), in every lane of several blocks, between
+    // walls that lie nearer or farther on the ray.
+    let mut segments: Vec<Segment> = (0..13)
+        .map(|k| {
+            let angle = 0.3 + k as f64 * 0.4;
+            Segment::new(DVec2::ZERO, DVec2::new(angle.cos(), angle.sin()) * 5.0)
+        })
+        .collect();
+    segments.push(Segment::new(DVec2::new(3.0, -1.0), DVec2::new(3.0, 1.0)));
+    segments.insert(0, Segment::new(DVec2::new(9.0, -1.0), DVec2::new(9.0, 1.0)));
+    let ray = Ray::new(DVec2::new(-4.0, 0.0), DVec2::new(1.0, 0.0));
+    let sets = [
+        SegmentSet::with_strategy(segments.clone(), Accel::BruteForce),
+        SegmentSet::with_strategy(segments.clone(), Accel::BruteForce).with_kernel(Kernel::Scalar),
+        SegmentSet::with_strategy(segments.clone(), Accel::Bvh),
+    ];
+    for skip in [Skip::NONE, Skip::one(1), Skip(1, 2)] {
+        let expected = if skip == Skip::NONE {
+            1
+        } else if skip == Skip::one(1) {
+            2
+        } else {
+            3
+        };
+        for set in &sets {
+            let hit = set.closest_hit(&ray, f64::INFINITY, skip);
+            assert_eq!(
+                hit.map(|(i, h)| (i, h.t)),
+                Some((expected, 4.0)),
+                "{:?}",
+                set.kernel()
+            );
+            let quad = set.closest_hits(&[ray; 4], f64::INFINITY, [skip; 4]);
+            assert_eq!(quad, [hit; 4]);
+        }
     }
 }

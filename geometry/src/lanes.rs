@@ -1,0 +1,552 @@
+//! The segments of a [`SegmentSet`](crate::SegmentSet) as the hot loop
+//! reads them: structure of arrays, in blocks of four, and the two kernels
+//! that test a run of blocks against a ray, one scalar and one with AVX
+//! (four `f64` lanes), chosen once per set at run time.
+//!
+//! Both kernels do the same IEEE operations in the same order (Rust never
+//! fuses a multiply and an add on its own), so they return the same bits.
+//! Slots past the last segment of a block hold NaN endpoints, which no
+//! crossing test accepts.
+
+use crate::{DVec2, Hit, Ray, Skip, crossing_parts};
+
+/// Segments per block: the lanes of one AVX register of `f64`.
+pub(crate) const BLOCK: usize = 4;
+
+/// How a set tests a block of segments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    /// One segment at a time, on any processor.
+    Scalar,
+    /// Four segments at a time with AVX, where the processor has it
+    /// (detected at run time).
+    Avx,
+}
+
+impl Kernel {
+    /// The fastest kernel this processor runs.
+    pub fn detect() -> Kernel {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            return Kernel::Avx;
+        }
+        Kernel::Scalar
+    }
+}
+
+/// Endpoints, edges and original indices, padded to whole blocks.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Lanes {
+    pub ax: Vec<f64>,
+    pub ay: Vec<f64>,
+    pub bx: Vec<f64>,
+    pub by: Vec<f64>,
+    /// `b - a`, as the crossing rule computes it.
+    pub ex: Vec<f64>,
+    pub ey: Vec<f64>,
+    /// The original index of each slot, as `f64` for the lane compares
+    /// (exact: every `u32` is an `f64`); `u32::MAX` in padding.
+    pub id: Vec<f64>,
+    /// The original index of each slot; `u32::MAX` in padding.
+    pub order: Vec<u32>,
+}
+
+impl Lanes {
+    /// Appends `segment` with original index `index`.
+    pub fn push(&mut self, segment: &crate::Segment, index: u32) {
+        let e = segment.b - segment.a;
+        self.ax.push(segment.a.x);
+        self.ay.push(segment.a.y);
+        self.bx.push(segment.b.x);
+        self.by.push(segment.b.y);
+        self.ex.push(e.x);
+        self.ey.push(e.y);
+        self.id.push(index as f64);
+        self.order.push(index);
+    }
+
+    /// Pads to a whole number of blocks with slots nothing crosses.
+    pub fn pad(&mut self) {
+        while !self.order.len().is_multiple_of(BLOCK) {
+            for v in [
+                &mut self.ax,
+                &mut self.ay,
+                &mut self.bx,
+                &mut self.by,
+                &mut self.ex,
+                &mut self.ey,
+            ] {
+                v.push(f64::NAN);
+            }
+            self.id.push(u32::MAX as f64);
+            self.order.push(u32::MAX);
+        }
+    }
+
+    #[inline(always)]
+    fn a(&self, slot: usize) -> DVec2 {
+        DVec2::new(self.ax[slot], self.ay[slot])
+    }
+
+    #[inline(always)]
+    fn b(&self, slot: usize) -> DVec2 {
+        DVec2::new(self.bx[slot], self.by[slot])
+    }
+
+    /// Keeps in `best` the nearest crossing among `slots`: the least
+    /// `(t, index)` with `0 < t < t_max` not skipped.
+    #[inline(always)]
+    pub fn closest(
+        &self,
+        kernel: Kernel,
+        ray: &Ray,
+        slots: std::ops::Range<usize>,
+        t_max: f64,
+        skip: Skip,
+        best: &mut Best,
+    ) {
+        match kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: a set holds `Kernel::Avx` only when `Kernel::detect`
+            // found AVX on this processor.
+            Kernel::Avx => unsafe { avx::closest(self, ray, slots, t_max, skip, best) },
+            _ => self.closest_scalar(ray, slots, t_max, skip, best),
+        }
+    }
+
+    /// `closest` for four rays at once over all slots, each from a fresh
+    /// `Best` with bound `t_max`: what four calls of `closest` return.
+    #[inline(always)]
+    pub fn closest4(
+        &self,
+        kernel: Kernel,
+        rays: &[Ray; 4],
+        t_max: f64,
+        skips: [Skip; 4],
+    ) -> [Best; 4] {
+        match kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as in `closest`.
+            Kernel::Avx => unsafe { avx::closest4(self, rays, t_max, skips) },
+            _ => std::array::from_fn(|k| {
+                let mut best = Best::new(t_max);
+                self.closest_scalar(&rays[k], 0..self.order.len(), t_max, skips[k], &mut best);
+                best
+            }),
+        }
+    }
+
+    #[inline(always)]
+    fn closest_scalar(
+        &self,
+        ray: &Ray,
+        slots: std::ops::Range<usize>,
+        t_max: f64,
+        skip: Skip,
+        best: &mut Best,
+    ) {
+        for slot in slots {
+            let (a, b, index) = (self.a(slot), self.b(slot), self.order[slot]);
+            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
+                continue;
+            };
+            if !(t > 0.0 && t < t_max) || t > best.t {
+                continue;
+            }
+            if skip.contains(index) || (t == best.t && index >= best.index) {
+                continue;
+            }
+            *best = Best {
+                t,
+                index,
+                u: sa / (sa - sb),
+            };
+        }
+    }
+
+    /// Calls `visit` for the crossings with `0 < t < t_max` among `slots`,
+    /// in slot order; `false` when `visit` stopped it.
+    #[inline(always)]
+    pub fn crossings<F: FnMut(u32, Hit) -> bool>(
+        &self,
+        kernel: Kernel,
+        ray: &Ray,
+        slots: std::ops::Range<usize>,
+        t_max: f64,
+        skip: Skip,
+        visit: &mut F,
+    ) -> bool {
+        match kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as in `closest`.
+            Kernel::Avx => unsafe { avx::crossings(self, ray, slots, t_max, skip, visit) },
+            _ => self.crossings_scalar(ray, slots, t_max, skip, visit),
+        }
+    }
+
+    #[inline(always)]
+    fn crossings_scalar<F: FnMut(u32, Hit) -> bool>(
+        &self,
+        ray: &Ray,
+        slots: std::ops::Range<usize>,
+        t_max: f64,
+        skip: Skip,
+        visit: &mut F,
+    ) -> bool {
+        for slot in slots {
+            let (a, b, index) = (self.a(slot), self.b(slot), self.order[slot]);
+            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
+                continue;
+            };
+            if !(t > 0.0 && t < t_max) || skip.contains(index) {
+                continue;
+            }
+            if !visit(
+                index,
+                Hit {
+                    t,
+                    u: sa / (sa - sb),
+                },
+            ) {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// The nearest crossing so far.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Best {
+    pub t: f64,
+    pub index: u32,
+    pub u: f64,
+}
+
+impl Best {
+    /// Nothing found yet below `t_max`.
+    #[inline]
+    pub fn new(t_max: f64) -> Best {
+        Best {
+            t: t_max,
+            index: u32::MAX,
+            u: 0.0,
+        }
+    }
+
+    pub fn found(self) -> Option<(u32, Hit)> {
+        (self.index != u32::MAX).then_some((
+            self.index,
+            Hit {
+                t: self.t,
+                u: self.u,
+            },
+        ))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    //! The crossing rule on four segments at once. Every lane computes
+    //! exactly what `crossing_parts` computes for its segment.
+
+    use std::arch::x86_64::*;
+
+    use super::{BLOCK, Best, Lanes};
+    use crate::{Hit, Ray, Skip, crossing_parts};
+
+    /// The lanes of one block, and the mask of its crossings with
+    /// `0 < t < t_max` that are not skipped.
+    struct Block {
+        t: __m256d,
+        sa: __m256d,
+        sb: __m256d,
+        id: __m256d,
+        ok: __m256d,
+    }
+
+    /// The ray and bounds, broadcast to every lane.
+    struct Wide {
+        ox: __m256d,
+        oy: __m256d,
+        dx: __m256d,
+        dy: __m256d,
+        t_max: __m256d,
+        skip0: __m256d,
+        skip1: __m256d,
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn wide(ray: &Ray, t_max: f64, skip: Skip) -> Wide {
+        Wide {
+            ox: _mm256_set1_pd(ray.origin.x),
+            oy: _mm256_set1_pd(ray.origin.y),
+            dx: _mm256_set1_pd(ray.dir.x),
+            dy: _mm256_set1_pd(ray.dir.y),
+            t_max: _mm256_set1_pd(t_max),
+            skip0: _mm256_set1_pd(skip.0 as f64),
+            skip1: _mm256_set1_pd(skip.1 as f64),
+        }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn load(v: &[f64], slot: usize) -> __m256d {
+        let lanes: &[f64; BLOCK] = v[slot..slot + BLOCK]
+            .try_into()
+            .unwrap_or(&[f64::NAN; BLOCK]);
+        // SAFETY: `lanes` is four readable f64; the load is unaligned.
+        unsafe { _mm256_loadu_pd(lanes.as_ptr()) }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn block(l: &Lanes, w: &Wide, slot: usize) -> Block {
+        let zero = _mm256_setzero_pd();
+        let pax = _mm256_sub_pd(load(&l.ax, slot), w.ox);
+        let pay = _mm256_sub_pd(load(&l.ay, slot), w.oy);
+        let pbx = _mm256_sub_pd(load(&l.bx, slot), w.ox);
+        let pby = _mm256_sub_pd(load(&l.by, slot), w.oy);
+        // sa = d.x * pa.y - d.y * pa.x, and so on, as in `crossing_parts`.
+        let sa = _mm256_sub_pd(_mm256_mul_pd(w.dx, pay), _mm256_mul_pd(w.dy, pax));
+        let sb = _mm256_sub_pd(_mm256_mul_pd(w.dx, pby), _mm256_mul_pd(w.dy, pbx));
+        let both = |p: __m256d, q: __m256d| _mm256_and_pd(p, q);
+        let same_side = _mm256_or_pd(
+            _mm256_or_pd(
+                both(
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(sa, zero),
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(sb, zero),
+                ),
+                both(
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(sa, zero),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(sb, zero),
+                ),
+            ),
+            both(
+                _mm256_cmp_pd::<_CMP_EQ_OQ>(sa, zero),
+                _mm256_cmp_pd::<_CMP_EQ_OQ>(sb, zero),
+            ),
+        );
+        let num = _mm256_sub_pd(
+            _mm256_mul_pd(pax, load(&l.ey, slot)),
+            _mm256_mul_pd(pay, load(&l.ex, slot)),
+        );
+        let t = _mm256_div_pd(num, _mm256_sub_pd(sb, sa));
+        let id = load(&l.id, slot);
+        let in_range = both(
+            _mm256_cmp_pd::<_CMP_GT_OQ>(t, zero),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(t, w.t_max),
+        );
+        let not_skipped = both(
+            _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, w.skip0),
+            _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, w.skip1),
+        );
+        Block {
+            t,
+            sa,
+            sb,
+            id,
+            ok: _mm256_andnot_pd(same_side, both(in_range, not_skipped)),
+        }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn lanes(v: __m256d) -> [f64; BLOCK] {
+        let mut out = [0.0; BLOCK];
+        // SAFETY: `out` is four writable f64; the store is unaligned.
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), v) };
+        out
+    }
+
+    /// # Safety
+    /// The processor must have AVX.
+    #[target_feature(enable = "avx")]
+    pub(super) unsafe fn closest(
+        l: &Lanes,
+        ray: &Ray,
+        slots: std::ops::Range<usize>,
+        t_max: f64,
+        skip: Skip,
+        best: &mut Best,
+    ) {
+        let w = wide(ray, t_max, skip);
+        // Per lane, the least (t, index) so far and its slot (-1: the
+        // `best` passed in).
+        let mut bt = _mm256_set1_pd(best.t);
+        let mut bi = _mm256_set1_pd(best.index as f64);
+        let mut bs = _mm256_set1_pd(-1.0);
+        let lane_offsets = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
+        let mut slot = slots.start;
+        while slot < slots.end {
+            let b = block(l, &w, slot);
+            let nearer = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(b.t, bt),
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_EQ_OQ>(b.t, bt),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(b.id, bi),
+                ),
+            );
+            // No branch: which lanes improve is as unpredictable as the
+            // scalar kernel's branches were.
+            let take = _mm256_and_pd(b.ok, nearer);
+            bt = _mm256_blendv_pd(bt, b.t, take);
+            bi = _mm256_blendv_pd(bi, b.id, take);
+            let here = _mm256_add_pd(_mm256_set1_pd(slot as f64), lane_offsets);
+            bs = _mm256_blendv_pd(bs, here, take);
+            slot += BLOCK;
+        }
+        let (ts, is, ss) = (lanes(bt), lanes(bi), lanes(bs));
+        let mut winner: Option<usize> = None;
+        let (mut t, mut index) = (best.t, best.index as f64);
+        for lane in 0..BLOCK {
+            if ss[lane] >= 0.0 && (ts[lane] < t || (ts[lane] == t && is[lane] < index)) {
+                (t, index) = (ts[lane], is[lane]);
+                winner = Some(ss[lane] as usize);
+            }
+        }
+        if let Some(slot) = winner {
+            let a = crate::DVec2::new(l.ax[slot], l.ay[slot]);
+            let b = crate::DVec2::new(l.bx[slot], l.by[slot]);
+            if let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) {
+                *best = Best {
+                    t,
+                    index: l.order[slot],
+                    u: sa / (sa - sb),
+                };
+            }
+        }
+    }
+
+    /// Four rays against every slot, one segment at a time: each lane is
+    /// one ray, so no lane ever waits for another and nothing is reduced
+    /// across lanes.
+    ///
+    /// # Safety
+    /// The processor must have AVX.
+    #[target_feature(enable = "avx")]
+    pub(super) unsafe fn closest4(
+        l: &Lanes,
+        rays: &[Ray; 4],
+        t_max: f64,
+        skips: [Skip; 4],
+    ) -> [Best; 4] {
+        let lane = |f: &dyn Fn(usize) -> f64| _mm256_set_pd(f(3), f(2), f(1), f(0));
+        let ox = lane(&|k| rays[k].origin.x);
+        let oy = lane(&|k| rays[k].origin.y);
+        let dx = lane(&|k| rays[k].dir.x);
+        let dy = lane(&|k| rays[k].dir.y);
+        let skip0 = lane(&|k| skips[k].0 as f64);
+        let skip1 = lane(&|k| skips[k].1 as f64);
+        let zero = _mm256_setzero_pd();
+        let t_max = _mm256_set1_pd(t_max);
+        let mut bt = t_max;
+        let mut bi = _mm256_set1_pd(u32::MAX as f64);
+        let (mut bsa, mut bsb) = (zero, zero);
+        let both = |p: __m256d, q: __m256d| _mm256_and_pd(p, q);
+        let n = l.order.len();
+        let (ax, ay, bx, by) = (&l.ax[..n], &l.ay[..n], &l.bx[..n], &l.by[..n]);
+        let (ex, ey, ids) = (&l.ex[..n], &l.ey[..n], &l.id[..n]);
+        for slot in 0..n {
+            let pax = _mm256_sub_pd(_mm256_set1_pd(ax[slot]), ox);
+            let pay = _mm256_sub_pd(_mm256_set1_pd(ay[slot]), oy);
+            let pbx = _mm256_sub_pd(_mm256_set1_pd(bx[slot]), ox);
+            let pby = _mm256_sub_pd(_mm256_set1_pd(by[slot]), oy);
+            let sa = _mm256_sub_pd(_mm256_mul_pd(dx, pay), _mm256_mul_pd(dy, pax));
+            let sb = _mm256_sub_pd(_mm256_mul_pd(dx, pby), _mm256_mul_pd(dy, pbx));
+            let same_side = _mm256_or_pd(
+                _mm256_or_pd(
+                    both(
+                        _mm256_cmp_pd::<_CMP_GT_OQ>(sa, zero),
+                        _mm256_cmp_pd::<_CMP_GT_OQ>(sb, zero),
+                    ),
+                    both(
+                        _mm256_cmp_pd::<_CMP_LT_OQ>(sa, zero),
+                        _mm256_cmp_pd::<_CMP_LT_OQ>(sb, zero),
+                    ),
+                ),
+                both(
+                    _mm256_cmp_pd::<_CMP_EQ_OQ>(sa, zero),
+                    _mm256_cmp_pd::<_CMP_EQ_OQ>(sb, zero),
+                ),
+            );
+            let num = _mm256_sub_pd(
+                _mm256_mul_pd(pax, _mm256_set1_pd(ey[slot])),
+                _mm256_mul_pd(pay, _mm256_set1_pd(ex[slot])),
+            );
+            let t = _mm256_div_pd(num, _mm256_sub_pd(sb, sa));
+            let id = _mm256_set1_pd(ids[slot]);
+            let ok = _mm256_andnot_pd(
+                same_side,
+                both(
+                    both(
+                        _mm256_cmp_pd::<_CMP_GT_OQ>(t, zero),
+                        _mm256_cmp_pd::<_CMP_LT_OQ>(t, t_max),
+                    ),
+                    both(
+                        _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, skip0),
+                        _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, skip1),
+                    ),
+                ),
+            );
+            let nearer = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(t, bt),
+                both(
+                    _mm256_cmp_pd::<_CMP_EQ_OQ>(t, bt),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(id, bi),
+                ),
+            );
+            let take = both(ok, nearer);
+            bt = _mm256_blendv_pd(bt, t, take);
+            bi = _mm256_blendv_pd(bi, id, take);
+            bsa = _mm256_blendv_pd(bsa, sa, take);
+            bsb = _mm256_blendv_pd(bsb, sb, take);
+        }
+        let u = _mm256_div_pd(bsa, _mm256_sub_pd(bsa, bsb));
+        let (t, i, u) = (lanes(bt), lanes(bi), lanes(u));
+        std::array::from_fn(|k| Best {
+            t: t[k],
+            // Every lane holds u32::MAX or a segment index.
+            index: i[k] as u32,
+            u: u[k],
+        })
+    }
+
+    /// # Safety
+    /// The processor must have AVX.
+    #[target_feature(enable = "avx")]
+    pub(super) unsafe fn crossings<F: FnMut(u32, Hit) -> bool>(
+        l: &Lanes,
+        ray: &Ray,
+        slots: std::ops::Range<usize>,
+        t_max: f64,
+        skip: Skip,
+        visit: &mut F,
+    ) -> bool {
+        let w = wide(ray, t_max, skip);
+        let mut slot = slots.start;
+        while slot < slots.end {
+            let b = block(l, &w, slot);
+            let mask = _mm256_movemask_pd(b.ok);
+            if mask != 0 {
+                let (t, sa, sb) = (lanes(b.t), lanes(b.sa), lanes(b.sb));
+                for lane in 0..BLOCK {
+                    if mask & (1 << lane) != 0
+                        && !visit(
+                            l.order[slot + lane],
+                            Hit {
+                                t: t[lane],
+                                u: sa[lane] / (sa[lane] - sb[lane]),
+                            },
+                        )
+                    {
+                        return false;
+                    }
+                }
+            }
+            slot += BLOCK;
+        }
+        true
+    }
+}
