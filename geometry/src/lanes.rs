@@ -49,6 +49,8 @@ pub(crate) struct Lanes {
     pub id: Vec<f64>,
     /// The original index of each slot; `u32::MAX` in padding.
     pub order: Vec<u32>,
+    /// The number of slots before the padding.
+    pub len: usize,
 }
 
 impl Lanes {
@@ -63,6 +65,7 @@ impl Lanes {
         self.ey.push(e.y);
         self.id.push(index as f64);
         self.order.push(index);
+        self.len = self.order.len();
     }
 
     /// Pads to a whole number of blocks with slots nothing crosses.
@@ -130,7 +133,7 @@ impl Lanes {
             Kernel::Avx => unsafe { avx::closest4(self, rays, t_max, skips) },
             _ => std::array::from_fn(|k| {
                 let mut best = Best::new(t_max);
-                self.closest_scalar(&rays[k], 0..self.order.len(), t_max, skips[k], &mut best);
+                self.closest_scalar(&rays[k], 0..self.len, t_max, skips[k], &mut best);
                 best
             }),
         }
@@ -445,7 +448,8 @@ mod avx {
         let mut bi = _mm256_set1_pd(u32::MAX as f64);
         let (mut bsa, mut bsb) = (zero, zero);
         let both = |p: __m256d, q: __m256d| _mm256_and_pd(p, q);
-        let n = l.order.len();
+        // The real segments only: padding would cost a division per lane.
+        let n = l.len;
         let (ax, ay, bx, by) = (&l.ax[..n], &l.ay[..n], &l.bx[..n], &l.by[..n]);
         let (ex, ey, ids) = (&l.ex[..n], &l.ey[..n], &l.id[..n]);
         for slot in 0..n {

@@ -11,6 +11,7 @@
 //! come in as plain data ([`Scene`]); images go out as linear floats
 //! ([`Image`]); progress goes out through a callback.
 
+mod coherence;
 mod glass;
 mod light;
 mod light_tracer;

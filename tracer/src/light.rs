@@ -39,6 +39,28 @@ impl Receiver {
     }
 }
 
+/// How a light's transmittance to a receiver point is found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Visibility {
+    /// By a shadow ray.
+    Trace,
+    /// Already known: 1 when the plan casts no shadow rays, or what the
+    /// floor's coherence masks proved for a whole pixel.
+    Known(Rgb),
+}
+
+impl Visibility {
+    /// Traced when the plan casts shadow rays, else 1.
+    #[inline]
+    pub fn of(shadows: bool) -> Visibility {
+        if shadows {
+            Visibility::Trace
+        } else {
+            Visibility::Known(Rgb::ONE)
+        }
+    }
+}
+
 /// The light that reaches `x` directly from every light: fluence for the
 /// floor, irradiance for a wall side. One shadow ray per light; line
 /// lights draw one number from `stream`.
@@ -50,19 +72,35 @@ pub(crate) fn direct_light(
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
+    let vis = Visibility::of(shadows);
+    direct_light_with(scene, x, receiver, |_| vis, stream, stats)
+}
+
+/// [`direct_light`] with each light's visibility given by `vis(light)`:
+/// draws the same numbers from `stream`.
+#[inline]
+pub(crate) fn direct_light_with(
+    scene: &Scene,
+    x: DVec2,
+    receiver: Receiver,
+    vis: impl Fn(usize) -> Visibility,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
     let mut sum = Rgb::ZERO;
     for index in 0..scene.lights.len() {
         let u = match scene.lights[index].shape {
             LightShape::Line { .. } => stream.uniform(),
             _ => 0.0,
         };
-        sum += light_contribution(scene, index, x, receiver, u, shadows, stats);
+        sum += light_contribution(scene, index, x, receiver, u, vis(index), stats);
     }
     sum
 }
 
 /// The light that reaches `x` from one light, coloured, with one shadow
-/// ray (none when `shadows` is off: the plan found nothing that occludes).
+/// ray (none when `vis` is known: the plan found nothing that occludes, or
+/// the floor's coherence masks know the answer).
 /// `u` in `[0, 1)` picks the point on a line light (uniform in the angle
 /// it subtends); other lights ignore it.
 pub(crate) fn light_contribution(
@@ -71,15 +109,12 @@ pub(crate) fn light_contribution(
     x: DVec2,
     receiver: Receiver,
     u: f64,
-    shadows: bool,
+    vis: Visibility,
     stats: &mut Stats,
 ) -> Rgb {
-    let transmittance = |ray: &Ray, t_max: f64, skip: Skip, stats: &mut Stats| {
-        if shadows {
-            transmittance(scene, ray, t_max, skip, stats)
-        } else {
-            Rgb::ONE
-        }
+    let transmittance = |ray: &Ray, t_max: f64, skip: Skip, stats: &mut Stats| match vis {
+        Visibility::Trace => transmittance(scene, ray, t_max, skip, stats),
+        Visibility::Known(known) => known,
     };
     let light = &scene.lights[index];
     // A light that sits on a wall shines past it: its shadow rays ignore

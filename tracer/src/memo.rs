@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use flatray_cache::{Value, WallMemo};
 use flatray_geometry::{Ray, Side, Skip};
 
-use crate::light::{Receiver, light_contribution};
+use crate::light::{Receiver, Visibility, light_contribution};
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
@@ -23,6 +23,10 @@ pub struct MemoOptions {
     pub floor_samples: u32,
     /// Stratified points per line light for a wall bin's irradiance.
     pub line_samples: u32,
+    /// Whether the floor's strata share one shadow ray per light where no
+    /// shadow edge crosses their pixel (`coherence.rs`): the same image,
+    /// fewer rays.
+    pub floor_coherence: bool,
 }
 
 impl Default for MemoOptions {
@@ -32,6 +36,7 @@ impl Default for MemoOptions {
             bin_length: 1.0,
             floor_samples: 64,
             line_samples: 64,
+            floor_coherence: true,
         }
     }
 }
@@ -111,13 +116,21 @@ pub(crate) fn build_wall_memo(
                             x,
                             receiver,
                             v,
-                            shadows,
+                            Visibility::of(shadows),
                             &mut local,
                         );
                     }
                     sum / line_samples as f64
                 }
-                _ => light_contribution(scene, light_index, x, receiver, 0.0, shadows, &mut local),
+                _ => light_contribution(
+                    scene,
+                    light_index,
+                    x,
+                    receiver,
+                    0.0,
+                    Visibility::of(shadows),
+                    &mut local,
+                ),
             };
             rays.fetch_add(local.shadow_rays, Ordering::Relaxed);
             to_value(value)

@@ -4,7 +4,7 @@
 use std::f64::consts::{PI, TAU};
 
 use flatray_cache::{Key, WallMemo};
-use flatray_geometry::{DVec2, Ray, Skip, intersect, reflect};
+use flatray_geometry::{DVec2, Hit, Ray, Skip, intersect, reflect};
 
 use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::light::{Receiver, direct_light};
@@ -19,28 +19,71 @@ use crate::{Integrator, Rgb, Stats};
 /// render loop has it from the memo). With a `memo`, next-event estimation
 /// at a diffuse wall reads it instead of casting shadow rays.
 pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &mut Stats) -> Rgb {
+    let begun = path_begin(trace, p, stream, stats);
+    let Some(ray) = begun.ray else {
+        return begun.fluence;
+    };
+    let hit = trace
+        .scene
+        .segments
+        .closest_hit(&ray, f64::INFINITY, Skip::NONE);
+    path_finish(trace, begun, hit, stream, stats)
+}
+
+/// A path sample up to its first ray: the floor's direct light (when the
+/// sample includes it) and the ray that leaves the floor, if any bounce is
+/// allowed. The render loop traces four of these rays at once.
+#[derive(Clone, Copy)]
+pub(crate) struct Begun {
+    pub fluence: Rgb,
+    pub ray: Option<Ray>,
+}
+
+/// The first part of [`path_sample`]: draws from `stream` exactly what
+/// `path_sample` draws before its first ray.
+pub(crate) fn path_begin(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &mut Stats) -> Begun {
+    let fluence = if trace.floor_direct {
+        direct_light(
+            trace.scene,
+            p,
+            Receiver::FLOOR,
+            trace.shadows,
+            stream,
+            stats,
+        )
+    } else {
+        Rgb::ZERO
+    };
+    // The floor sees the whole circle: a uniform direction, weight 2pi.
+    let ray = (trace.bounces > 0).then(|| Ray::new(p, uniform_circle(stream)));
+    Begun { fluence, ray }
+}
+
+/// The rest of [`path_sample`], given where its first ray (from
+/// `path_begin`) meets the walls.
+pub(crate) fn path_finish(
+    trace: &Trace,
+    begun: Begun,
+    first_hit: Option<(u32, Hit)>,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
     let Trace {
         scene,
         bounces,
         integrator,
-        floor_direct,
         memo,
         shadows,
         mirror_emission,
         force,
+        ..
     } = *trace;
-    let mut fluence = if floor_direct {
-        direct_light(scene, p, Receiver::FLOOR, shadows, stream, stats)
-    } else {
-        Rgb::ZERO
-    };
-    if bounces == 0 {
+    let mut fluence = begun.fluence;
+    let Some(mut ray) = begun.ray else {
         return fluence;
-    }
-
-    // The floor sees the whole circle: a uniform direction, weight 2pi.
+    };
+    let mut first_hit = Some(first_hit);
     let mut throughput = Rgb::splat(TAU);
-    let mut ray = Ray::new(p, uniform_circle(stream));
     let mut skip = Skip::NONE;
     let mut bounce = 0;
     // After a mirror the path can carry light from a line light that no
@@ -53,7 +96,10 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
 
     loop {
         stats.bounce_rays += 1;
-        let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
+        let hit = match first_hit.take() {
+            Some(hit) => hit,
+            None => scene.segments.closest_hit(&ray, f64::INFINITY, skip),
+        };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
         if mirror_emission && (after_mirror || force) {
             stats.emission_tests += 1;

@@ -1,16 +1,17 @@
 //! The render loop, written once: tiles in parallel, then pixels, then
 //! samples. Integrators only say how one sample is estimated.
 
-use flatray_geometry::DVec2;
+use flatray_geometry::{DVec2, Skip};
 use rayon::prelude::*;
 
 use flatray_cache::WallMemo;
 
-use crate::light::{Receiver, direct_light};
+use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
+use crate::light::{Receiver, Visibility, direct_light_with};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
-use crate::path::{Trace, path_sample};
+use crate::path::{Begun, Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
-use crate::sampling::Stream;
+use crate::sampling::{Stream, StreamKey};
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
@@ -125,10 +126,14 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             &mut memo_stats,
         )
     });
+    let coherence = (plan.floor_memo && plan.shadows && options.memo.floor_coherence)
+        .then(|| FloorCoherence::build(scene, (width, height)))
+        .flatten();
     let context = Context {
         options,
         size: (width, height),
         floor_memo: plan.floor_memo,
+        coherence: coherence.as_ref(),
         trace: trace_for(scene, options, &plan, memo.as_ref()),
     };
     let tiles_x = width.div_ceil(TILE);
@@ -185,6 +190,8 @@ struct Context<'a> {
     size: (u32, u32),
     /// Whether the floor's direct light is estimated once per pixel.
     floor_memo: bool,
+    /// Where that estimate's strata can share their shadow rays.
+    coherence: Option<&'a FloorCoherence>,
     trace: Trace<'a>,
 }
 
@@ -221,22 +228,51 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
         options,
         size,
         floor_memo,
+        coherence,
         ref trace,
     } = *context;
     let scene = trace.scene;
-    let pixel = Pixel::new(scene, size, x, y);
-    let (step, pixel_index) = (pixel.step, pixel.index);
+    let pixel = Pixel::new(scene, size, x, y, options.seed);
+    let step = pixel.step;
     let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
     let mut direct = Rgb::ZERO;
     if floor_memo {
         let grid = floor_grid(&options.memo, options.samples);
+        // Each light's transmittance where the whole pixel shares it.
+        let centre = corner + 0.5 * step;
+        let visibility: Vec<Visibility> = match coherence {
+            Some(coherence) => coherence
+                .pixel(x, y)
+                .iter()
+                .enumerate()
+                .map(|(light, state)| match state {
+                    Coherence::Varies => Visibility::Trace,
+                    Coherence::Same => {
+                        stats.floor_shared_visibility += 1;
+                        Visibility::Known(centre_transmittance(scene, light, centre, stats))
+                    }
+                    Coherence::Clear => {
+                        stats.floor_shared_visibility += 1;
+                        Visibility::Known(Rgb::ONE)
+                    }
+                })
+                .collect(),
+            None => vec![Visibility::of(trace.shadows); scene.lights.len()],
+        };
         let mut sum = Rgb::ZERO;
         for k in 0..grid * grid {
-            let mut stream = Stream::new(options.seed, pixel_index, FLOOR_STREAMS + k as u64);
+            let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
             let cell = DVec2::new((k % grid) as f64, (k / grid) as f64);
             let jitter = (cell + DVec2::new(stream.uniform(), stream.uniform())) / grid as f64;
             let p = corner + jitter * step;
-            let value = direct_light(scene, p, Receiver::FLOOR, trace.shadows, &mut stream, stats);
+            let value = direct_light_with(
+                scene,
+                p,
+                Receiver::FLOOR,
+                |light| visibility[light],
+                &mut stream,
+                stats,
+            );
             if value.is_finite() {
                 sum += value;
             } else {
@@ -247,13 +283,22 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
         stats.floor_memo_reuses += options.samples as u64;
     }
     let mut sum = Rgb::ZERO;
-    for sample in 0..options.samples {
-        let value = sample_with(context, &pixel, sample, stats);
+    let mut add = |value: Rgb, sample: u32, stats: &mut Stats| {
         if value.is_finite() {
             sum += value;
         } else {
             stats.record_nonfinite(x, y, sample);
         }
+    };
+    let quads = options.samples / 4;
+    for quad in 0..quads {
+        let values = four_samples(context, &pixel, 4 * quad, stats);
+        for (k, value) in values.into_iter().enumerate() {
+            add(value, 4 * quad + k as u32, stats);
+        }
+    }
+    for sample in 4 * quads..options.samples {
+        add(sample_with(context, &pixel, sample, stats), sample, stats);
     }
     let mean = direct + sum / options.samples.max(1) as f64;
     let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
@@ -261,19 +306,20 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
     [value.x as f32, value.y as f32, value.z as f32]
 }
 
-/// A pixel's position, stream index and size, computed once for all its
+/// A pixel's position, stream key and size, computed once for all its
 /// samples.
 struct Pixel {
     position: DVec2,
-    index: u64,
+    key: StreamKey,
     step: DVec2,
 }
 
 impl Pixel {
-    fn new(scene: &Scene, size: (u32, u32), x: u32, y: u32) -> Pixel {
+    fn new(scene: &Scene, size: (u32, u32), x: u32, y: u32, seed: u64) -> Pixel {
+        let index = y as u64 * size.0 as u64 + x as u64;
         Pixel {
             position: DVec2::new(x as f64, y as f64),
-            index: y as u64 * size.0 as u64 + x as u64,
+            key: StreamKey::new(seed, index),
             step: pixel_size(scene, size),
         }
     }
@@ -282,15 +328,39 @@ impl Pixel {
 /// One sample of a pixel: the receiver is jittered uniformly inside the
 /// pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
 fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats) -> Rgb {
-    let Context {
-        options, ref trace, ..
-    } = *context;
+    let trace = &context.trace;
     let scene = trace.scene;
-    let mut stream = Stream::new(options.seed, pixel.index, sample as u64);
+    let mut stream = pixel.key.stream(sample as u64);
     let jitter = DVec2::new(stream.uniform(), stream.uniform());
     let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
     stats.camera_samples += 1;
     path_sample(trace, p, &mut stream, stats)
+}
+
+/// Samples `first..first + 4` of a pixel, exactly as four calls of
+/// [`sample_with`] make them, with their first rays traced together.
+fn four_samples(context: &Context, pixel: &Pixel, first: u32, stats: &mut Stats) -> [Rgb; 4] {
+    let trace = &context.trace;
+    let scene = trace.scene;
+    let mut streams: [Stream; 4] =
+        std::array::from_fn(|k| pixel.key.stream((first + k as u32) as u64));
+    let begun: [Begun; 4] = std::array::from_fn(|k| {
+        let stream = &mut streams[k];
+        let jitter = DVec2::new(stream.uniform(), stream.uniform());
+        let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
+        stats.camera_samples += 1;
+        path_begin(trace, p, stream, stats)
+    });
+    let hits = match begun.map(|b| b.ray) {
+        [Some(a), Some(b), Some(c), Some(d)] => {
+            scene
+                .segments
+                .closest_hits(&[a, b, c, d], f64::INFINITY, [Skip::NONE; 4])
+        }
+        // No bounce: no ray to trace.
+        _ => [None; 4],
+    };
+    std::array::from_fn(|k| path_finish(trace, begun[k], hits[k], &mut streams[k], stats))
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of
@@ -317,7 +387,13 @@ pub fn pixel_sample(
         options: &options,
         size,
         floor_memo: false,
+        coherence: None,
         trace: trace_for(scene, &options, &plan, None),
     };
-    sample_with(&context, &Pixel::new(scene, size, x, y), sample, stats)
+    sample_with(
+        &context,
+        &Pixel::new(scene, size, x, y, options.seed),
+        sample,
+        stats,
+    )
 }

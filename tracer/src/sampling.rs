@@ -18,14 +18,34 @@ impl Stream {
     /// The stream keyed by `(seed, index, sample)`, where `index` is the
     /// pixel (or light path) index.
     pub fn new(seed: u64, index: u64, sample: u64) -> Stream {
-        let key = mix(mix(mix(seed) ^ index) ^ sample.rotate_left(29));
-        Stream(Xoshiro256PlusPlus::seed_from_u64(key))
+        StreamKey::new(seed, index).stream(sample)
     }
 
     /// A uniform number in `[0, 1)`.
     #[inline]
     pub fn uniform(&mut self) -> f64 {
         self.0.random::<f64>()
+    }
+}
+
+/// The part of a stream's key shared by all samples of one pixel (or light
+/// path): computed once per pixel, it leaves one mix per sample.
+#[derive(Clone, Copy, Debug)]
+pub struct StreamKey(u64);
+
+impl StreamKey {
+    #[inline]
+    pub fn new(seed: u64, index: u64) -> StreamKey {
+        StreamKey(mix(mix(seed) ^ index))
+    }
+
+    /// The stream of sample `sample`: the same as `Stream::new(seed,
+    /// index, sample)`.
+    #[inline]
+    pub fn stream(self, sample: u64) -> Stream {
+        Stream(Xoshiro256PlusPlus::seed_from_u64(mix(
+            self.0 ^ sample.rotate_left(29)
+        )))
     }
 }
 

@@ -31,6 +31,9 @@ pub struct Stats {
     pub memo_lookups: u64,
     /// Path samples that reused their pixel's memoised direct light.
     pub floor_memo_reuses: u64,
+    /// (pixel, light) pairs of the floor memo whose strata shared one
+    /// visibility (one shadow ray, or none for a clear line light).
+    pub floor_shared_visibility: u64,
     /// Reflections off mirrors.
     pub mirror_reflections: u64,
     /// Passes of a path through a transparent wall.
@@ -69,6 +72,7 @@ impl Stats {
         self.memo_fill_rays += other.memo_fill_rays;
         self.memo_lookups += other.memo_lookups;
         self.floor_memo_reuses += other.floor_memo_reuses;
+        self.floor_shared_visibility += other.floor_shared_visibility;
         self.mirror_reflections += other.mirror_reflections;
         self.transparent_passes += other.transparent_passes;
         self.floor_albedo_reads += other.floor_albedo_reads;
@@ -109,6 +113,7 @@ impl fmt::Display for Stats {
         writeln!(f, "  fill rays        {:>14}", self.memo_fill_rays)?;
         writeln!(f, "  wall hits        {:>14}", self.memo_lookups)?;
         writeln!(f, "  floor reuses     {:>14}", self.floor_memo_reuses)?;
+        writeln!(f, "  floor shared     {:>14}", self.floor_shared_visibility)?;
         write!(f, "non-finite samples {:>14}", self.nonfinite_samples)?;
         if let Some((x, y, s)) = self.first_nonfinite {
             write!(f, " (first: pixel ({x}, {y}), sample {s})")?;

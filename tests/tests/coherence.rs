@@ -1,0 +1,109 @@
+//! The floor memo's coherence masks (`tracer/src/coherence.rs`) let the
+//! strata of a pixel share one shadow ray per light where no wall or shadow
+//! edge passes near it. They must change nothing but the ray count: every
+//! image here is bit-identical with them on and off.
+
+use flatray_tests::{render, scene, workspace_root};
+use flatray_tracer::{MemoOptions, RenderOptions, Scene, Stats};
+
+fn image_and_stats(
+    scene: &Scene,
+    options: &RenderOptions,
+    coherence: bool,
+) -> (flatray_tracer::Image, Stats) {
+    let options = RenderOptions {
+        memo: MemoOptions {
+            floor_coherence: coherence,
+            ..options.memo
+        },
+        ..*options
+    };
+    let rendered = render(scene, &options);
+    (rendered.image, rendered.stats)
+}
+
+/// Renders with and without the masks; returns how many (pixel, light)
+/// pairs shared their visibility.
+fn assert_same_image(name: &str, scene: &Scene, options: &RenderOptions) -> u64 {
+    let (with, with_stats) = image_and_stats(scene, options, true);
+    let (without, without_stats) = image_and_stats(scene, options, false);
+    assert!(with == without, "{name}: the masks changed the image");
+    assert_eq!(without_stats.floor_shared_visibility, 0);
+    assert!(
+        with_stats.shadow_rays <= without_stats.shadow_rays,
+        "{name}"
+    );
+    with_stats.floor_shared_visibility
+}
+
+#[test]
+fn the_example_scenes_render_the_same_with_fewer_shadow_rays() {
+    for name in ["room", "colour-bleed", "soft-shadow", "lens", "prism"] {
+        let loaded =
+            flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
+        let options = RenderOptions {
+            samples: 16,
+            scale: 0.25,
+            ..loaded.options
+        };
+        if options.integrator == flatray_tracer::Integrator::Light {
+            continue;
+        }
+        let shared = assert_same_image(name, &loaded.scene, &options);
+        // Most of the rooms' floor is far from every shadow edge (the soft
+        // shadow's occluders cut the line light off nearly everywhere).
+        if name == "room" || name == "colour-bleed" {
+            assert!(shared > 0, "{name}: nothing shared");
+        }
+    }
+}
+
+/// Configurations where a mask could be wrong: lights on walls and on wall
+/// ends, walls through a light's line and touching its ends, transparent
+/// walls (tints multiply), a sun, a spot, a light just off a wall, thin
+/// slits, and coordinates far outside the canvas.
+const HARD: &[&str] = &[
+    // A point light on a wall's end, one on a wall's middle, a line light
+    // sharing an end with a wall.
+    "Scene(canvas: (60, 40), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (10, 10), b: (50, 10)), Wall(a: (30, 10), b: (30, 35), material: Transparent(tint: (0.5, 0.9, 0.7))),
+                Wall(a: (5, 30), b: (20, 20))],
+        lights: [Point(at: (10, 10), intensity: 5.0), Point(at: (40, 10), intensity: 5.0),
+                 Line(a: (20, 20), b: (25, 30), intensity: 1.0)])",
+    // A solid line light (it is also a wall), a sun and a spot.
+    "Scene(canvas: (60, 40), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (15, 5), b: (15, 25)), Wall(a: (35, 12), b: (45, 30), material: Mirror())],
+        lights: [Line(a: (50, 5), b: (58, 5), intensity: 2.0, solid: true),
+                 Directional(direction: (0.3, 1.0), intensity: 1.0),
+                 Spot(at: (5, 35), direction: (1, -1), cone: 0.6, softness: 0.2, intensity: 5.0)])",
+    // A light a hair off a wall, and a slit narrower than a pixel.
+    "Scene(canvas: (60, 40), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (20, 0), b: (20, 19.8)), Wall(a: (20, 20.1), b: (20, 40)), Wall(a: (40, 5), b: (40, 30))],
+        lights: [Point(at: (10, 20), intensity: 5.0), Point(at: (40.000000000001, 15), intensity: 5.0),
+                 Line(a: (5, 2), b: (5, 38), intensity: 0.5)])",
+    // Walls from far outside the canvas, crossing it (not diffuse: the
+    // wall memo would bin them at every unit of their length).
+    "Scene(canvas: (60, 40), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (-1e9, -1e9), b: (1e9, 1e9), material: Transparent(tint: (0.5, 0.5, 0.5))),
+                Wall(a: (-3e7, 30), b: (25, 30), material: Mirror())],
+        lights: [Point(at: (45, 10), intensity: 5.0), Line(a: (10, 5), b: (20, 8), intensity: 1.0)])",
+];
+
+#[test]
+fn hard_configurations_render_the_same() {
+    for (k, text) in HARD.iter().enumerate() {
+        let loaded = scene(text);
+        for scale in [1.0, 0.37] {
+            let options = RenderOptions {
+                samples: 16,
+                scale,
+                ..loaded.options
+            };
+            assert_same_image(
+                &format!("hard scene {k} at {scale}"),
+                &loaded.scene,
+                &options,
+            );
+        }
+    }
+}

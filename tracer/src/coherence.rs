@@ -1,0 +1,314 @@
+//! Where a light's visibility cannot change across a pixel of the floor,
+//! so that the floor memo's strata there share one shadow ray (or need
+//! none).
+//!
+//! Which walls a shadow ray from floor point `x` to a point light crosses
+//! changes only where `x` crosses a wall or a shadow edge: the ray from
+//! the light through a wall's endpoint, beyond it. For a line light, the
+//! walls that cut the triangle from `x` to the light change only where `x`
+//! crosses a wall, a ray from either end of the light through a wall's
+//! endpoint, or the light's own line. Every such boundary is drawn into a
+//! per-light mask of pixels, widened by a pixel on each side, so that a
+//! pixel left unmarked lies at least a fraction of a pixel from every
+//! boundary, far beyond any rounding. In an unmarked pixel:
+//!
+//! - a point, spot or directional light's transmittance is the same for
+//!   every stratum: one shadow ray from the pixel's centre gives it, the
+//!   very product of tints each stratum's own ray would give (same walls,
+//!   same order), so the image is bit-identical;
+//! - a line light is either cut by some wall for every stratum (its rays
+//!   are traced) or for none: then every transmittance is exactly 1 and no
+//!   ray is cast.
+//!
+//! Scenes with more wall-light pairs than [`MAX_PAIRS`] skip this (every
+//! pixel traces), since drawing their boundaries would cost more than it
+//! saves.
+
+use flatray_geometry::{DVec2, Ray, Segment, Skip};
+
+use crate::scene::{LightShape, Scene};
+use crate::{Rgb, Stats};
+
+/// Above this many (wall, light) pairs every pixel traces its strata.
+pub const MAX_PAIRS: usize = 4096;
+
+/// What the strata of one pixel need for one light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Coherence {
+    /// A boundary passes near: every stratum casts its own shadow ray.
+    Varies,
+    /// The same transmittance everywhere in the pixel: one shadow ray.
+    Same,
+    /// A line light that no wall cuts off anywhere in the pixel.
+    Clear,
+}
+
+/// Per pixel and light, a [`Coherence`].
+pub(crate) struct FloorCoherence {
+    width: usize,
+    lights: usize,
+    cells: Vec<Coherence>,
+}
+
+impl FloorCoherence {
+    /// The masks for `scene` rendered at `size` pixels, or `None` when the
+    /// scene is too large for them to pay (see [`MAX_PAIRS`]).
+    pub fn build(scene: &Scene, size: (u32, u32)) -> Option<FloorCoherence> {
+        let lights = scene.lights.len();
+        if lights == 0 || scene.walls.len() * lights > MAX_PAIRS {
+            return None;
+        }
+        let (width, height) = (size.0 as usize, size.1 as usize);
+        let step = DVec2::new(
+            scene.canvas.width as f64 / size.0 as f64,
+            scene.canvas.height as f64 / size.1 as f64,
+        );
+        let to_pixels = |p: DVec2| (p - scene.canvas.origin) / step;
+        let mut cells = vec![Coherence::Varies; width * height * lights];
+        for (index, light) in scene.lights.iter().enumerate() {
+            let mut mask = Mask::new(width, height);
+            let own = scene.light_wall[index];
+            let walls = || {
+                scene
+                    .walls
+                    .iter()
+                    .enumerate()
+                    .filter(move |(i, _)| own != Some(*i as u32))
+                    .map(|(_, w)| w.segment)
+            };
+            let mut complete = true;
+            for wall in walls() {
+                let (a, b) = (to_pixels(wall.a), to_pixels(wall.b));
+                mask.mark(a, b - a, 0.0, 1.0);
+                for end in [wall.a, wall.b] {
+                    let e = to_pixels(end);
+                    match light.shape {
+                        LightShape::Point { at } | LightShape::Spot { at, .. } => {
+                            // A wall that all but touches the light leaves
+                            // its shadow rays' `t < 1` test to rounding.
+                            complete &= !near(at, &wall);
+                            mask.mark(e, e - to_pixels(at), 0.0, f64::INFINITY);
+                        }
+                        LightShape::Directional { direction } => {
+                            mask.mark(e, direction / step, 0.0, f64::INFINITY);
+                        }
+                        LightShape::Line { segment, .. } => {
+                            // A wall that touches an end of the light cuts
+                            // every triangle: the centre test below says
+                            // so, and no boundary is needed.
+                            for light_end in [segment.a, segment.b] {
+                                let away = e - to_pixels(light_end);
+                                if away != DVec2::ZERO {
+                                    mask.mark(e, away, 0.0, f64::INFINITY);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            if let LightShape::Line { segment, .. } = light.shape {
+                let (a, b) = (to_pixels(segment.a), to_pixels(segment.b));
+                mask.mark(a, b - a, f64::NEG_INFINITY, f64::INFINITY);
+            }
+            if let LightShape::Point { at } | LightShape::Spot { at, .. } = light.shape {
+                // The light's own pixel, where no direction is defined.
+                let p = to_pixels(at);
+                mask.mark(p, DVec2::ZERO, 0.0, 0.0);
+            }
+            if !complete || mask.overflow {
+                continue;
+            }
+            for y in 0..height {
+                for x in 0..width {
+                    if mask.marked[y * width + x] {
+                        continue;
+                    }
+                    let state = match light.shape {
+                        LightShape::Line { segment, .. } => {
+                            let centre =
+                                scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
+                            if walls().any(|w| cuts_triangle(&w, centre, &segment)) {
+                                Coherence::Varies
+                            } else {
+                                Coherence::Clear
+                            }
+                        }
+                        _ => Coherence::Same,
+                    };
+                    cells[(y * width + x) * lights + index] = state;
+                }
+            }
+        }
+        Some(FloorCoherence {
+            width,
+            lights,
+            cells,
+        })
+    }
+
+    /// What pixel `(x, y)` needs for each light, in light order.
+    #[inline]
+    pub fn pixel(&self, x: u32, y: u32) -> &[Coherence] {
+        let first = (y as usize * self.width + x as usize) * self.lights;
+        &self.cells[first..first + self.lights]
+    }
+}
+
+/// Pixels a boundary passes near.
+struct Mask {
+    width: usize,
+    height: usize,
+    marked: Vec<bool>,
+    /// A boundary could not be drawn (not finite): trust no pixel.
+    overflow: bool,
+}
+
+impl Mask {
+    fn new(width: usize, height: usize) -> Mask {
+        Mask {
+            width,
+            height,
+            marked: vec![false; width * height],
+            overflow: false,
+        }
+    }
+
+    /// Marks every pixel within about a pixel of `o + t d` for `t` in
+    /// `[t0, t1]` (in pixel coordinates), clipped to the image.
+    fn mark(&mut self, o: DVec2, d: DVec2, t0: f64, t1: f64) {
+        if !(o.is_finite() && d.is_finite()) {
+            self.overflow = true;
+            return;
+        }
+        let lo = DVec2::splat(-2.0);
+        let hi = DVec2::new(self.width as f64, self.height as f64) + 2.0;
+        let Some((t0, t1)) = clip(o, d, t0, t1, lo, hi) else {
+            return;
+        };
+        let length = d.length() * (t1 - t0);
+        if !length.is_finite() {
+            self.overflow = true;
+            return;
+        }
+        // Steps of at most half a pixel; the 3 x 3 stamp covers the gaps.
+        let steps = (length * 2.0).ceil() as usize + 1;
+        for k in 0..=steps {
+            let t = t0 + (t1 - t0) * (k as f64 / steps as f64);
+            let p = o + d * t;
+            let (cx, cy) = (p.x.floor() as i64, p.y.floor() as i64);
+            for y in cy - 1..=cy + 1 {
+                for x in cx - 1..=cx + 1 {
+                    if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
+                        self.marked[y as usize * self.width + x as usize] = true;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The part `[t0, t1]` of the line `o + t d` inside the box `[lo, hi]`
+/// (Liang-Barsky), if any.
+fn clip(o: DVec2, d: DVec2, mut t0: f64, mut t1: f64, lo: DVec2, hi: DVec2) -> Option<(f64, f64)> {
+    for (p, q) in [
+        (-d.x, o.x - lo.x),
+        (d.x, hi.x - o.x),
+        (-d.y, o.y - lo.y),
+        (d.y, hi.y - o.y),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+}
+
+/// Whether `p` lies within rounding distance of `segment`: about 1e-9 of
+/// the coordinates' magnitude, a million times what rounding can move a
+/// computed point.
+fn near(p: DVec2, segment: &Segment) -> bool {
+    let scale = 1.0
+        + p.abs()
+            .max(segment.a.abs())
+            .max(segment.b.abs())
+            .max_element();
+    let e = segment.b - segment.a;
+    let t = ((p - segment.a).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+    let d = (segment.a + e * t).distance(p);
+    // A NaN distance (a degenerate segment) counts as near.
+    d.is_nan() || d <= 1e-9 * scale
+}
+
+/// Whether `wall` meets the closed triangle of `x` and `light`'s ends, or
+/// comes within rounding distance of the light (so that its rays' `t < 1`
+/// test could go either way).
+fn cuts_triangle(wall: &Segment, x: DVec2, light: &Segment) -> bool {
+    if near(light.a, wall) || near(light.b, wall) || near(wall.a, light) || near(wall.b, light) {
+        return true;
+    }
+    let corners = [x, light.a, light.b];
+    let inside = |p: DVec2| {
+        let s: [f64; 3] = std::array::from_fn(|k| {
+            flatray_geometry::cross(corners[(k + 1) % 3] - corners[k], p - corners[k])
+        });
+        s.iter().all(|&v| v >= 0.0) || s.iter().all(|&v| v <= 0.0)
+    };
+    inside(wall.a)
+        || inside(wall.b)
+        || (0..3).any(|k| segments_meet(wall.a, wall.b, corners[k], corners[(k + 1) % 3]))
+}
+
+/// Whether closed segments `p q` and `r s` share a point.
+fn segments_meet(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
+    use flatray_geometry::cross;
+    let d1 = cross(q - p, r - p);
+    let d2 = cross(q - p, s - p);
+    let d3 = cross(s - r, p - r);
+    let d4 = cross(s - r, q - r);
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    let on = |a: DVec2, b: DVec2, c: DVec2, side: f64| {
+        side == 0.0
+            && c.x >= a.x.min(b.x)
+            && c.x <= a.x.max(b.x)
+            && c.y >= a.y.min(b.y)
+            && c.y <= a.y.max(b.y)
+    };
+    on(p, q, r, d1) || on(p, q, s, d2) || on(r, s, p, d3) || on(r, s, q, d4)
+}
+
+/// The transmittance from the centre of pixel `(x, y)` to point, spot or
+/// directional light `index`: what every stratum of a `Same` pixel gets.
+pub(crate) fn centre_transmittance(
+    scene: &Scene,
+    index: usize,
+    centre: DVec2,
+    stats: &mut Stats,
+) -> Rgb {
+    let skip = Skip(u32::MAX, scene.light_wall[index].unwrap_or(u32::MAX));
+    match scene.lights[index].shape {
+        LightShape::Point { at } | LightShape::Spot { at, .. } => {
+            crate::light::transmittance(scene, &Ray::new(centre, at - centre), 1.0, skip, stats)
+        }
+        LightShape::Directional { direction } => crate::light::transmittance(
+            scene,
+            &Ray::new(centre, -direction),
+            f64::INFINITY,
+            Skip::NONE,
+            stats,
+        ),
+        LightShape::Line { .. } => Rgb::ONE,
+    }
+}
