@@ -1,6 +1,8 @@
 //! Criterion benchmarks of flatray: ray queries against the room and
-//! against mazes of 1k to 100k walls (brute force and BVH), and the room
-//! rendered end to end at a reduced size, with the memo on and off.
+//! against mazes of 1k to 100k walls (brute force with each kernel, and
+//! BVH), four rays at a time, where the BVH starts to pay, and the room
+//! rendered end to end at a reduced size with the memo on and off (in rays
+//! per second).
 //!
 //! Run: `cargo bench -p flatray-benches` (all), or with a filter, e.g.
 //! `cargo bench -p flatray-benches -- closest_hit`.
@@ -140,8 +142,10 @@ fn room_render(c: &mut Criterion) {
             },
             ..loaded.options
         };
-        let samples = 100 * 100 * 32u64;
-        group.throughput(Throughput::Elements(samples));
+        // Throughput in rays (shadow, bounce and memo-filling rays), so that
+        // criterion reports rays per second of a whole render.
+        let stats = flatray_tracer::render(&loaded.scene, &options, &|_| {}).stats;
+        group.throughput(Throughput::Elements(stats.rays() + stats.memo_fill_rays));
         group.bench_function(
             BenchmarkId::new("memo", if memo { "on" } else { "off" }),
             |b| b.iter(|| flatray_tracer::render(&loaded.scene, &options, &|_| {})),

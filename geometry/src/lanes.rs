@@ -315,21 +315,15 @@ mod avx {
         let sa = _mm256_sub_pd(_mm256_mul_pd(w.dx, pay), _mm256_mul_pd(w.dy, pax));
         let sb = _mm256_sub_pd(_mm256_mul_pd(w.dx, pby), _mm256_mul_pd(w.dy, pbx));
         let both = |p: __m256d, q: __m256d| _mm256_and_pd(p, q);
-        let same_side = _mm256_or_pd(
-            _mm256_or_pd(
-                both(
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(sa, zero),
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(sb, zero),
-                ),
-                both(
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(sa, zero),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(sb, zero),
-                ),
-            ),
+        // The crossing rule, as in `closest4_with`.
+        let lo = _mm256_min_pd(sa, sb);
+        let hi = _mm256_max_pd(sa, sb);
+        let crosses = both(
             both(
-                _mm256_cmp_pd::<_CMP_EQ_OQ>(sa, zero),
-                _mm256_cmp_pd::<_CMP_EQ_OQ>(sb, zero),
+                _mm256_cmp_pd::<_CMP_LE_OQ>(lo, zero),
+                _mm256_cmp_pd::<_CMP_GE_OQ>(hi, zero),
             ),
+            _mm256_cmp_pd::<_CMP_NEQ_OQ>(lo, hi),
         );
         let num = _mm256_sub_pd(
             _mm256_mul_pd(pax, load(&l.ey, slot)),
@@ -350,7 +344,7 @@ mod avx {
             sa,
             sb,
             id,
-            ok: _mm256_andnot_pd(same_side, both(in_range, not_skipped)),
+            ok: both(crosses, both(in_range, not_skipped)),
         }
     }
 
@@ -384,16 +378,12 @@ mod avx {
         let mut slot = slots.start;
         while slot < slots.end {
             let b = block(l, &w, slot);
-            let nearer = _mm256_or_pd(
-                _mm256_cmp_pd::<_CMP_LT_OQ>(b.t, bt),
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_EQ_OQ>(b.t, bt),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(b.id, bi),
-                ),
-            );
-            // No branch: which lanes improve is as unpredictable as the
-            // scalar kernel's branches were.
-            let take = _mm256_and_pd(b.ok, nearer);
+            // Each lane meets its slots in index order, so a tie never
+            // goes to the later one: `t < bt` keeps the lower index. (The
+            // reduction below compares indices across lanes.) No branch:
+            // which lanes improve is as unpredictable as the scalar
+            // kernel's branches were.
+            let take = _mm256_and_pd(b.ok, _mm256_cmp_pd::<_CMP_LT_OQ>(b.t, bt));
             bt = _mm256_blendv_pd(bt, b.t, take);
             bi = _mm256_blendv_pd(bi, b.id, take);
             let here = _mm256_add_pd(_mm256_set1_pd(slot as f64), lane_offsets);
@@ -435,6 +425,25 @@ mod avx {
         t_max: f64,
         skips: [Skip; 4],
     ) -> [Best; 4] {
+        if skips == [Skip::NONE; 4] {
+            closest4_with::<false>(l, rays, t_max, skips)
+        } else {
+            closest4_with::<true>(l, rays, t_max, skips)
+        }
+    }
+
+    /// `closest4`, testing the skips only when `SKIPS`. The slots are in
+    /// index order (brute force), so a later segment at the same `t` never
+    /// wins a tie: `t < best` alone keeps the lower index, and `best`
+    /// starts at `t_max`, so it also bounds `t`.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn closest4_with<const SKIPS: bool>(
+        l: &Lanes,
+        rays: &[Ray; 4],
+        t_max: f64,
+        skips: [Skip; 4],
+    ) -> [Best; 4] {
         let lane = |f: &dyn Fn(usize) -> f64| _mm256_set_pd(f(3), f(2), f(1), f(0));
         let ox = lane(&|k| rays[k].origin.x);
         let oy = lane(&|k| rays[k].origin.y);
@@ -443,11 +452,9 @@ mod avx {
         let skip0 = lane(&|k| skips[k].0 as f64);
         let skip1 = lane(&|k| skips[k].1 as f64);
         let zero = _mm256_setzero_pd();
-        let t_max = _mm256_set1_pd(t_max);
-        let mut bt = t_max;
+        let mut bt = _mm256_set1_pd(t_max);
         let mut bi = _mm256_set1_pd(u32::MAX as f64);
         let (mut bsa, mut bsb) = (zero, zero);
-        let both = |p: __m256d, q: __m256d| _mm256_and_pd(p, q);
         // The real segments only: padding would cost a division per lane.
         let n = l.len;
         let (ax, ay, bx, by) = (&l.ax[..n], &l.ay[..n], &l.bx[..n], &l.by[..n]);
@@ -459,49 +466,42 @@ mod avx {
             let pby = _mm256_sub_pd(_mm256_set1_pd(by[slot]), oy);
             let sa = _mm256_sub_pd(_mm256_mul_pd(dx, pay), _mm256_mul_pd(dy, pax));
             let sb = _mm256_sub_pd(_mm256_mul_pd(dx, pby), _mm256_mul_pd(dy, pbx));
-            let same_side = _mm256_or_pd(
-                _mm256_or_pd(
-                    both(
-                        _mm256_cmp_pd::<_CMP_GT_OQ>(sa, zero),
-                        _mm256_cmp_pd::<_CMP_GT_OQ>(sb, zero),
-                    ),
-                    both(
-                        _mm256_cmp_pd::<_CMP_LT_OQ>(sa, zero),
-                        _mm256_cmp_pd::<_CMP_LT_OQ>(sb, zero),
-                    ),
+            // The crossing rule: not both > 0, not both < 0, not both 0.
+            // With lo = min and hi = max of the two: lo <= 0 <= hi, and
+            // lo != hi (equal only when both are 0; -0 counts as 0). A NaN
+            // side makes a NaN `t`, which the `t > 0` test rejects, as in
+            // the scalar kernel.
+            let lo = _mm256_min_pd(sa, sb);
+            let hi = _mm256_max_pd(sa, sb);
+            let crosses = _mm256_and_pd(
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_LE_OQ>(lo, zero),
+                    _mm256_cmp_pd::<_CMP_GE_OQ>(hi, zero),
                 ),
-                both(
-                    _mm256_cmp_pd::<_CMP_EQ_OQ>(sa, zero),
-                    _mm256_cmp_pd::<_CMP_EQ_OQ>(sb, zero),
-                ),
+                _mm256_cmp_pd::<_CMP_NEQ_OQ>(lo, hi),
             );
             let num = _mm256_sub_pd(
                 _mm256_mul_pd(pax, _mm256_set1_pd(ey[slot])),
                 _mm256_mul_pd(pay, _mm256_set1_pd(ex[slot])),
             );
             let t = _mm256_div_pd(num, _mm256_sub_pd(sb, sa));
+            let mut take = _mm256_and_pd(
+                crosses,
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(t, zero),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(t, bt),
+                ),
+            );
             let id = _mm256_set1_pd(ids[slot]);
-            let ok = _mm256_andnot_pd(
-                same_side,
-                both(
-                    both(
-                        _mm256_cmp_pd::<_CMP_GT_OQ>(t, zero),
-                        _mm256_cmp_pd::<_CMP_LT_OQ>(t, t_max),
-                    ),
-                    both(
+            if SKIPS {
+                take = _mm256_and_pd(
+                    take,
+                    _mm256_and_pd(
                         _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, skip0),
                         _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, skip1),
                     ),
-                ),
-            );
-            let nearer = _mm256_or_pd(
-                _mm256_cmp_pd::<_CMP_LT_OQ>(t, bt),
-                both(
-                    _mm256_cmp_pd::<_CMP_EQ_OQ>(t, bt),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(id, bi),
-                ),
-            );
-            let take = both(ok, nearer);
+                );
+            }
             bt = _mm256_blendv_pd(bt, t, take);
             bi = _mm256_blendv_pd(bi, id, take);
             bsa = _mm256_blendv_pd(bsa, sa, take);

@@ -136,7 +136,8 @@ pub(crate) fn path_finish(
             fluence += throughput * line_emission(light, side, unfolded, scene.small_radius);
         }
 
-        let normal = wall.segment.normal_on(side);
+        // Computed where a branch needs it: a memo read does not.
+        let normal = || wall.segment.normal_on(side);
         match wall.material {
             Material::Transparent { tint } => {
                 stats.transparent_passes += 1;
@@ -156,7 +157,15 @@ pub(crate) fn path_finish(
                     break;
                 }
                 let event = interact(
-                    scene, body, inside, side, ray.dir, normal, &mut glass, stream, stats,
+                    scene,
+                    body,
+                    inside,
+                    side,
+                    ray.dir,
+                    normal(),
+                    &mut glass,
+                    stream,
+                    stats,
                 );
                 throughput *= event.colour * event.radiance_scale;
                 ray = Ray::new(x, event.dir);
@@ -177,7 +186,7 @@ pub(crate) fn path_finish(
                     stats.paths_absorbed += 1;
                     break;
                 }
-                ray = Ray::new(x, reflect(ray.dir, normal));
+                ray = Ray::new(x, reflect(ray.dir, normal()));
                 skip = Skip::one(index);
                 after_mirror = true;
             }
@@ -201,7 +210,7 @@ pub(crate) fn path_finish(
                     }
                     None => {
                         let receiver = Receiver {
-                            normal: Some(normal),
+                            normal: Some(normal()),
                             wall: Some(index),
                         };
                         direct_light(scene, x, receiver, shadows, stream, stats)
@@ -221,11 +230,11 @@ pub(crate) fn path_finish(
                     Integrator::Path | Integrator::Light => {
                         // BRDF rho/2 times cos over pdf cos/2: exactly rho.
                         throughput *= rho;
-                        cosine_half_circle(normal, stream.uniform())
+                        cosine_half_circle(normal(), stream.uniform())
                     }
                     Integrator::Original => {
                         // BRDF rho/2 times cos over pdf 1/pi.
-                        let (dir, cos) = uniform_half_circle(normal, stream.uniform());
+                        let (dir, cos) = uniform_half_circle(normal(), stream.uniform());
                         throughput *= rho * (0.5 * PI * cos);
                         dir
                     }
