@@ -141,6 +141,18 @@ impl SegmentSet {
         }
     }
 
+    /// How queries run, in words: "BVH", or "brute force" with its kernel.
+    /// It depends on the processor (AVX or not) as well as on the set.
+    pub fn describe(&self) -> String {
+        match (self.strategy(), self.kernel()) {
+            (Strategy::Bvh, _) => "BVH".into(),
+            (Strategy::BruteForce, Kernel::Avx) => {
+                "brute force with AVX, four segments or four rays at a time".into()
+            }
+            (Strategy::BruteForce, Kernel::Scalar) => "brute force, one segment at a time".into(),
+        }
+    }
+
     /// The kernel that tests blocks of segments in a brute-force set (a
     /// BVH tests its small leaves with the scalar kernel).
     #[inline]

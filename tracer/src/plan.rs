@@ -29,6 +29,9 @@ pub struct Plan {
     pub wall_memo: bool,
     /// The floor half of the memo: direct light once per pixel.
     pub floor_memo: bool,
+    /// The floor memo's strata share one shadow ray per light where no
+    /// shadow edge crosses their pixel (`coherence.rs`).
+    pub floor_coherence: bool,
     /// Every effect with its reason, in a fixed order, for printing.
     pub effects: Vec<Effect>,
 }
@@ -105,6 +108,11 @@ impl Plan {
         // that would change the image.
         let floor_memo =
             !tracing_light && indirect_possible && reflectors > 0 && options.memo.enabled;
+        let pairs = scene.walls.len() * scene.lights.len();
+        let floor_coherence = floor_memo
+            && shadows
+            && options.memo.floor_coherence
+            && pairs <= crate::coherence::MAX_PAIRS;
 
         let mut effects = Vec::new();
         let mut add =
@@ -251,6 +259,24 @@ impl Plan {
             },
         );
         add(
+            "memo: floor strata share shadow rays",
+            floor_coherence,
+            if !floor_memo {
+                "no floor memo".into()
+            } else if !shadows {
+                "no shadow rays".into()
+            } else if !options.memo.floor_coherence {
+                "switched off".into()
+            } else if pairs > crate::coherence::MAX_PAIRS {
+                format!(
+                    "{pairs} wall-light pairs, over {}: drawing the shadow edges would cost more than it saves",
+                    crate::coherence::MAX_PAIRS
+                )
+            } else {
+                "one shadow ray per light where no shadow edge crosses the pixel".into()
+            },
+        );
+        add(
             "point lights seen in mirrors or glass",
             tracing_light && indirect && specular > 0 && points + spots + suns > 0,
             if specular == 0 {
@@ -291,12 +317,26 @@ impl Plan {
                 n(dispersive, "dispersive glass body")
             },
         );
+        add(
+            "ray queries",
+            !scene.walls.is_empty(),
+            if scene.walls.is_empty() {
+                "no walls".into()
+            } else {
+                format!(
+                    "{}: {}",
+                    n(scene.walls.len(), "wall"),
+                    scene.segments().describe()
+                )
+            },
+        );
         Plan {
             shadows,
             indirect,
             mirror_emission,
             wall_memo,
             floor_memo,
+            floor_coherence,
             effects,
         }
     }

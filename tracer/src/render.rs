@@ -126,7 +126,8 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             &mut memo_stats,
         )
     });
-    let coherence = (plan.floor_memo && plan.shadows && options.memo.floor_coherence)
+    let coherence = plan
+        .floor_coherence
         .then(|| FloorCoherence::build(scene, (width, height)))
         .flatten();
     let context = Context {
