@@ -7,7 +7,9 @@
 //!
 //! What it never does: colour, randomness, files or threads. It knows
 //! nothing of materials or lights; a segment is identified by its index in
-//! a [`SegmentSet`], and callers attach meaning to that index.
+//! a [`SegmentSet`], and callers attach meaning to that index. Its only
+//! `unsafe` code is the AVX kernel in `lanes.rs`, run only where the
+//! processor reports AVX, and checked bit for bit against the scalar one.
 //!
 //! # The crossing rule
 //!

@@ -133,8 +133,16 @@ pub(crate) fn light_contribution(
                 }
                 Rgb::splat(light.intensity * light.falloff.g(0.0, r0))
             } else {
-                let dir = to / r;
-                let weight = receiver.cosine(dir) * light.spot_window(-dir);
+                // The floor under a point light needs no direction (its
+                // weight is exactly 1): spare the divisions.
+                let weight = if receiver.normal.is_none()
+                    && matches!(light.shape, LightShape::Point { .. })
+                {
+                    1.0
+                } else {
+                    let dir = to / r;
+                    receiver.cosine(dir) * light.spot_window(-dir)
+                };
                 if weight == 0.0 {
                     return Rgb::ZERO;
                 }
