@@ -151,9 +151,11 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             let y1 = (y0 + TILE).min(height);
             let mut stats = Stats::default();
             let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            // Reused by every pixel of the tile: no allocation per pixel.
+            let mut visibility = Vec::with_capacity(scene.lights.len());
             for y in y0..y1 {
                 for x in x0..x1 {
-                    pixels.push(render_pixel(&context, x, y, &mut stats));
+                    pixels.push(render_pixel(&context, x, y, &mut visibility, &mut stats));
                 }
             }
             progress(pixels.len() as u64 * options.samples as u64);
@@ -224,7 +226,13 @@ const FLOOR_STREAMS: u64 = 1 << 40;
 /// pixel over a stratified grid and every path sample reuses it; without,
 /// each sample estimates it anew. A sample whose estimate is not finite is
 /// left out and reported in `stats`.
-fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3] {
+fn render_pixel(
+    context: &Context,
+    x: u32,
+    y: u32,
+    visibility: &mut Vec<Visibility>,
+    stats: &mut Stats,
+) -> [f32; 3] {
     let Context {
         options,
         size,
@@ -241,12 +249,10 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
         let grid = floor_grid(&options.memo, options.samples);
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
-        let visibility: Vec<Visibility> = match coherence {
-            Some(coherence) => coherence
-                .pixel(x, y)
-                .iter()
-                .enumerate()
-                .map(|(light, state)| match state {
+        visibility.clear();
+        match coherence {
+            Some(coherence) => visibility.extend(coherence.pixel(x, y).iter().enumerate().map(
+                |(light, state)| match state {
                     Coherence::Varies => Visibility::Trace,
                     Coherence::Same => {
                         stats.floor_shared_visibility += 1;
@@ -256,10 +262,10 @@ fn render_pixel(context: &Context, x: u32, y: u32, stats: &mut Stats) -> [f32; 3
                         stats.floor_shared_visibility += 1;
                         Visibility::Known(Rgb::ONE)
                     }
-                })
-                .collect(),
-            None => vec![Visibility::of(trace.shadows); scene.lights.len()],
-        };
+                },
+            )),
+            None => visibility.resize(scene.lights.len(), Visibility::of(trace.shadows)),
+        }
         let mut sum = Rgb::ZERO;
         for k in 0..grid * grid {
             let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
