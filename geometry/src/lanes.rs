@@ -97,7 +97,10 @@ impl Lanes {
     }
 
     /// Keeps in `best` the nearest crossing among `slots`: the least
-    /// `(t, index)` with `0 < t < t_max` not skipped.
+    /// `(t, index)` with `0 < t < t_max` not skipped. The AVX kernel
+    /// settles ties within a lane by slot order, so `slots` must be in
+    /// index order and `best` must hold nothing from a higher index: true
+    /// of brute force (one call, all slots, a fresh `best`), the only user.
     #[inline(always)]
     pub fn closest(
         &self,
