@@ -1,7 +1,7 @@
 //! A set of segments with closest-hit and all-crossings queries: brute
-//! force over a structure-of-arrays copy for small sets, a bounding volume
-//! hierarchy for large ones, each testing segments four at a time where
-//! the processor has AVX. All give exactly the same answers.
+//! force over a structure-of-arrays copy for small sets (four segments, or
+//! four rays, at a time where the processor has AVX), a bounding volume
+//! hierarchy for large ones. All give exactly the same answers.
 
 use crate::lanes::{Best, Kernel, Lanes};
 use crate::{DVec2, Hit, Ray, Segment};
