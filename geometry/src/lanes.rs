@@ -299,40 +299,70 @@ mod avx {
     #[inline]
     #[target_feature(enable = "avx")]
     fn load(v: &[f64], slot: usize) -> __m256d {
-        let lanes: &[f64; BLOCK] = v[slot..slot + BLOCK]
-            .try_into()
-            .unwrap_or(&[f64::NAN; BLOCK]);
-        // SAFETY: `lanes` is four readable f64; the load is unaligned.
+        let lanes = &v[slot..slot + BLOCK];
+        // SAFETY: the slice (bounds-checked above) is four readable f64;
+        // the load is unaligned.
         unsafe { _mm256_loadu_pd(lanes.as_ptr()) }
+    }
+
+    /// Four lanes of the crossing rule.
+    struct Crossing {
+        /// The sides of `a` and `b`, as in `crossing_parts`.
+        sa: __m256d,
+        sb: __m256d,
+        /// All ones where the ray's line crosses the segment.
+        crosses: __m256d,
+        /// The ray parameter of the crossing (meaningful where it crosses).
+        t: __m256d,
+    }
+
+    /// What `crossing_parts` computes, lane by lane, for rays `o + t d`
+    /// and segments `a b` with edges `e = b - a`, in the same operations
+    /// and order (so the same bits). The rule "not both sides > 0, not
+    /// both < 0, not both 0" is `lo <= 0 <= hi` and `lo != hi` for
+    /// `lo = min` and `hi = max` of the two sides (equal only when both are
+    /// 0; -0 counts as 0). A NaN side makes a NaN `t`, which every caller's
+    /// `t > 0` test rejects, as in the scalar kernel.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn crossing(
+        (ox, oy): (__m256d, __m256d),
+        (dx, dy): (__m256d, __m256d),
+        (ax, ay): (__m256d, __m256d),
+        (bx, by): (__m256d, __m256d),
+        (ex, ey): (__m256d, __m256d),
+    ) -> Crossing {
+        let zero = _mm256_setzero_pd();
+        let (pax, pay) = (_mm256_sub_pd(ax, ox), _mm256_sub_pd(ay, oy));
+        let (pbx, pby) = (_mm256_sub_pd(bx, ox), _mm256_sub_pd(by, oy));
+        let sa = _mm256_sub_pd(_mm256_mul_pd(dx, pay), _mm256_mul_pd(dy, pax));
+        let sb = _mm256_sub_pd(_mm256_mul_pd(dx, pby), _mm256_mul_pd(dy, pbx));
+        let lo = _mm256_min_pd(sa, sb);
+        let hi = _mm256_max_pd(sa, sb);
+        let crosses = _mm256_and_pd(
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_LE_OQ>(lo, zero),
+                _mm256_cmp_pd::<_CMP_GE_OQ>(hi, zero),
+            ),
+            _mm256_cmp_pd::<_CMP_NEQ_OQ>(lo, hi),
+        );
+        let num = _mm256_sub_pd(_mm256_mul_pd(pax, ey), _mm256_mul_pd(pay, ex));
+        let t = _mm256_div_pd(num, _mm256_sub_pd(sb, sa));
+        Crossing { sa, sb, crosses, t }
     }
 
     #[inline]
     #[target_feature(enable = "avx")]
     fn block(l: &Lanes, w: &Wide, slot: usize) -> Block {
         let zero = _mm256_setzero_pd();
-        let pax = _mm256_sub_pd(load(&l.ax, slot), w.ox);
-        let pay = _mm256_sub_pd(load(&l.ay, slot), w.oy);
-        let pbx = _mm256_sub_pd(load(&l.bx, slot), w.ox);
-        let pby = _mm256_sub_pd(load(&l.by, slot), w.oy);
-        // sa = d.x * pa.y - d.y * pa.x, and so on, as in `crossing_parts`.
-        let sa = _mm256_sub_pd(_mm256_mul_pd(w.dx, pay), _mm256_mul_pd(w.dy, pax));
-        let sb = _mm256_sub_pd(_mm256_mul_pd(w.dx, pby), _mm256_mul_pd(w.dy, pbx));
+        let Crossing { sa, sb, crosses, t } = crossing(
+            (w.ox, w.oy),
+            (w.dx, w.dy),
+            (load(&l.ax, slot), load(&l.ay, slot)),
+            (load(&l.bx, slot), load(&l.by, slot)),
+            (load(&l.ex, slot), load(&l.ey, slot)),
+        );
         let both = |p: __m256d, q: __m256d| _mm256_and_pd(p, q);
-        // The crossing rule, as in `closest4_with`.
-        let lo = _mm256_min_pd(sa, sb);
-        let hi = _mm256_max_pd(sa, sb);
-        let crosses = both(
-            both(
-                _mm256_cmp_pd::<_CMP_LE_OQ>(lo, zero),
-                _mm256_cmp_pd::<_CMP_GE_OQ>(hi, zero),
-            ),
-            _mm256_cmp_pd::<_CMP_NEQ_OQ>(lo, hi),
-        );
-        let num = _mm256_sub_pd(
-            _mm256_mul_pd(pax, load(&l.ey, slot)),
-            _mm256_mul_pd(pay, load(&l.ex, slot)),
-        );
-        let t = _mm256_div_pd(num, _mm256_sub_pd(sb, sa));
         let id = load(&l.id, slot);
         let in_range = both(
             _mm256_cmp_pd::<_CMP_GT_OQ>(t, zero),
@@ -462,32 +492,15 @@ mod avx {
         let n = l.len;
         let (ax, ay, bx, by) = (&l.ax[..n], &l.ay[..n], &l.bx[..n], &l.by[..n]);
         let (ex, ey, ids) = (&l.ex[..n], &l.ey[..n], &l.id[..n]);
+        let splat = |v: f64| _mm256_set1_pd(v);
         for slot in 0..n {
-            let pax = _mm256_sub_pd(_mm256_set1_pd(ax[slot]), ox);
-            let pay = _mm256_sub_pd(_mm256_set1_pd(ay[slot]), oy);
-            let pbx = _mm256_sub_pd(_mm256_set1_pd(bx[slot]), ox);
-            let pby = _mm256_sub_pd(_mm256_set1_pd(by[slot]), oy);
-            let sa = _mm256_sub_pd(_mm256_mul_pd(dx, pay), _mm256_mul_pd(dy, pax));
-            let sb = _mm256_sub_pd(_mm256_mul_pd(dx, pby), _mm256_mul_pd(dy, pbx));
-            // The crossing rule: not both > 0, not both < 0, not both 0.
-            // With lo = min and hi = max of the two: lo <= 0 <= hi, and
-            // lo != hi (equal only when both are 0; -0 counts as 0). A NaN
-            // side makes a NaN `t`, which the `t > 0` test rejects, as in
-            // the scalar kernel.
-            let lo = _mm256_min_pd(sa, sb);
-            let hi = _mm256_max_pd(sa, sb);
-            let crosses = _mm256_and_pd(
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_LE_OQ>(lo, zero),
-                    _mm256_cmp_pd::<_CMP_GE_OQ>(hi, zero),
-                ),
-                _mm256_cmp_pd::<_CMP_NEQ_OQ>(lo, hi),
+            let Crossing { sa, sb, crosses, t } = crossing(
+                (ox, oy),
+                (dx, dy),
+                (splat(ax[slot]), splat(ay[slot])),
+                (splat(bx[slot]), splat(by[slot])),
+                (splat(ex[slot]), splat(ey[slot])),
             );
-            let num = _mm256_sub_pd(
-                _mm256_mul_pd(pax, _mm256_set1_pd(ey[slot])),
-                _mm256_mul_pd(pay, _mm256_set1_pd(ex[slot])),
-            );
-            let t = _mm256_div_pd(num, _mm256_sub_pd(sb, sa));
             let mut take = _mm256_and_pd(
                 crosses,
                 _mm256_and_pd(

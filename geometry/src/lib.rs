@@ -241,6 +241,39 @@ pub(crate) fn crossing_parts(o: DVec2, d: DVec2, a: DVec2, b: DVec2) -> Option<(
     Some(((pa.x * e.y - pa.y * e.x) / (sb - sa), sa, sb))
 }
 
+/// The part `[t0, t1]` of the line `o + t d` (for `t` in the given
+/// `[t0, t1]`) inside the box `[lo, hi]`, by Liang-Barsky clipping; `None`
+/// when nothing of it is inside or an end would not be finite.
+pub fn clip_to_box(
+    o: DVec2,
+    d: DVec2,
+    mut t0: f64,
+    mut t1: f64,
+    lo: DVec2,
+    hi: DVec2,
+) -> Option<(f64, f64)> {
+    for (p, q) in [
+        (-d.x, o.x - lo.x),
+        (d.x, hi.x - o.x),
+        (-d.y, o.y - lo.y),
+        (d.y, hi.y - o.y),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+}
+
 /// The crossing of `ray` with `seg` at `t > 0`, if any.
 #[inline]
 pub fn intersect(ray: &Ray, seg: &Segment) -> Option<Hit> {

@@ -24,7 +24,7 @@
 //! pixel traces), since drawing their boundaries would cost more than it
 //! saves.
 
-use flatray_geometry::{DVec2, Ray, Segment, Skip};
+use flatray_geometry::{DVec2, Ray, Segment, Skip, clip_to_box};
 
 use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
@@ -182,7 +182,7 @@ impl Mask {
         }
         let lo = DVec2::splat(-2.0);
         let hi = DVec2::new(self.width as f64, self.height as f64) + 2.0;
-        let Some((t0, t1)) = clip(o, d, t0, t1, lo, hi) else {
+        let Some((t0, t1)) = clip_to_box(o, d, t0, t1, lo, hi) else {
             return;
         };
         let length = d.length() * (t1 - t0);
@@ -205,31 +205,6 @@ impl Mask {
             }
         }
     }
-}
-
-/// The part `[t0, t1]` of the line `o + t d` inside the box `[lo, hi]`
-/// (Liang-Barsky), if any.
-fn clip(o: DVec2, d: DVec2, mut t0: f64, mut t1: f64, lo: DVec2, hi: DVec2) -> Option<(f64, f64)> {
-    for (p, q) in [
-        (-d.x, o.x - lo.x),
-        (d.x, hi.x - o.x),
-        (-d.y, o.y - lo.y),
-        (d.y, hi.y - o.y),
-    ] {
-        if p == 0.0 {
-            if q < 0.0 {
-                return None;
-            }
-        } else {
-            let r = q / p;
-            if p < 0.0 {
-                t0 = t0.max(r);
-            } else {
-                t1 = t1.min(r);
-            }
-        }
-    }
-    (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
 }
 
 /// Whether `p` lies within rounding distance of `segment`: about 1e-9 of
@@ -289,7 +264,7 @@ fn segments_meet(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
     on(p, q, r, d1) || on(p, q, s, d2) || on(r, s, p, d3) || on(r, s, q, d4)
 }
 
-/// The transmittance from the centre of pixel `(x, y)` to point, spot or
+/// The transmittance from a pixel's `centre` to point, spot or
 /// directional light `index`: what every stratum of a `Same` pixel gets.
 pub(crate) fn centre_transmittance(
     scene: &Scene,

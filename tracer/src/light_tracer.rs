@@ -5,7 +5,7 @@
 
 use std::f64::consts::TAU;
 
-use flatray_geometry::{DVec2, Ray, Side, Skip, reflect};
+use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box, reflect};
 use rayon::prelude::*;
 
 use crate::glass::{GlassState, absorption, interact, transmit};
@@ -402,23 +402,11 @@ impl Grid {
         let o = (ray.origin - self.origin) * self.scale;
         let d = ray.dir * self.scale;
         let (w, h) = (self.width as f64, self.height as f64);
-        // Clip t to the canvas rectangle (Liang-Barsky).
-        let (mut t0, mut t1) = (0.0f64, t_end);
-        for (p, q) in [(-d.x, o.x), (d.x, w - o.x), (-d.y, o.y), (d.y, h - o.y)] {
-            if p == 0.0 {
-                if q < 0.0 {
-                    return;
-                }
-            } else {
-                let r = q / p;
-                if p < 0.0 {
-                    t0 = t0.max(r);
-                } else {
-                    t1 = t1.min(r);
-                }
-            }
-        }
-        if t0.is_nan() || t0 >= t1 || !t1.is_finite() {
+        // Clip t to the canvas rectangle.
+        let Some((t0, t1)) = clip_to_box(o, d, 0.0, t_end, DVec2::ZERO, DVec2::new(w, h)) else {
+            return;
+        };
+        if t0 >= t1 {
             return;
         }
         let start = o + d * t0;
