@@ -2,8 +2,8 @@
 //! proptest configuration, so each run checks the same cases.
 
 use flatray_geometry::{
-    DVec2, Kernel, Ray, Segment, SegmentSet, Side, Skip, Strategy as Accel, cross, intersect,
-    reflect,
+    ArcCandidates, DVec2, Kernel, Ray, Segment, SegmentSet, Side, Skip, Strategy as Accel, cross,
+    intersect, reflect,
 };
 use proptest::prelude::*;
 
@@ -210,4 +210,92 @@ fn ties_at_a_shared_corner_go_to_the_lower_index_in_every_set() {
             assert_eq!(quad, [hit; 4]);
         }
     }
+}
+
+/// A direction at fraction `f` of the way through arc `k` of `arcs`.
+fn in_arc(k: usize, arcs: usize, f: f64) -> DVec2 {
+    let angle = std::f64::consts::TAU * (k as f64 + f) / arcs as f64;
+    DVec2::new(angle.cos(), angle.sin())
+}
+
+/// Short segments around the box `[lo, lo + size]`, where culling decides
+/// most, with random long ones.
+fn segments_near(lo: DVec2, size: f64) -> impl Strategy<Value = Vec<Segment>> {
+    let near =
+        (-3.0..4.0f64, -3.0..4.0f64, -1.0..1.0f64, -1.0..1.0f64).prop_map(move |(x, y, dx, dy)| {
+            let a = lo + DVec2::new(x, y) * size;
+            Segment::new(a, a + DVec2::new(dx, dy) * size)
+        });
+    prop::collection::vec(prop_oneof![3 => near, 1 => segment()], 1..40)
+        .prop_map(|s| s.into_iter().filter(|s| s.a != s.b).collect())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(11), ..ProptestConfig::default() })]
+
+    #[test]
+    fn culled_queries_return_exactly_what_the_full_scan_returns(
+        (lo, size, segments) in (point(), prop_oneof![0.5..40.0f64, Just(1.0), Just(1e-6)])
+            .prop_flat_map(|(lo, size)| (Just(lo), Just(size), segments_near(lo, size))),
+        arcs in prop_oneof![Just(8usize), Just(16), Just(64)],
+        rays in prop::collection::vec(
+            (prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64], prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64],
+             0usize..64, prop_oneof![Just(0.0), Just(1.0 - 1e-12), 0.0..1.0f64]),
+            64),
+    ) {
+        let set = SegmentSet::new(segments);
+        let hi = lo + DVec2::splat(size);
+        let mut tile = ArcCandidates::default();
+        tile.fill(&set, lo, hi, arcs, None);
+        // A quarter of the box, filled from the whole box's lists.
+        let mut quarter = ArcCandidates::default();
+        let mid = lo + DVec2::splat(size / 2.0);
+        quarter.fill(&set, lo, mid, arcs, Some(&tile));
+        prop_assert_eq!(tile.arcs(), arcs);
+        for (fx, fy, k, f) in rays {
+            let k = k % arcs;
+            let dir = in_arc(k, arcs, f);
+            for (candidates, from, to) in [(&tile, lo, hi), (&quarter, lo, mid)] {
+                let origin = DVec2::new(from.x + fx * (to.x - from.x), from.y + fy * (to.y - from.y));
+                let ray = Ray::new(origin, dir);
+                let list = candidates.arc(k);
+                prop_assert!(list.windows(2).all(|w| w[0] < w[1]));
+                prop_assert_eq!(
+                    set.closest_hit_among(&ray, f64::INFINITY, Skip::NONE, list),
+                    set.closest_hit(&ray, f64::INFINITY, Skip::NONE),
+                    "arc {} of {}, origin {}, dir {}", k, arcs, origin, dir
+                );
+                // Every crossing, not only the nearest, is a candidate.
+                set.for_each_crossing(&ray, f64::INFINITY, Skip::NONE, |i, _| {
+                    assert!(list.contains(&i), "wall {i} crossed but culled");
+                    true
+                });
+            }
+        }
+    }
+}
+
+#[test]
+fn culling_keeps_only_the_walls_an_arc_can_see() {
+    // A unit box in the middle of four walls: rays going right (the arc
+    // around angle 0) can meet only the right wall, rays going down only
+    // the bottom one (y grows downwards, angles turn from +x to +y).
+    let walls = vec![
+        Segment::new(DVec2::new(10.0, -10.0), DVec2::new(10.0, 10.0)),
+        Segment::new(DVec2::new(-10.0, 10.0), DVec2::new(10.0, 10.0)),
+        Segment::new(DVec2::new(-10.0, -10.0), DVec2::new(-10.0, 10.0)),
+        Segment::new(DVec2::new(-10.0, -10.0), DVec2::new(10.0, -10.0)),
+    ];
+    let set = SegmentSet::new(walls);
+    let mut c = ArcCandidates::default();
+    c.fill(&set, DVec2::splat(-0.5), DVec2::splat(0.5), 16, None);
+    assert_eq!(c.arc(0), &[0]);
+    assert_eq!(c.arc(15), &[0]);
+    assert_eq!(c.arc(4), &[1]);
+    assert_eq!(c.arc(8), &[2]);
+    assert_eq!(c.arc(12), &[3]);
+    // An arc that reaches a corner lists both walls of it.
+    assert_eq!(c.arc(2), &[0, 1]);
+    // Arcs beyond those filled are empty.
+    assert!(c.arc(16).is_empty());
 }

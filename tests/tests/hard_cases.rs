@@ -534,14 +534,15 @@ fn a_scene_scaled_down_gives_the_scaled_image() {
             .sum::<f64>()
     };
     // Direct light: pixel by pixel (only the jitter differs: the streams
-    // are keyed by pixel index, and the images' widths differ).
-    let a = render(&scene(big).scene, &options(64, 0)).image;
+    // are keyed by pixel index, and the images' widths differ). At 256
+    // samples that noise is 0.40-0.57 % (seeds 0 to 9), half the bound.
+    let a = render(&scene(big).scene, &options(256, 0)).image;
     let b = crop(
         &render(
             &scene(small).scene,
             &RenderOptions {
                 scale: 100.0,
-                ..options(64, 0)
+                ..options(256, 0)
             },
         )
         .image,

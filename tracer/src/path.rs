@@ -8,7 +8,7 @@ use flatray_geometry::{DVec2, Hit, Ray, Skip, intersect, reflect};
 
 use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::light::{Receiver, direct_light};
-use crate::sampling::{Stream, cosine_half_circle, uniform_circle, uniform_half_circle};
+use crate::sampling::{Stream, cosine_half_circle, uniform_circle_arc, uniform_half_circle};
 use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
 use crate::{Integrator, Rgb, Stats};
 
@@ -27,7 +27,7 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
         .scene
         .segments
         .closest_hit(&ray, f64::INFINITY, Skip::NONE);
-    path_finish(trace, begun, hit, stream, stats)
+    path_finish(trace, begun.fluence, ray, hit, stream, stats)
 }
 
 /// A path sample up to its first ray: the floor's direct light (when the
@@ -37,6 +37,8 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
 pub(crate) struct Begun {
     pub fluence: Rgb,
     pub ray: Option<Ray>,
+    /// The arc of [`crate::sampling::ARCS`] that holds the ray's direction.
+    pub arc: usize,
 }
 
 /// The first part of [`path_sample`]: draws from `stream` exactly what
@@ -55,15 +57,30 @@ pub(crate) fn path_begin(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &m
         Rgb::ZERO
     };
     // The floor sees the whole circle: a uniform direction, weight 2pi.
-    let ray = (trace.bounces > 0).then(|| Ray::new(p, uniform_circle(stream)));
-    Begun { fluence, ray }
+    if trace.bounces == 0 {
+        return Begun {
+            fluence,
+            ray: None,
+            arc: 0,
+        };
+    }
+    let (dir, arc) = uniform_circle_arc(stream);
+    Begun {
+        fluence,
+        ray: Some(Ray::new(p, dir)),
+        arc,
+    }
 }
 
-/// The rest of [`path_sample`], given where its first ray (from
-/// `path_begin`) meets the walls.
+/// The rest of [`path_sample`], given the fluence and the ray that
+/// `path_begin` returned, and where that ray meets the walls. Inlined:
+/// passed through memory, the hit was reloaded wider than it was stored,
+/// a stall that cost a tenth of the render.
+#[inline(always)]
 pub(crate) fn path_finish(
     trace: &Trace,
-    begun: Begun,
+    fluence: Rgb,
+    ray: Ray,
     first_hit: Option<(u32, Hit)>,
     stream: &mut Stream,
     stats: &mut Stats,
@@ -78,10 +95,8 @@ pub(crate) fn path_finish(
         force,
         ..
     } = *trace;
-    let mut fluence = begun.fluence;
-    let Some(mut ray) = begun.ray else {
-        return fluence;
-    };
+    let mut fluence = fluence;
+    let mut ray = ray;
     let mut first_hit = Some(first_hit);
     let mut throughput = Rgb::splat(TAU);
     let mut skip = Skip::NONE;

@@ -4,7 +4,10 @@
 
 use std::fmt;
 
-use crate::render::{Integrator, RenderOptions};
+use flatray_geometry::Strategy;
+
+use crate::render::{CULL_BLOCK, Integrator, RenderOptions};
+use crate::sampling::ARCS;
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Floor, Rgb};
 
@@ -32,6 +35,9 @@ pub struct Plan {
     /// The floor memo's strata share one shadow ray per light where no
     /// shadow edge crosses their pixel (`coherence.rs`).
     pub floor_coherence: bool,
+    /// The floor's rays test only the walls that rays from their block of
+    /// pixels, in their arc of directions, can meet (`ArcCandidates`).
+    pub floor_ray_culling: bool,
     /// Every effect with its reason, in a fixed order, for printing.
     pub effects: Vec<Effect>,
 }
@@ -113,6 +119,9 @@ impl Plan {
             && shadows
             && options.memo.floor_coherence
             && pairs <= crate::coherence::MAX_PAIRS;
+        let brute_force = scene.segments().strategy() == Strategy::BruteForce;
+        let floor_ray_culling =
+            !tracing_light && indirect && !scene.walls.is_empty() && brute_force;
 
         let mut effects = Vec::new();
         let mut add =
@@ -318,6 +327,23 @@ impl Plan {
             },
         );
         add(
+            "floor rays: walls culled by direction",
+            floor_ray_culling,
+            if tracing_light {
+                "light tracing casts none".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else if scene.walls.is_empty() {
+                "no walls".into()
+            } else if !brute_force {
+                "the BVH culls walls for every ray".into()
+            } else {
+                format!(
+                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet"
+                )
+            },
+        );
+        add(
             "ray queries",
             !scene.walls.is_empty(),
             if scene.walls.is_empty() {
@@ -337,6 +363,7 @@ impl Plan {
             wall_memo,
             floor_memo,
             floor_coherence,
+            floor_ray_culling,
             effects,
         }
     }

@@ -1,7 +1,7 @@
 //! The render loop, written once: tiles in parallel, then pixels, then
 //! samples. Integrators only say how one sample is estimated.
 
-use flatray_geometry::{DVec2, Skip};
+use flatray_geometry::{ArcCandidates, DVec2, Ray, Skip};
 use rayon::prelude::*;
 
 use flatray_cache::WallMemo;
@@ -11,7 +11,7 @@ use crate::light::{Receiver, Visibility, direct_light_with};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::path::{Begun, Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
-use crate::sampling::{Stream, StreamKey};
+use crate::sampling::{ARCS, Stream, StreamKey};
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
@@ -99,6 +99,9 @@ pub struct Rendered {
 
 /// The side of a square tile in pixels.
 pub const TILE: u32 = 16;
+/// The side of the square blocks of pixels whose floor rays share lists
+/// of the walls each arc of directions can meet.
+pub const CULL_BLOCK: u32 = 4;
 
 /// The image size for `scene` at `scale`: at least one pixel each way.
 pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
@@ -135,8 +138,10 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         size: (width, height),
         floor_memo: plan.floor_memo,
         coherence: coherence.as_ref(),
+        culling: plan.floor_ray_culling,
         trace: trace_for(scene, options, &plan, memo.as_ref()),
     };
+    let step = pixel_size(scene, (width, height));
     let tiles_x = width.div_ceil(TILE);
     let tiles_y = height.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> = (0..tiles_y)
@@ -150,12 +155,46 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             let x1 = (x0 + TILE).min(width);
             let y1 = (y0 + TILE).min(height);
             let mut stats = Stats::default();
-            let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            let tile_width = x1 - x0;
+            let mut pixels = vec![[0.0; 3]; (tile_width * (y1 - y0)) as usize];
             // Reused by every pixel of the tile: no allocation per pixel.
             let mut visibility = Vec::with_capacity(scene.lights.len());
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    pixels.push(render_pixel(&context, x, y, &mut visibility, &mut stats));
+            // The walls each arc of directions can meet, for the tile and
+            // then for each block of it (tested against the tile's lists).
+            let mut tile_arcs = ArcCandidates::default();
+            let mut block_arcs = ArcCandidates::default();
+            let mut batch = Batch::default();
+            let corner =
+                |x: u32, y: u32| scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
+            if context.culling {
+                tile_arcs.fill(&scene.segments, corner(x0, y0), corner(x1, y1), ARCS, None);
+            }
+            for by in (y0..y1).step_by(CULL_BLOCK as usize) {
+                for bx in (x0..x1).step_by(CULL_BLOCK as usize) {
+                    let (bx1, by1) = ((bx + CULL_BLOCK).min(x1), (by + CULL_BLOCK).min(y1));
+                    let arcs = context.culling.then(|| {
+                        block_arcs.fill(
+                            &scene.segments,
+                            corner(bx, by),
+                            corner(bx1, by1),
+                            ARCS,
+                            Some(&tile_arcs),
+                        );
+                        &block_arcs
+                    });
+                    for y in by..by1 {
+                        for x in bx..bx1 {
+                            pixels[((y - y0) * tile_width + x - x0) as usize] = render_pixel(
+                                &context,
+                                x,
+                                y,
+                                &mut visibility,
+                                arcs,
+                                &mut batch,
+                                &mut stats,
+                            );
+                        }
+                    }
                 }
             }
             progress(pixels.len() as u64 * options.samples as u64);
@@ -195,6 +234,8 @@ struct Context<'a> {
     floor_memo: bool,
     /// Where that estimate's strata can share their shadow rays.
     coherence: Option<&'a FloorCoherence>,
+    /// Whether the floor's rays test only their arc's walls.
+    culling: bool,
     trace: Trace<'a>,
 }
 
@@ -231,6 +272,8 @@ fn render_pixel(
     x: u32,
     y: u32,
     visibility: &mut Vec<Visibility>,
+    arcs: Option<&ArcCandidates>,
+    batch: &mut Batch,
     stats: &mut Stats,
 ) -> [f32; 3] {
     let Context {
@@ -239,6 +282,7 @@ fn render_pixel(
         floor_memo,
         coherence,
         ref trace,
+        ..
     } = *context;
     let scene = trace.scene;
     let pixel = Pixel::new(scene, size, x, y, options.seed);
@@ -297,15 +341,20 @@ fn render_pixel(
             stats.record_nonfinite(x, y, sample);
         }
     };
-    let quads = options.samples / 4;
-    for quad in 0..quads {
-        let values = four_samples(context, &pixel, 4 * quad, stats);
-        for (k, value) in values.into_iter().enumerate() {
-            add(value, 4 * quad + k as u32, stats);
+    match arcs {
+        Some(arcs) => culled_samples(context, &pixel, arcs, batch, stats, add),
+        None => {
+            let quads = options.samples / 4;
+            for quad in 0..quads {
+                let values = four_samples(context, &pixel, 4 * quad, stats);
+                for (k, value) in values.into_iter().enumerate() {
+                    add(value, 4 * quad + k as u32, stats);
+                }
+            }
+            for sample in 4 * quads..options.samples {
+                add(sample_with(context, &pixel, sample, stats), sample, stats);
+            }
         }
-    }
-    for sample in 4 * quads..options.samples {
-        add(sample_with(context, &pixel, sample, stats), sample, stats);
     }
     let mean = direct + sum / options.samples.max(1) as f64;
     let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
@@ -344,6 +393,107 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
     path_sample(trace, p, &mut stream, stats)
 }
 
+/// The samples of a pixel whose floor rays are culled by direction, in
+/// chunks: first every sample of the chunk up to its first ray, then the
+/// rays and the rest of the paths taken arc by arc, so that neighbouring
+/// paths meet the same walls and their branches are predictable. Each
+/// value is exactly what [`sample_with`] gives; `add` receives them in
+/// sample order, so the pixel's sum does not depend on the grouping.
+fn culled_samples(
+    context: &Context,
+    pixel: &Pixel,
+    arcs: &ArcCandidates,
+    batch: &mut Batch,
+    stats: &mut Stats,
+    mut add: impl FnMut(Rgb, u32, &mut Stats),
+) {
+    let trace = &context.trace;
+    let scene = trace.scene;
+    let samples = context.options.samples;
+    for first in (0..samples).step_by(CHUNK) {
+        let last = (first + CHUNK as u32).min(samples);
+        batch.clear();
+        let mut starts = [0u32; ARCS + 1];
+        for sample in first..last {
+            let mut stream = pixel.key.stream(sample as u64);
+            let jitter = DVec2::new(stream.uniform(), stream.uniform());
+            let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
+            stats.camera_samples += 1;
+            let begun = path_begin(trace, p, &mut stream, stats);
+            // The plan culls only when paths bounce: every sample has a ray.
+            let dir = begun.ray.map_or(DVec2::ZERO, |ray| ray.dir);
+            starts[begun.arc + 1] += 1;
+            batch.fluence.push(begun.fluence);
+            batch.origins.push(p);
+            batch.dirs.push(dir);
+            batch.arcs.push(begun.arc as u8);
+            batch.streams.push(stream);
+        }
+        // A counting sort of the chunk by arc.
+        for arc in 0..ARCS {
+            starts[arc + 1] += starts[arc];
+        }
+        let n = batch.arcs.len();
+        batch.order.resize(n, 0);
+        for (k, &arc) in batch.arcs.iter().enumerate() {
+            batch.order[starts[arc as usize] as usize] = k as u32;
+            starts[arc as usize] += 1;
+        }
+        batch.values.resize(n, Rgb::ZERO);
+        for &k in &batch.order {
+            let k = k as usize;
+            let ray = Ray::new(batch.origins[k], batch.dirs[k]);
+            let walls = arcs.arc(batch.arcs[k] as usize);
+            stats.culled_rays += 1;
+            stats.culled_walls_tested += walls.len() as u64;
+            let hit = scene
+                .segments
+                .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
+            batch.values[k] = path_finish(
+                trace,
+                batch.fluence[k],
+                ray,
+                hit,
+                &mut batch.streams[k],
+                stats,
+            );
+        }
+        for (k, &value) in batch.values.iter().enumerate() {
+            add(value, first + k as u32, stats);
+        }
+    }
+}
+
+/// Samples taken together by [`culled_samples`]: enough that most arcs
+/// hold several, few enough to stay in the processor's caches.
+const CHUNK: usize = 512;
+
+/// The buffers of [`culled_samples`], kept by a tile for all its pixels.
+/// Kept as separate arrays (one per field): a copied struct that holds an
+/// `Option<Ray>` was reloaded across the halves of its stores, a stall
+/// that cost a sixth of the render.
+#[derive(Default)]
+struct Batch {
+    fluence: Vec<Rgb>,
+    origins: Vec<DVec2>,
+    dirs: Vec<DVec2>,
+    arcs: Vec<u8>,
+    streams: Vec<Stream>,
+    order: Vec<u32>,
+    values: Vec<Rgb>,
+}
+
+impl Batch {
+    fn clear(&mut self) {
+        self.fluence.clear();
+        self.origins.clear();
+        self.dirs.clear();
+        self.arcs.clear();
+        self.streams.clear();
+        self.values.clear();
+    }
+}
+
 /// Samples `first..first + 4` of a pixel, exactly as four calls of
 /// [`sample_with`] make them, with their first rays traced together.
 fn four_samples(context: &Context, pixel: &Pixel, first: u32, stats: &mut Stats) -> [Rgb; 4] {
@@ -367,7 +517,17 @@ fn four_samples(context: &Context, pixel: &Pixel, first: u32, stats: &mut Stats)
         // No bounce: no ray to trace.
         _ => [None; 4],
     };
-    std::array::from_fn(|k| path_finish(trace, begun[k], hits[k], &mut streams[k], stats))
+    std::array::from_fn(|k| match begun[k].ray {
+        Some(ray) => path_finish(
+            trace,
+            begun[k].fluence,
+            ray,
+            hits[k],
+            &mut streams[k],
+            stats,
+        ),
+        None => begun[k].fluence,
+    })
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of
@@ -395,6 +555,7 @@ pub fn pixel_sample(
         size,
         floor_memo: false,
         coherence: None,
+        culling: false,
         trace: trace_for(scene, &options, &plan, None),
     };
     sample_with(

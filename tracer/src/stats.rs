@@ -15,6 +15,11 @@ pub struct Stats {
     /// Closest-hit rays of indirect paths (the first from the floor, then
     /// one after every reflection or pass through a transparent wall).
     pub bounce_rays: u64,
+    /// Floor rays tested only against the walls of their arc of
+    /// directions (a part of `bounce_rays`).
+    pub culled_rays: u64,
+    /// The walls those rays were tested against, in all.
+    pub culled_walls_tested: u64,
     /// Paths whose last ray hit nothing.
     pub paths_escaped: u64,
     /// Paths stopped by the bounce limit.
@@ -64,6 +69,8 @@ impl Stats {
         self.shadow_rays += other.shadow_rays;
         self.light_paths += other.light_paths;
         self.bounce_rays += other.bounce_rays;
+        self.culled_rays += other.culled_rays;
+        self.culled_walls_tested += other.culled_walls_tested;
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
         self.paths_absorbed += other.paths_absorbed;
@@ -97,6 +104,8 @@ impl fmt::Display for Stats {
         writeln!(f, "  shadow rays      {:>14}", self.shadow_rays)?;
         writeln!(f, "  bounce rays      {:>14}", self.bounce_rays)?;
         writeln!(f, "  light paths      {:>14}", self.light_paths)?;
+        writeln!(f, "  culled rays      {:>14}", self.culled_rays)?;
+        writeln!(f, "  walls tested     {:>14}", self.culled_walls_tested)?;
         writeln!(f, "paths ended by")?;
         writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;

@@ -1,0 +1,205 @@
+//! Culling by direction: which segments rays that leave a box can meet,
+//! for each of `n` equal arcs of directions.
+//!
+//! Arc `k` of `n` holds the directions at angles `2 pi k / n` to
+//! `2 pi (k + 1) / n` from `+x` towards `+y`. A ray from a point of the box
+//! whose direction lies in arc `k` can only cross the segments listed for
+//! `k`: the list is every segment that meets the region such rays sweep,
+//! grown by a margin far beyond rounding (a relative `1e-9` in distance,
+//! `1e-9` radians in angle). So [`SegmentSet::closest_hit_among`] over the
+//! list returns exactly what [`SegmentSet::closest_hit`] returns.
+//!
+//! The region is the Minkowski sum of the box and the arc's cone, a convex
+//! set bounded by the two rays of the cone drawn from the box's outermost
+//! corners and by the box edges that face away from the cone. A segment
+//! misses it exactly when one of those lines, or the segment's own line,
+//! separates the two (the separating axis theorem).
+
+use crate::lanes::Best;
+use crate::{DVec2, Hit, Ray, SegmentSet, Skip, cross, crossing_parts};
+
+/// The angular margin of an arc, in radians, on each side.
+const ARC_MARGIN: f64 = 1e-9;
+/// The distance margin, relative to the largest coordinate involved.
+const DISTANCE_MARGIN: f64 = 1e-9;
+
+/// For each arc of directions, the indices (ascending) of the segments
+/// that rays leaving one box can meet. Filled again for each box without
+/// allocating once its buffers have grown.
+#[derive(Clone, Debug, Default)]
+pub struct ArcCandidates {
+    /// `indices[starts[k]..starts[k + 1]]` is arc `k`'s list.
+    starts: Vec<u32>,
+    indices: Vec<u32>,
+}
+
+impl ArcCandidates {
+    /// Fills the lists for rays leaving the box `[lo, hi]` in `arcs` arcs.
+    /// With `within`, only the segments of its lists (for the same number
+    /// of arcs, and a box that holds this one) are tested.
+    pub fn fill(
+        &mut self,
+        set: &SegmentSet,
+        lo: DVec2,
+        hi: DVec2,
+        arcs: usize,
+        within: Option<&ArcCandidates>,
+    ) {
+        self.starts.clear();
+        self.indices.clear();
+        self.starts.push(0);
+        let scale = lo.abs().max(hi.abs()).max_element();
+        // Without a parent, every segment is tested.
+        let all: Vec<u32> = match within {
+            Some(_) => Vec::new(),
+            None => (0..set.len() as u32).collect(),
+        };
+        let angle = std::f64::consts::TAU / arcs as f64;
+        for k in 0..arcs {
+            let (s0, c0) = (angle * k as f64 - ARC_MARGIN).sin_cos();
+            let (s1, c1) = (angle * (k + 1) as f64 + ARC_MARGIN).sin_cos();
+            let wedge = Wedge::new(lo, hi, DVec2::new(c0, s0), DVec2::new(c1, s1));
+            let tested = within.map_or(&all[..], |parent| parent.arc(k));
+            for &index in tested {
+                let segment = set.get(index);
+                let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
+                if wedge.meets(segment.a, segment.b, DISTANCE_MARGIN * (1.0 + extent)) {
+                    self.indices.push(index);
+                }
+            }
+            self.starts.push(self.indices.len() as u32);
+        }
+    }
+
+    /// The number of arcs filled.
+    pub fn arcs(&self) -> usize {
+        self.starts.len().saturating_sub(1)
+    }
+
+    /// Arc `k`'s segments, in ascending index order (empty beyond the
+    /// arcs filled).
+    #[inline]
+    pub fn arc(&self, k: usize) -> &[u32] {
+        match (self.starts.get(k), self.starts.get(k + 1)) {
+            (Some(&a), Some(&b)) => &self.indices[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+}
+
+/// The region swept by rays leaving a box with directions in a cone less
+/// than half a turn wide.
+struct Wedge {
+    lo: DVec2,
+    hi: DVec2,
+    corners: [DVec2; 4],
+    /// The cone's edge directions, `d1` counter-clockwise from `d0`.
+    d0: DVec2,
+    d1: DVec2,
+}
+
+impl Wedge {
+    fn new(lo: DVec2, hi: DVec2, d0: DVec2, d1: DVec2) -> Wedge {
+        Wedge {
+            lo,
+            hi,
+            corners: [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)],
+            d0,
+            d1,
+        }
+    }
+
+    /// Whether segment `a b` comes within about `margin` of the region:
+    /// `false` only when a separating line clears both by `margin`.
+    fn meets(&self, a: DVec2, b: DVec2, margin: f64) -> bool {
+        let Wedge {
+            lo,
+            hi,
+            corners,
+            d0,
+            d1,
+        } = *self;
+        // The cone's edges, from the corners farthest out on each side
+        // (|d| = 1, so the cross products are distances).
+        let c0 = corners
+            .map(|v| cross(d0, v))
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        if cross(d0, a) < c0 - margin && cross(d0, b) < c0 - margin {
+            return false;
+        }
+        let c1 = corners
+            .map(|v| cross(d1, v))
+            .into_iter()
+            .fold(f64::NEG_INFINITY, f64::max);
+        if cross(d1, a) > c1 + margin && cross(d1, b) > c1 + margin {
+            return false;
+        }
+        // The box's edges that face away from every direction of the cone.
+        if d0.x >= 0.0 && d1.x >= 0.0 && a.x < lo.x - margin && b.x < lo.x - margin {
+            return false;
+        }
+        if d0.x <= 0.0 && d1.x <= 0.0 && a.x > hi.x + margin && b.x > hi.x + margin {
+            return false;
+        }
+        if d0.y >= 0.0 && d1.y >= 0.0 && a.y < lo.y - margin && b.y < lo.y - margin {
+            return false;
+        }
+        if d0.y <= 0.0 && d1.y <= 0.0 && a.y > hi.y + margin && b.y > hi.y + margin {
+            return false;
+        }
+        // The segment's own line: the whole region on one side of it, and
+        // moving away along every direction of the cone.
+        let e = b - a;
+        let reach = margin * e.length();
+        let side = corners.map(|v| cross(e, v - a));
+        let (least, most) = side
+            .into_iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, m), s| {
+                (l.min(s), m.max(s))
+            });
+        let (e0, e1) = (cross(e, d0), cross(e, d1));
+        if least > reach && e0 >= 0.0 && e1 >= 0.0 {
+            return false;
+        }
+        if most < -reach && e0 <= 0.0 && e1 <= 0.0 {
+            return false;
+        }
+        true
+    }
+}
+
+impl SegmentSet {
+    /// [`SegmentSet::closest_hit`] among `candidates` only (ascending
+    /// indices): the same answer whenever every segment the ray crosses
+    /// before `t_max` is a candidate, as [`ArcCandidates`] guarantees for
+    /// rays from its box in their arc. Scalar: the lists are short.
+    #[inline]
+    pub fn closest_hit_among(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        candidates: &[u32],
+    ) -> Option<(u32, Hit)> {
+        let mut best = Best::new(t_max);
+        for &index in candidates {
+            let segment = self.get(index);
+            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, segment.a, segment.b)
+            else {
+                continue;
+            };
+            // Ascending indices: an equal `t` found later never wins, as
+            // in the full scan.
+            if !(t > 0.0 && t < best.t) || skip.contains(index) {
+                continue;
+            }
+            best = Best {
+                t,
+                index,
+                u: sa / (sa - sb),
+            };
+        }
+        best.found()
+    }
+}
