@@ -307,7 +307,7 @@ fn trace_photon(
                     stats.paths_bounce_limit += 1;
                     return;
                 }
-                let rho = diffuse_albedo(scene, albedo, x, stats);
+                let rho = diffuse_albedo(scene, albedo, (index, h.u, x), stats);
                 // Power arriving at the wall, with the kernel's share.
                 power *= kernel.factor(travelled, r0) * rho;
                 kernel = Kernel::None;

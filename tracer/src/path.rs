@@ -211,7 +211,7 @@ pub(crate) fn path_finish(
                     stats.paths_bounce_limit += 1;
                     break;
                 }
-                let rho = diffuse_albedo(scene, albedo, x, stats);
+                let rho = diffuse_albedo(scene, albedo, (index, h.u, x), stats);
                 // 2pi L_o = 2pi (rho / 2) E, with 2pi already in throughput.
                 let irradiance = match memo {
                     Some(memo) => {
@@ -264,20 +264,23 @@ pub(crate) fn path_finish(
     fluence
 }
 
-/// A diffuse wall's albedo at `x`: its own, or the floor's there (colour
-/// bleeding from the floor), counted in `stats`.
+/// A diffuse wall's albedo at `x`, the point at `u` on wall `wall`: its
+/// own, or the floor's there (colour bleeding from the floor), counted in
+/// `stats`.
 #[inline]
 pub(crate) fn diffuse_albedo(
     scene: &Scene,
     albedo: Option<Rgb>,
-    x: DVec2,
+    (wall, u, x): (u32, f64, DVec2),
     stats: &mut Stats,
 ) -> Rgb {
     match albedo {
         Some(rho) => rho,
         None => {
             stats.floor_albedo_reads += 1;
-            scene.floor.albedo_at(&scene.canvas, x)
+            scene
+                .albedo_along
+                .at(&scene.floor, &scene.canvas, wall, u, x)
         }
     }
 }
