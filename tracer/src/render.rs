@@ -412,51 +412,45 @@ fn culled_samples(
     let samples = context.options.samples;
     for first in (0..samples).step_by(CHUNK) {
         let last = (first + CHUNK as u32).min(samples);
-        batch.clear();
-        let mut starts = [0u32; ARCS + 1];
-        for sample in first..last {
+        let n = (last - first) as usize;
+        batch.starts.resize(n, Start::default());
+        let mut counts = [0u32; ARCS + 1];
+        for (start, sample) in batch.starts.iter_mut().zip(first..last) {
             let mut stream = pixel.key.stream(sample as u64);
             let jitter = DVec2::new(stream.uniform(), stream.uniform());
             let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
-            stats.camera_samples += 1;
             let begun = path_begin(trace, p, &mut stream, stats);
             // The plan culls only when paths bounce: every sample has a ray.
-            let dir = begun.ray.map_or(DVec2::ZERO, |ray| ray.dir);
-            starts[begun.arc + 1] += 1;
-            batch.fluence.push(begun.fluence);
-            batch.origins.push(p);
-            batch.dirs.push(dir);
-            batch.arcs.push(begun.arc as u8);
-            batch.streams.push(stream);
+            start.dir = begun.ray.map_or(DVec2::ZERO, |ray| ray.dir);
+            start.origin = p;
+            start.fluence = begun.fluence;
+            start.arc = begun.arc as u8;
+            start.stream = stream;
+            counts[begun.arc + 1] += 1;
         }
+        stats.camera_samples += n as u64;
         // A counting sort of the chunk by arc.
         for arc in 0..ARCS {
-            starts[arc + 1] += starts[arc];
+            counts[arc + 1] += counts[arc];
         }
-        let n = batch.arcs.len();
         batch.order.resize(n, 0);
-        for (k, &arc) in batch.arcs.iter().enumerate() {
-            batch.order[starts[arc as usize] as usize] = k as u32;
-            starts[arc as usize] += 1;
+        for (k, start) in batch.starts.iter().enumerate() {
+            let arc = start.arc as usize;
+            batch.order[counts[arc] as usize] = k as u32;
+            counts[arc] += 1;
         }
         batch.values.resize(n, Rgb::ZERO);
         for &k in &batch.order {
             let k = k as usize;
-            let ray = Ray::new(batch.origins[k], batch.dirs[k]);
-            let walls = arcs.arc(batch.arcs[k] as usize);
+            let start = &mut batch.starts[k];
+            let ray = Ray::new(start.origin, start.dir);
+            let walls = arcs.arc(start.arc as usize);
             stats.culled_rays += 1;
             stats.culled_walls_tested += walls.len() as u64;
             let hit = scene
                 .segments
                 .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
-            batch.values[k] = path_finish(
-                trace,
-                batch.fluence[k],
-                ray,
-                hit,
-                &mut batch.streams[k],
-                stats,
-            );
+            batch.values[k] = path_finish(trace, start.fluence, ray, hit, &mut start.stream, stats);
         }
         for (k, &value) in batch.values.iter().enumerate() {
             add(value, first + k as u32, stats);
@@ -469,28 +463,34 @@ fn culled_samples(
 const CHUNK: usize = 512;
 
 /// The buffers of [`culled_samples`], kept by a tile for all its pixels.
-/// Kept as separate arrays (one per field): a copied struct that holds an
-/// `Option<Ray>` was reloaded across the halves of its stores, a stall
-/// that cost a sixth of the render.
 #[derive(Default)]
 struct Batch {
-    fluence: Vec<Rgb>,
-    origins: Vec<DVec2>,
-    dirs: Vec<DVec2>,
-    arcs: Vec<u8>,
-    streams: Vec<Stream>,
+    starts: Vec<Start>,
     order: Vec<u32>,
     values: Vec<Rgb>,
 }
 
-impl Batch {
-    fn clear(&mut self) {
-        self.fluence.clear();
-        self.origins.clear();
-        self.dirs.clear();
-        self.arcs.clear();
-        self.streams.clear();
-        self.values.clear();
+/// A sample up to its first ray. Read field by field: copied whole, the
+/// struct that held an `Option<Ray>` was reloaded across the halves of
+/// its stores, a stall that cost a sixth of the render.
+#[derive(Clone)]
+struct Start {
+    origin: DVec2,
+    dir: DVec2,
+    fluence: Rgb,
+    stream: Stream,
+    arc: u8,
+}
+
+impl Default for Start {
+    fn default() -> Start {
+        Start {
+            origin: DVec2::ZERO,
+            dir: DVec2::ZERO,
+            fluence: Rgb::ZERO,
+            stream: Stream::new(0, 0, 0),
+            arc: 0,
+        }
     }
 }
 
