@@ -98,6 +98,72 @@ pub(crate) fn direct_light_with(
     sum
 }
 
+/// The floor memo's points in one pixel, with what their line lights draw.
+#[derive(Default)]
+pub(crate) struct Strata {
+    pub points: Vec<DVec2>,
+    /// For point `k`, the number that each line light draws (in the
+    /// lights' order): `lines` numbers per point.
+    pub numbers: Vec<f64>,
+    /// The direct light at each point.
+    pub values: Vec<Rgb>,
+}
+
+/// [`direct_light_with`] at every point of `strata`, on the floor, each
+/// value computed exactly as it would be there (the same operations in
+/// the same order), but light by light over all points, so that work on
+/// one light runs without the branches of the others, and the floor's
+/// most common case, a point light whose visibility is known, runs in a
+/// loop of its own.
+pub(crate) fn direct_light_strata(
+    scene: &Scene,
+    strata: &mut Strata,
+    visibility: &[Visibility],
+    stats: &mut Stats,
+) {
+    let Strata {
+        points,
+        numbers,
+        values,
+    } = strata;
+    values.clear();
+    values.resize(points.len(), Rgb::ZERO);
+    let lines = scene
+        .lights
+        .iter()
+        .filter(|l| matches!(l.shape, LightShape::Line { .. }))
+        .count();
+    let mut line = 0;
+    for (index, light) in scene.lights.iter().enumerate() {
+        let vis = visibility[index];
+        match (light.shape, vis) {
+            (LightShape::Point { at }, Visibility::Known(known)) => {
+                let (intensity, falloff, r0) = (light.intensity, light.falloff, scene.small_radius);
+                for (value, &x) in values.iter_mut().zip(points.iter()) {
+                    // As `light_contribution` computes it for the floor.
+                    let r = (at - x).length();
+                    let v = if r == 0.0 {
+                        Rgb::splat(intensity * falloff.g(0.0, r0))
+                    } else {
+                        Rgb::splat(intensity * falloff.g(r, r0) * 1.0) * known
+                    };
+                    *value += v * light.color;
+                }
+            }
+            _ => {
+                let line_light = matches!(light.shape, LightShape::Line { .. });
+                for (k, (value, &x)) in values.iter_mut().zip(points.iter()).enumerate() {
+                    let u = if line_light { numbers[k * lines + line] } else { 0.0 };
+                    *value += light_contribution(scene, index, x, Receiver::FLOOR, u, vis, stats);
+                }
+            }
+        }
+        if let LightShape::Line { .. } = light.shape {
+            line += 1;
+        }
+    }
+}
+
 /// The light that reaches `x` from one light, coloured, with one shadow
 /// ray (none when `vis` is known: the plan found nothing that occludes, or
 /// the floor's coherence masks know the answer).

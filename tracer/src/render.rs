@@ -7,12 +7,12 @@ use rayon::prelude::*;
 use flatray_cache::WallMemo;
 
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
-use crate::light::{Receiver, Visibility, direct_light_with};
+use crate::light::{Strata, Visibility, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::path::{Begun, Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
 use crate::sampling::{ARCS, Stream, StreamKey};
-use crate::scene::Scene;
+use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
 
 /// Which estimator a render uses.
@@ -310,20 +310,26 @@ fn render_pixel(
             )),
             None => visibility.resize(scene.lights.len(), Visibility::of(trace.shadows)),
         }
-        let mut sum = Rgb::ZERO;
+        // The strata's points, and the number each line light draws, in
+        // the order `direct_light_with` draws them; then the lights one
+        // by one over all strata (`direct_light_strata`).
+        let floor = &mut batch.floor;
+        floor.points.clear();
+        floor.numbers.clear();
         for k in 0..grid * grid {
             let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
             let cell = DVec2::new((k % grid) as f64, (k / grid) as f64);
             let jitter = (cell + DVec2::new(stream.uniform(), stream.uniform())) / grid as f64;
-            let p = corner + jitter * step;
-            let value = direct_light_with(
-                scene,
-                p,
-                Receiver::FLOOR,
-                |light| visibility[light],
-                &mut stream,
-                stats,
-            );
+            floor.points.push(corner + jitter * step);
+            for light in &scene.lights {
+                if let LightShape::Line { .. } = light.shape {
+                    floor.numbers.push(stream.uniform());
+                }
+            }
+        }
+        direct_light_strata(scene, floor, visibility, stats);
+        let mut sum = Rgb::ZERO;
+        for &value in &floor.values {
             if value.is_finite() {
                 sum += value;
             } else {
@@ -465,6 +471,8 @@ const CHUNK: usize = 512;
 /// The buffers of [`culled_samples`], kept by a tile for all its pixels.
 #[derive(Default)]
 struct Batch {
+    /// The floor memo's strata of one pixel.
+    floor: Strata,
     starts: Vec<Start>,
     order: Vec<u32>,
     values: Vec<Rgb>,
