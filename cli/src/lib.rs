@@ -284,6 +284,7 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
             ..loaded.options.memo
         },
         force_all_effects: args.force_all_effects,
+        cull_floor_rays: true,
     };
     let (width, height) = image_size(&loaded.scene, options.scale);
     let pixels = width as u64 * height as u64;

@@ -326,6 +326,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             ..MemoOptions::default()
         },
         force_all_effects: false,
+        cull_floor_rays: true,
     };
     Ok(Loaded {
         scene,

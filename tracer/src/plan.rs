@@ -120,8 +120,11 @@ impl Plan {
             && options.memo.floor_coherence
             && pairs <= crate::coherence::MAX_PAIRS;
         let brute_force = scene.segments().strategy() == Strategy::BruteForce;
-        let floor_ray_culling =
-            !tracing_light && indirect && !scene.walls.is_empty() && brute_force;
+        let floor_ray_culling = !tracing_light
+            && indirect
+            && !scene.walls.is_empty()
+            && brute_force
+            && options.cull_floor_rays;
 
         let mut effects = Vec::new();
         let mut add =
@@ -337,6 +340,8 @@ impl Plan {
                 "no walls".into()
             } else if !brute_force {
                 "the BVH culls walls for every ray".into()
+            } else if !options.cull_floor_rays {
+                "switched off".into()
             } else {
                 format!(
                     "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet"

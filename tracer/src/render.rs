@@ -50,6 +50,10 @@ pub struct RenderOptions {
     /// Run every effect wherever doing so cannot change the image, even
     /// when the plan would skip it: a debugging and benchmarking aid.
     pub force_all_effects: bool,
+    /// Let the plan cull the floor's rays by direction (the default). Off,
+    /// every floor ray tests every wall: the same image, for tests and
+    /// benchmarks.
+    pub cull_floor_rays: bool,
 }
 
 impl Default for RenderOptions {
@@ -63,6 +67,7 @@ impl Default for RenderOptions {
             integrator: Integrator::Path,
             memo: MemoOptions::default(),
             force_all_effects: false,
+            cull_floor_rays: true,
         }
     }
 }

@@ -1,0 +1,130 @@
+//! The floor's rays are culled by direction (`geometry/src/cull.rs`): per
+//! block of 4x4 pixels and 1/64 turn, a ray tests only the walls such rays
+//! can meet. That must change nothing but the work: every image here is
+//! bit-identical with culling on and off, and the counts show it ran.
+
+use flatray_tests::{render, scene, workspace_root};
+use flatray_tracer::{Image, RenderOptions, Scene, Stats};
+
+fn image_and_stats(scene: &Scene, options: &RenderOptions, cull: bool) -> (Image, Stats) {
+    let options = RenderOptions {
+        cull_floor_rays: cull,
+        ..*options
+    };
+    let rendered = render(scene, &options);
+    (rendered.image, rendered.stats)
+}
+
+/// Renders with and without culling; returns the culled render's stats.
+fn assert_same_image(name: &str, scene: &Scene, options: &RenderOptions) -> Stats {
+    let (with, with_stats) = image_and_stats(scene, options, true);
+    let (without, without_stats) = image_and_stats(scene, options, false);
+    assert!(with == without, "{name}: culling changed the image");
+    assert_eq!(without_stats.culled_rays, 0, "{name}");
+    // The same paths: only the walls tested differ.
+    assert_eq!(
+        Stats {
+            culled_rays: 0,
+            culled_walls_tested: 0,
+            ..with_stats
+        },
+        without_stats,
+        "{name}"
+    );
+    with_stats
+}
+
+#[test]
+fn the_example_rooms_render_the_same_testing_an_eighth_of_the_walls() {
+    for name in ["room", "colour-bleed"] {
+        let loaded =
+            flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
+        let options = RenderOptions {
+            samples: 8,
+            scale: 0.3,
+            ..loaded.options
+        };
+        let stats = assert_same_image(name, &loaded.scene, &options);
+        assert_eq!(stats.culled_rays, stats.camera_samples, "{name}");
+        // 13 walls, 1.18 tested per ray here (1.0 at full size, where the
+        // blocks are smaller in world units).
+        let walls = loaded.scene.walls.len() as u64;
+        assert!(
+            stats.culled_walls_tested * 8 < stats.culled_rays * walls,
+            "{name}: {} walls tested for {} rays",
+            stats.culled_walls_tested,
+            stats.culled_rays
+        );
+    }
+}
+
+/// Where a list could miss a wall: walls along pixel and block borders, a
+/// ray's-width slit, walls through one point, walls ending exactly on
+/// block corners, rays grazing a wall, mirrors and transparent walls
+/// (their rays continue unculled), lights on walls, odd image sizes (part
+/// blocks and tiles), and coordinates far outside the canvas.
+const HARD: &[&str] = &[
+    // Walls on pixel, block (4) and tile (16) borders, a fan of walls
+    // through one point, a slit of a hundredth of a pixel.
+    "Scene(canvas: (37, 23), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (4, 0), b: (4, 16)), Wall(a: (0, 8), b: (16, 8)), Wall(a: (16, 4), b: (32, 4)),
+                Wall(a: (20, 12), b: (30, 22)), Wall(a: (20, 12), b: (36, 12)), Wall(a: (20, 12), b: (20, 22)),
+                Wall(a: (8, 12), b: (8, 17.995)), Wall(a: (8, 18.005), b: (8, 23)),
+                Wall(a: (12, 16), b: (16, 20), material: Mirror())],
+        lights: [Point(at: (2, 20), intensity: 5.0), Point(at: (30, 2), intensity: 5.0)])",
+    // A closed room whose corners sit on block corners, a light on a
+    // wall, a transparent pane, a line light.
+    "Scene(canvas: (41, 41), floor: Tiles(size: 5.0, grout_width: 1.0, tile: (0.8, 0.7, 0.6), grout: (0.2, 0.2, 0.2)),
+        walls: [Wall(a: (4, 4), b: (36, 4)), Wall(a: (36, 4), b: (36, 36)), Wall(a: (36, 36), b: (4, 36)),
+                Wall(a: (4, 36), b: (4, 4)), Wall(a: (20, 4), b: (20, 24), material: Transparent(tint: (0.9, 0.5, 0.5))),
+                Wall(a: (8, 28), b: (28, 28.000001))],
+        lights: [Point(at: (12, 4), intensity: 5.0), Line(a: (24, 32), b: (32, 32), intensity: 1.0)])",
+    // Walls from a billion units away crossing the canvas.
+    "Scene(canvas: (30, 30), floor: Color((0.8, 0.8, 0.8)),
+        walls: [Wall(a: (-1e9, -1e9), b: (1e9, 1e9), material: Mirror()),
+                Wall(a: (-3e7, 20), b: (25, 20), material: Transparent(tint: (0.5, 0.5, 0.5))),
+                Wall(a: (15, -1e9), b: (15.5, 1e9), material: Mirror())],
+        lights: [Point(at: (25, 5), intensity: 5.0), Point(at: (5, 25), intensity: 5.0)])",
+];
+
+#[test]
+fn hard_configurations_render_the_same() {
+    for (k, text) in HARD.iter().enumerate() {
+        let loaded = scene(text);
+        for (scale, bounces) in [(1.0, 1), (0.37, 2), (2.5, 1)] {
+            let options = RenderOptions {
+                samples: 24,
+                scale,
+                bounces,
+                ..loaded.options
+            };
+            let stats = assert_same_image(
+                &format!("hard scene {k} at {scale}, {bounces} bounces"),
+                &loaded.scene,
+                &options,
+            );
+            assert!(stats.culled_rays > 0);
+        }
+    }
+}
+
+#[test]
+fn scenes_queried_through_a_bvh_are_not_culled() {
+    // More walls than brute force takes: the BVH culls for every ray, and
+    // the plan says so.
+    let walls: String = (0..40)
+        .map(|k| format!("Wall(a: ({}, 2), b: ({}, 8)),", 2 + k, 2 + k))
+        .collect();
+    let loaded = scene(&format!(
+        "Scene(canvas: (50, 10), floor: Color((0.8, 0.8, 0.8)), walls: [{walls}],
+            lights: [Point(at: (45, 5), intensity: 1.0)])"
+    ));
+    let options = RenderOptions {
+        samples: 4,
+        ..loaded.options
+    };
+    let stats = assert_same_image("bvh", &loaded.scene, &options);
+    assert_eq!(stats.culled_rays, 0);
+    let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
+    assert!(!plan.floor_ray_culling);
+}
