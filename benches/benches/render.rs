@@ -1,6 +1,7 @@
 //! Criterion benchmarks of flatray: ray queries against the room and
 //! against mazes of 1k to 100k walls (brute force with each kernel, and
-//! BVH), four rays at a time, where the BVH starts to pay, and the room
+//! BVH), four rays at a time, rays culled by direction as the floor's are,
+//! where the BVH starts to pay, and the room
 //! rendered end to end at a reduced size with the memo on and off (in rays
 //! per second).
 //!
@@ -12,7 +13,7 @@ use std::path::Path;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use flatray_benches::{Inputs, maze, room_walls};
-use flatray_geometry::{DVec2, Kernel, Segment, SegmentSet, Skip, Strategy};
+use flatray_geometry::{ArcCandidates, DVec2, Kernel, Ray, Segment, SegmentSet, Skip, Strategy};
 use flatray_tracer::{MemoOptions, RenderOptions};
 
 /// Nanoseconds per query: `rays` closest-hit queries against `set`.
@@ -91,6 +92,48 @@ fn closest_hit(c: &mut Criterion) {
             })
         },
     );
+    // The floor's rays as the render loop casts them: each tests only the
+    // walls its 4x4-pixel block and its 1/64 turn of directions can meet.
+    let mut inputs = Inputs::new(3);
+    let blocks: Vec<(ArcCandidates, Vec<(Ray, usize)>)> = (0..64)
+        .map(|_| {
+            let lo = DVec2::new(
+                4.0 * (inputs.uniform() * 125.0).floor(),
+                4.0 * (inputs.uniform() * 125.0).floor(),
+            );
+            let mut arcs = ArcCandidates::default();
+            arcs.fill(&set, lo, lo + DVec2::splat(4.0), 64, None);
+            let rays = (0..64)
+                .map(|_| {
+                    let origin = lo + DVec2::new(inputs.uniform(), inputs.uniform()) * 4.0;
+                    let u = inputs.uniform();
+                    let angle = std::f64::consts::TAU * u;
+                    (
+                        Ray::new(origin, DVec2::new(angle.cos(), angle.sin())),
+                        (u * 64.0) as usize,
+                    )
+                })
+                .collect();
+            (arcs, rays)
+        })
+        .collect();
+    group.throughput(Throughput::Elements(64 * 64));
+    group.bench_function(BenchmarkId::new("culled-by-arc", "room-13"), |b| {
+        b.iter(|| {
+            let mut found = 0u32;
+            for (arcs, rays) in &blocks {
+                for (ray, arc) in rays {
+                    let walls = arcs.arc(*arc);
+                    if let Some((i, _)) =
+                        set.closest_hit_among(black_box(ray), f64::INFINITY, Skip::NONE, walls)
+                    {
+                        found = found.wrapping_add(i);
+                    }
+                }
+            }
+            found
+        })
+    });
     group.finish();
 }
 

@@ -153,7 +153,11 @@ pub(crate) fn direct_light_strata(
             _ => {
                 let line_light = matches!(light.shape, LightShape::Line { .. });
                 for (k, (value, &x)) in values.iter_mut().zip(points.iter()).enumerate() {
-                    let u = if line_light { numbers[k * lines + line] } else { 0.0 };
+                    let u = if line_light {
+                        numbers[k * lines + line]
+                    } else {
+                        0.0
+                    };
                     *value += light_contribution(scene, index, x, Receiver::FLOOR, u, vis, stats);
                 }
             }
