@@ -3,7 +3,10 @@
 //!
 //! What it is for: one vector formula for every orientation of a wall (no
 //! special case for vertical, horizontal or diagonal segments), exact
-//! endpoint ownership so that closed corners never leak, and reflection.
+//! endpoint ownership so that closed corners never leak, and reflection;
+//! queries that give the same answers faster: a BVH for many segments, AVX
+//! kernels for few, and culling by direction ([`ArcCandidates`]) for rays
+//! that leave a small box.
 //!
 //! What it never does: colour, randomness, files or threads. It knows
 //! nothing of materials or lights; a segment is identified by its index in
