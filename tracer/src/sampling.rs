@@ -29,9 +29,15 @@ impl Stream {
     /// A uniform number in `[0, 1)`.
     #[inline]
     pub fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(GOLDEN);
         // The top 53 bits, as a multiple of 2^-53.
-        (finalise(self.0) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        (self.bits() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// The next 64 random bits.
+    #[inline]
+    fn bits(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(GOLDEN);
+        finalise(self.0)
     }
 }
 
@@ -83,8 +89,14 @@ pub fn uniform_circle(stream: &mut Stream) -> DVec2 {
 /// as `flatray_geometry::ArcCandidates` numbers them).
 #[inline]
 pub fn uniform_circle_arc(stream: &mut Stream) -> (DVec2, usize) {
-    let u = stream.uniform();
-    (circle_point(u), (u * ARCS as f64) as usize & (ARCS - 1))
+    // Exactly `circle_point(stream.uniform())`, read from the bits: the
+    // uniform number is `(z >> 11) 2^-53`, so 64 times it has the integer
+    // part `z >> 58` and the fraction `(z >> 11) mod 2^47` times 2^-47,
+    // with no conversion from a float to an integer and back.
+    let z = stream.bits();
+    let arc = (z >> 58) as usize;
+    let fraction = ((z >> 11) & ((1 << 47) - 1)) as f64 * (1.0 / (1u64 << 47) as f64);
+    (arc_point(arc, fraction), arc)
 }
 
 /// `(cos 2 pi u, sin 2 pi u)` for `u` in `[0, 1)`, to within 1e-15, with
@@ -98,8 +110,15 @@ pub fn uniform_circle_arc(stream: &mut Stream) -> (DVec2, usize) {
 pub fn circle_point(u: f64) -> DVec2 {
     // Exact: a product by a power of two, then a difference on its grid.
     let x = u * ARCS as f64;
-    let arc = x as usize;
-    let a = (x - arc as f64 - 0.5) * (std::f64::consts::TAU / ARCS as f64);
+    let arc = x as i64;
+    arc_point(arc as usize, x - arc as f64)
+}
+
+/// The point of the circle `fraction` (in `[0, 1)`) of the way through arc
+/// `arc`.
+#[inline]
+fn arc_point(arc: usize, fraction: f64) -> DVec2 {
+    let a = (fraction - 0.5) * (std::f64::consts::TAU / ARCS as f64);
     let a2 = a * a;
     let s = a * (1.0 + a2 * (-1.0 / 6.0 + a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0))));
     let c = 1.0 + a2 * (-0.5 + a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40_320.0))));
@@ -364,6 +383,18 @@ mod tests {
                 "u {u}: length {}",
                 d.length()
             );
+        }
+    }
+
+    #[test]
+    fn a_direction_read_from_the_bits_is_the_direction_of_the_uniform_number() {
+        let key = StreamKey::new(3, 4);
+        for sample in 0..100_000 {
+            let (mut a, mut b) = (key.stream(sample), key.stream(sample));
+            let (dir, arc) = uniform_circle_arc(&mut a);
+            let u = b.uniform();
+            assert_eq!(dir, circle_point(u), "sample {sample}");
+            assert_eq!(arc, (u * ARCS as f64).floor() as usize, "sample {sample}");
         }
     }
 
