@@ -9,6 +9,10 @@
 //! `1e-9` radians in angle). So [`SegmentSet::closest_hit_among`] over the
 //! list returns exactly what [`SegmentSet::closest_hit`] returns.
 //!
+//! [`hull_candidates`] does the same for segments between two convex
+//! sets, shadow rays from a box of receivers to a light: the segments that
+//! meet the convex hull of the given points.
+//!
 //! The region is the Minkowski sum of the box and the arc's cone, a convex
 //! set bounded by the two rays of the cone drawn from the box's outermost
 //! corners and by the box edges that face away from the cone. A segment
@@ -169,7 +173,168 @@ impl Wedge {
     }
 }
 
+/// Writes to `out` (ascending) the indices of the segments of `set` that
+/// come within a relative `1e-9` of the convex hull of `points`: every
+/// segment that a ray from one point of the hull to another can cross.
+/// `points` may repeat or be collinear; with none, nothing is listed.
+pub fn hull_candidates(set: &SegmentSet, points: &[DVec2], out: &mut Vec<u32>) {
+    out.clear();
+    let hull = convex_hull(points);
+    if hull.is_empty() {
+        return;
+    }
+    let scale = hull
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    for index in 0..set.len() as u32 {
+        let segment = set.get(index);
+        let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
+        if meets_polygon(
+            &hull,
+            segment.a,
+            segment.b,
+            DISTANCE_MARGIN * (1.0 + extent),
+        ) {
+            out.push(index);
+        }
+    }
+}
+
+/// The convex hull of `points`, counter-clockwise (in a y-up frame),
+/// without collinear points (Andrew's monotone chain). Non-finite points
+/// give an empty hull's stand-in: every point, so that nothing is culled.
+fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+    let mut p: Vec<DVec2> = points.to_vec();
+    if p.iter().any(|q| !q.is_finite()) {
+        return p;
+    }
+    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    p.dedup();
+    if p.len() < 3 {
+        return p;
+    }
+    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let ordered: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for &q in ordered {
+            while hull.len() >= start + 2
+                && cross(
+                    hull[hull.len() - 1] - hull[hull.len() - 2],
+                    q - hull[hull.len() - 2],
+                ) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// Whether segment `a b` comes within about `margin` of the convex
+/// polygon `hull` (counter-clockwise; one or two points stand for a point
+/// or a segment): `false` only when a separating line clears both by
+/// `margin`. The candidate lines are the polygon's edges (both sides, so
+/// that degenerate and clockwise-by-rounding polygons stay conservative)
+/// and the segment's own line.
+fn meets_polygon(hull: &[DVec2], a: DVec2, b: DVec2, margin: f64) -> bool {
+    if !(a.is_finite() && b.is_finite()) || hull.iter().any(|p| !p.is_finite()) {
+        return true;
+    }
+    let n = hull.len();
+    let separates = |o: DVec2, e: DVec2| -> bool {
+        // The line through `o` along `e`: the segment on one side, every
+        // vertex on the other, by `margin` in distance.
+        let length = e.length();
+        if length == 0.0 {
+            return false;
+        }
+        let reach = margin * length;
+        let (sa, sb) = (cross(e, a - o), cross(e, b - o));
+        let (least, most) = hull
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, m), &p| {
+                let s = cross(e, p - o);
+                (l.min(s), m.max(s))
+            });
+        (sa > most + reach && sb > most + reach) || (sa < least - reach && sb < least - reach)
+    };
+    for k in 0..n {
+        let (p, q) = (hull[k], hull[(k + 1) % n]);
+        if separates(p, q - p) {
+            return false;
+        }
+    }
+    // A point or a segment: also the perpendicular directions.
+    if n <= 2 {
+        let e = if n == 2 { hull[1] - hull[0] } else { DVec2::X };
+        if separates(hull[0], e.perp()) || separates(hull[0], e) {
+            return false;
+        }
+        if n == 1 && separates(hull[0], DVec2::Y) {
+            return false;
+        }
+    }
+    // The segment's own line.
+    let e = b - a;
+    let length = e.length();
+    if length > 0.0 {
+        let reach = margin * length;
+        let (least, most) = hull
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, m), &p| {
+                let s = cross(e, p - a);
+                (l.min(s), m.max(s))
+            });
+        if least > reach || most < -reach {
+            return false;
+        }
+    }
+    true
+}
+
 impl SegmentSet {
+    /// [`SegmentSet::for_each_crossing`] among `candidates` only
+    /// (ascending indices), visited in index order as brute force visits
+    /// them: the same calls whenever every segment the ray crosses before
+    /// `t_max` is a candidate.
+    #[inline]
+    pub fn for_each_crossing_among(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        candidates: &[u32],
+        mut visit: impl FnMut(u32, Hit) -> bool,
+    ) -> bool {
+        for &index in candidates {
+            let segment = self.get(index);
+            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, segment.a, segment.b)
+            else {
+                continue;
+            };
+            if !(t > 0.0 && t < t_max) || skip.contains(index) {
+                continue;
+            }
+            if !visit(
+                index,
+                Hit {
+                    t,
+                    u: sa / (sa - sb),
+                },
+            ) {
+                return false;
+            }
+        }
+        true
+    }
+
     /// [`SegmentSet::closest_hit`] among `candidates` only (ascending
     /// indices): the same answer whenever every segment the ray crosses
     /// before `t_max` is a candidate, as [`ArcCandidates`] guarantees for

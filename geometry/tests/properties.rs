@@ -3,7 +3,7 @@
 
 use flatray_geometry::{
     ArcCandidates, DVec2, Kernel, Ray, Segment, SegmentSet, Side, Skip, Strategy as Accel, cross,
-    intersect, reflect,
+    hull_candidates, intersect, reflect,
 };
 use proptest::prelude::*;
 
@@ -298,4 +298,71 @@ fn culling_keeps_only_the_walls_an_arc_can_see() {
     assert_eq!(c.arc(2), &[0, 1]);
     // Arcs beyond those filled are empty.
     assert!(c.arc(16).is_empty());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(13), ..ProptestConfig::default() })]
+
+    #[test]
+    fn shadow_rays_among_hull_candidates_cross_what_the_full_scan_crosses(
+        (lo, size, segments) in (point(), prop_oneof![0.5..40.0f64, Just(4.0), Just(1e-6)])
+            .prop_flat_map(|(lo, size)| (Just(lo), Just(size), segments_near(lo, size))),
+        light in (point(), prop_oneof![Just(None), point().prop_map(Some)]),
+        rays in prop::collection::vec(
+            (prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64], prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64],
+             prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64]),
+            32),
+    ) {
+        // Brute force visits crossings in index order, as the culled scan
+        // does (a BVH visits them in tree order).
+        let set = SegmentSet::with_strategy(segments, Accel::BruteForce);
+        let hi = lo + DVec2::splat(size);
+        let (a, b) = (light.0, light.1.unwrap_or(light.0));
+        let mut points = vec![lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y), a];
+        if light.1.is_some() {
+            points.push(b);
+        }
+        let mut list = Vec::new();
+        hull_candidates(&set, &points, &mut list);
+        prop_assert!(list.windows(2).all(|w| w[0] < w[1]));
+        for (fx, fy, f) in rays {
+            let origin = DVec2::new(lo.x + fx * size, lo.y + fy * size);
+            let target = a + f * (b - a);
+            // As a shadow ray is cast: to the target, up to t = 1.
+            let ray = Ray::new(origin, target - origin);
+            let mut all = Vec::new();
+            set.for_each_crossing(&ray, 1.0, Skip::NONE, |i, h| { all.push((i, h.t.to_bits(), h.u.to_bits())); true });
+            let mut among = Vec::new();
+            set.for_each_crossing_among(&ray, 1.0, Skip::NONE, &list, |i, h| { among.push((i, h.t.to_bits(), h.u.to_bits())); true });
+            prop_assert_eq!(among, all, "origin {}, target {}", origin, target);
+        }
+    }
+}
+
+#[test]
+fn hull_culling_keeps_only_the_walls_between_a_box_and_a_light() {
+    // A unit box, a light to its right: a wall between them is kept, walls
+    // behind the box, beyond the light or off to the side are not.
+    let walls = vec![
+        Segment::new(DVec2::new(5.0, -1.0), DVec2::new(5.0, 1.0)),
+        Segment::new(DVec2::new(-3.0, -1.0), DVec2::new(-3.0, 1.0)),
+        Segment::new(DVec2::new(12.0, -1.0), DVec2::new(12.0, 1.0)),
+        Segment::new(DVec2::new(5.0, 4.0), DVec2::new(6.0, 6.0)),
+    ];
+    let set = SegmentSet::new(walls);
+    let mut list = Vec::new();
+    let box_and_light = [
+        DVec2::splat(-0.5),
+        DVec2::new(0.5, -0.5),
+        DVec2::splat(0.5),
+        DVec2::new(-0.5, 0.5),
+        DVec2::new(10.0, 0.0),
+    ];
+    hull_candidates(&set, &box_and_light, &mut list);
+    assert_eq!(list, [0]);
+    // A line light reaching up past the fourth wall keeps it too.
+    let mut with_line = box_and_light.to_vec();
+    with_line.push(DVec2::new(10.0, 9.0));
+    hull_candidates(&set, &with_line, &mut list);
+    assert_eq!(list, [0, 3]);
 }

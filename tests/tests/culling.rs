@@ -1,7 +1,9 @@
 //! The floor's rays are culled by direction (`geometry/src/cull.rs`): per
 //! block of 4x4 pixels and 1/64 turn, a ray tests only the walls such rays
-//! can meet. That must change nothing but the work: every image here is
-//! bit-identical with culling on and off, and the counts show it ran.
+//! can meet; the floor memo's shadow rays test only the walls between the
+//! block and the light. That must change nothing but the work: every image
+//! here is bit-identical with culling on and off, and the counts show it
+//! ran.
 
 use flatray_tests::{render, scene, workspace_root};
 use flatray_tracer::{Image, RenderOptions, Scene, Stats};
@@ -73,12 +75,14 @@ const HARD: &[&str] = &[
                 Wall(a: (12, 16), b: (16, 20), material: Mirror())],
         lights: [Point(at: (2, 20), intensity: 5.0), Point(at: (30, 2), intensity: 5.0)])",
     // A closed room whose corners sit on block corners, a light on a
-    // wall, a transparent pane, a line light.
+    // wall, a transparent pane, a line light, a spot and a sun.
     "Scene(canvas: (41, 41), floor: Tiles(size: 5.0, grout_width: 1.0, tile: (0.8, 0.7, 0.6), grout: (0.2, 0.2, 0.2)),
         walls: [Wall(a: (4, 4), b: (36, 4)), Wall(a: (36, 4), b: (36, 36)), Wall(a: (36, 36), b: (4, 36)),
                 Wall(a: (4, 36), b: (4, 4)), Wall(a: (20, 4), b: (20, 24), material: Transparent(tint: (0.9, 0.5, 0.5))),
                 Wall(a: (8, 28), b: (28, 28.000001))],
-        lights: [Point(at: (12, 4), intensity: 5.0), Line(a: (24, 32), b: (32, 32), intensity: 1.0)])",
+        lights: [Point(at: (12, 4), intensity: 5.0), Line(a: (24, 32), b: (32, 32), intensity: 1.0),
+                 Spot(at: (30, 10), direction: (-1, 1), cone: 0.6, softness: 0.2, intensity: 5.0),
+                 Directional(direction: (0.3, 1.0), intensity: 1.0)])",
     // Walls from a billion units away crossing the canvas.
     "Scene(canvas: (30, 30), floor: Color((0.8, 0.8, 0.8)),
         walls: [Wall(a: (-1e9, -1e9), b: (1e9, 1e9), material: Mirror()),

@@ -274,14 +274,20 @@ pub(crate) fn centre_transmittance(
 ) -> Rgb {
     let skip = Skip(u32::MAX, scene.light_wall[index].unwrap_or(u32::MAX));
     match scene.lights[index].shape {
-        LightShape::Point { at } | LightShape::Spot { at, .. } => {
-            crate::light::transmittance(scene, &Ray::new(centre, at - centre), 1.0, skip, stats)
-        }
+        LightShape::Point { at } | LightShape::Spot { at, .. } => crate::light::transmittance(
+            scene,
+            &Ray::new(centre, at - centre),
+            1.0,
+            skip,
+            None,
+            stats,
+        ),
         LightShape::Directional { direction } => crate::light::transmittance(
             scene,
             &Ray::new(centre, -direction),
             f64::INFINITY,
             Skip::NONE,
+            None,
             stats,
         ),
         LightShape::Line { .. } => Rgb::ONE,

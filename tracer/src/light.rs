@@ -9,17 +9,22 @@ use crate::{Rgb, Stats};
 /// Who receives the light: the floor (no cosine, every direction) or one
 /// side of a wall (cosine to its normal, only that side).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Receiver {
+pub(crate) struct Receiver<'a> {
     /// The unit normal of the receiving side; `None` for the floor.
     pub normal: Option<DVec2>,
     /// The wall the receiver lies on, skipped by its shadow rays.
     pub wall: Option<u32>,
+    /// The only walls its shadow rays can cross, in index order, where
+    /// that is known (floor points, culled per block of pixels and light:
+    /// `hull_candidates`); `None`: every wall.
+    pub shadow_walls: Option<&'a [u32]>,
 }
 
-impl Receiver {
-    pub const FLOOR: Receiver = Receiver {
+impl Receiver<'_> {
+    pub const FLOOR: Receiver<'static> = Receiver {
         normal: None,
         wall: None,
+        shadow_walls: None,
     };
 
     #[inline]
@@ -115,10 +120,14 @@ pub(crate) struct Strata {
 /// one light runs without the branches of the others, and the floor's
 /// most common case, a point light whose visibility is known, runs in a
 /// loop of its own.
+/// With `shadow_walls` (per light: the walls its shadow rays from these
+/// points can cross, or `None` for every wall), shadow rays test only
+/// those.
 pub(crate) fn direct_light_strata(
     scene: &Scene,
     strata: &mut Strata,
     visibility: &[Visibility],
+    shadow_walls: Option<&[Option<Vec<u32>>]>,
     stats: &mut Stats,
 ) {
     let Strata {
@@ -152,13 +161,17 @@ pub(crate) fn direct_light_strata(
             }
             _ => {
                 let line_light = matches!(light.shape, LightShape::Line { .. });
+                let receiver = Receiver {
+                    shadow_walls: shadow_walls.and_then(|w| w[index].as_deref()),
+                    ..Receiver::FLOOR
+                };
                 for (k, (value, &x)) in values.iter_mut().zip(points.iter()).enumerate() {
                     let u = if line_light {
                         numbers[k * lines + line]
                     } else {
                         0.0
                     };
-                    *value += light_contribution(scene, index, x, Receiver::FLOOR, u, vis, stats);
+                    *value += light_contribution(scene, index, x, receiver, u, vis, stats);
                 }
             }
         }
@@ -183,7 +196,7 @@ pub(crate) fn light_contribution(
     stats: &mut Stats,
 ) -> Rgb {
     let transmittance = |ray: &Ray, t_max: f64, skip: Skip, stats: &mut Stats| match vis {
-        Visibility::Trace => transmittance(scene, ray, t_max, skip, stats),
+        Visibility::Trace => transmittance(scene, ray, t_max, skip, receiver.shadow_walls, stats),
         Visibility::Known(known) => known,
     };
     let light = &scene.lights[index];
@@ -263,29 +276,35 @@ pub(crate) fn light_contribution(
 /// What fraction of light gets along `ray` for `0 < t < t_max`: zero when
 /// an opaque wall is in the way, else the product of the transparent
 /// walls' tints. Counts one shadow ray.
+/// With `walls`, only those walls are tested (in index order, as brute
+/// force visits them): the same answer when they hold every wall the ray
+/// can cross.
 pub(crate) fn transmittance(
     scene: &Scene,
     ray: &Ray,
     t_max: f64,
     skip: Skip,
+    walls: Option<&[u32]>,
     stats: &mut Stats,
 ) -> Rgb {
     stats.shadow_rays += 1;
     let mut through = Rgb::ONE;
-    scene
-        .segments
-        .for_each_crossing(ray, t_max, skip, |index, _| {
-            match scene.walls[index as usize].material {
-                Material::Transparent { tint } => {
-                    through *= tint;
-                    through != Rgb::ZERO
-                }
-                // Glass refracts: no straight shadow ray gets through it.
-                Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. } => {
-                    through = Rgb::ZERO;
-                    false
-                }
-            }
-        });
+    let visit = |index: u32, _| match scene.walls[index as usize].material {
+        Material::Transparent { tint } => {
+            through *= tint;
+            through != Rgb::ZERO
+        }
+        // Glass refracts: no straight shadow ray gets through it.
+        Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. } => {
+            through = Rgb::ZERO;
+            false
+        }
+    };
+    match walls {
+        Some(walls) => scene
+            .segments
+            .for_each_crossing_among(ray, t_max, skip, walls, visit),
+        None => scene.segments.for_each_crossing(ray, t_max, skip, visit),
+    };
     through
 }

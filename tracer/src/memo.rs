@@ -102,6 +102,7 @@ pub(crate) fn build_wall_memo(
             let receiver = Receiver {
                 normal: Some(w.segment.normal_on(side)),
                 wall: Some(wall),
+                shadow_walls: None,
             };
             let light = &scene.lights[light_index];
             let mut local = Stats::default();

@@ -227,6 +227,7 @@ pub(crate) fn path_finish(
                         let receiver = Receiver {
                             normal: Some(normal()),
                             wall: Some(index),
+                            shadow_walls: None,
                         };
                         direct_light(scene, x, receiver, shadows, stream, stats)
                     }

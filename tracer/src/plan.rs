@@ -344,7 +344,7 @@ impl Plan {
                 "switched off".into()
             } else {
                 format!(
-                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet"
+                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet; the floor memo's shadow rays, only the walls between the pixels and the light"
                 )
             },
         );

@@ -1,7 +1,7 @@
 //! The render loop, written once: tiles in parallel, then pixels, then
 //! samples. Integrators only say how one sample is estimated.
 
-use flatray_geometry::{ArcCandidates, DVec2, Ray, Skip};
+use flatray_geometry::{ArcCandidates, DVec2, Ray, Skip, hull_candidates};
 use rayon::prelude::*;
 
 use flatray_cache::WallMemo;
@@ -167,7 +167,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             // The walls each arc of directions can meet, for the tile and
             // then for each block of it (tested against the tile's lists).
             let mut tile_arcs = ArcCandidates::default();
-            let mut block_arcs = ArcCandidates::default();
+            let mut block = BlockCulling::default();
             let mut batch = Batch::default();
             let corner =
                 |x: u32, y: u32| scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
@@ -177,15 +177,10 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             for by in (y0..y1).step_by(CULL_BLOCK as usize) {
                 for bx in (x0..x1).step_by(CULL_BLOCK as usize) {
                     let (bx1, by1) = ((bx + CULL_BLOCK).min(x1), (by + CULL_BLOCK).min(y1));
-                    let arcs = context.culling.then(|| {
-                        block_arcs.fill(
-                            &scene.segments,
-                            corner(bx, by),
-                            corner(bx1, by1),
-                            ARCS,
-                            Some(&tile_arcs),
-                        );
-                        &block_arcs
+                    let culled = context.culling.then(|| {
+                        let (lo, hi) = (corner(bx, by), corner(bx1, by1));
+                        block.fill(scene, lo, hi, &tile_arcs, context.floor_memo);
+                        &block
                     });
                     for y in by..by1 {
                         for x in bx..bx1 {
@@ -194,7 +189,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
                                 x,
                                 y,
                                 &mut visibility,
-                                arcs,
+                                culled,
                                 &mut batch,
                                 &mut stats,
                             );
@@ -277,7 +272,7 @@ fn render_pixel(
     x: u32,
     y: u32,
     visibility: &mut Vec<Visibility>,
-    arcs: Option<&ArcCandidates>,
+    culled: Option<&BlockCulling>,
     batch: &mut Batch,
     stats: &mut Stats,
 ) -> [f32; 3] {
@@ -332,7 +327,8 @@ fn render_pixel(
                 }
             }
         }
-        direct_light_strata(scene, floor, visibility, stats);
+        let shadow_walls = culled.map(|c| &c.shadows[..]);
+        direct_light_strata(scene, floor, visibility, shadow_walls, stats);
         let mut sum = Rgb::ZERO;
         for &value in &floor.values {
             if value.is_finite() {
@@ -352,8 +348,8 @@ fn render_pixel(
             stats.record_nonfinite(x, y, sample);
         }
     };
-    match arcs {
-        Some(arcs) => culled_samples(context, &pixel, arcs, batch, stats, add),
+    match culled {
+        Some(culled) => culled_samples(context, &pixel, &culled.arcs, batch, stats, add),
         None => {
             let quads = options.samples / 4;
             for quad in 0..quads {
@@ -474,6 +470,42 @@ fn culled_samples(
 const CHUNK: usize = 512;
 
 /// The buffers of [`culled_samples`], kept by a tile for all its pixels.
+/// What a block of pixels culls: for each arc of directions, the walls its
+/// floor rays can meet; for each light, the walls the shadow rays of its
+/// floor memo can cross (`None` for a sun: every wall).
+#[derive(Default)]
+struct BlockCulling {
+    arcs: ArcCandidates,
+    shadows: Vec<Option<Vec<u32>>>,
+}
+
+impl BlockCulling {
+    /// The lists for the block `[lo, hi]` of tile `tile`; the shadow lists
+    /// only with the floor memo (no other shadow ray leaves the floor).
+    fn fill(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, tile: &ArcCandidates, floor: bool) {
+        self.arcs.fill(&scene.segments, lo, hi, ARCS, Some(tile));
+        self.shadows.resize(scene.lights.len(), None);
+        if !floor {
+            return;
+        }
+        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        for (light, list) in scene.lights.iter().zip(&mut self.shadows) {
+            let ends = match light.shape {
+                LightShape::Point { at } | LightShape::Spot { at, .. } => [at, at],
+                LightShape::Line { segment, .. } => [segment.a, segment.b],
+                LightShape::Directional { .. } => {
+                    *list = None;
+                    continue;
+                }
+            };
+            let points = [
+                corners[0], corners[1], corners[2], corners[3], ends[0], ends[1],
+            ];
+            hull_candidates(&scene.segments, &points, list.get_or_insert_with(Vec::new));
+        }
+    }
+}
+
 #[derive(Default)]
 struct Batch {
     /// The floor memo's strata of one pixel.
