@@ -2,7 +2,7 @@
 
 use flatray_geometry::{DVec2, Ray, Skip};
 
-use crate::sampling::{Stream, sample_subtended_angle};
+use crate::sampling::{AngleSample, Stream, sample_subtended_angle, sample_subtended_angles};
 use crate::scene::{EMITTING_SIDE, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
@@ -112,6 +112,10 @@ pub(crate) struct Strata {
     pub numbers: Vec<f64>,
     /// The direct light at each point.
     pub values: Vec<Rgb>,
+    /// Buffers of a line light's passes (`sample_subtended_angles`).
+    us: Vec<f64>,
+    work: Vec<(f64, f64)>,
+    samples: Vec<Option<AngleSample>>,
 }
 
 /// [`direct_light_with`] at every point of `strata`, on the floor, each
@@ -134,6 +138,9 @@ pub(crate) fn direct_light_strata(
         points,
         numbers,
         values,
+        us,
+        work,
+        samples,
     } = strata;
     values.clear();
     values.resize(points.len(), Rgb::ZERO);
@@ -159,19 +166,54 @@ pub(crate) fn direct_light_strata(
                     *value += v * light.color;
                 }
             }
-            _ => {
-                let line_light = matches!(light.shape, LightShape::Line { .. });
+            (
+                LightShape::Line {
+                    segment, one_sided, ..
+                },
+                _,
+            ) => {
+                // As `light_contribution` computes it for the floor, with
+                // the angle samples drawn in passes over all points.
                 let receiver = Receiver {
                     shadow_walls: shadow_walls.and_then(|w| w[index].as_deref()),
                     ..Receiver::FLOOR
                 };
-                for (k, (value, &x)) in values.iter_mut().zip(points.iter()).enumerate() {
-                    let u = if line_light {
-                        numbers[k * lines + line]
-                    } else {
-                        0.0
+                us.clear();
+                us.extend((0..points.len()).map(|k| numbers[k * lines + line]));
+                sample_subtended_angles(points, us, &segment, work, samples);
+                let skip = receiver.skip(scene.light_wall[index]);
+                for ((value, &x), sample) in
+                    values.iter_mut().zip(points.iter()).zip(samples.iter())
+                {
+                    let lit = !one_sided || segment.side_of(x) == Some(EMITTING_SIDE);
+                    let (true, Some(s)) = (lit, sample) else {
+                        *value += Rgb::ZERO;
+                        continue;
                     };
-                    *value += light_contribution(scene, index, x, receiver, u, vis, stats);
+                    let vis = match vis {
+                        Visibility::Known(known) => known,
+                        Visibility::Trace => transmittance(
+                            scene,
+                            &Ray::new(x, s.point - x),
+                            1.0,
+                            skip,
+                            receiver.shadow_walls,
+                            stats,
+                        ),
+                    };
+                    let per_angle =
+                        light.intensity * light.falloff.per_radian(s.distance, scene.small_radius);
+                    *value += Rgb::splat(per_angle * s.subtended * 1.0) * vis * light.color;
+                }
+            }
+            // Spots, suns, and point lights behind shadow rays: no number.
+            _ => {
+                let receiver = Receiver {
+                    shadow_walls: shadow_walls.and_then(|w| w[index].as_deref()),
+                    ..Receiver::FLOOR
+                };
+                for (value, &x) in values.iter_mut().zip(points.iter()) {
+                    *value += light_contribution(scene, index, x, receiver, 0.0, vis, stats);
                 }
             }
         }

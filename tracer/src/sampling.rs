@@ -273,6 +273,72 @@ pub fn sample_subtended_angle(p: DVec2, light: &Segment, u: f64) -> Option<Angle
     })
 }
 
+/// [`sample_subtended_angle`] at every point of `points`, with the number
+/// `us[k]` for point `k`: for each point the same operations as one call,
+/// so the same samples, but in passes over all points, so that the long
+/// chain of one point's arithmetic (an `atan2`, then a `sin_cos`, then a
+/// division) overlaps the other points'. `work` holds the passes'
+/// intermediate values between calls.
+pub fn sample_subtended_angles(
+    points: &[DVec2],
+    us: &[f64],
+    light: &Segment,
+    work: &mut Vec<(f64, f64)>,
+    out: &mut Vec<Option<AngleSample>>,
+) {
+    // Pass 1: the cross and dot products.
+    work.clear();
+    work.extend(points.iter().map(|&p| {
+        let (va, vb) = (light.a - p, light.b - p);
+        (cross(va, vb), va.dot(vb))
+    }));
+    // Pass 2: the subtended angles (the cross product's sign is kept).
+    for (c, d) in work.iter_mut() {
+        *d = c.abs().atan2(*d);
+    }
+    // Pass 3: the rotation of each angle's share.
+    out.clear();
+    out.extend(work.iter().zip(us).map(|(&(c, subtended), &u)| {
+        let (s, co) = (subtended * u).sin_cos();
+        Some(AngleSample {
+            point: DVec2::ZERO,
+            dir: DVec2::new(co, s),
+            distance: c,
+            subtended,
+        })
+    }));
+    // Pass 4: the directions and the points on the light.
+    for (sample, &p) in out.iter_mut().zip(points) {
+        let Some(AngleSample {
+            dir: DVec2 { x: co, y: s },
+            distance: c,
+            subtended,
+            ..
+        }) = *sample
+        else {
+            continue;
+        };
+        *sample = (|| {
+            if c == 0.0 {
+                return None;
+            }
+            let da = (light.a - p).normalize();
+            let perp = if c > 0.0 { da.perp() } else { -da.perp() };
+            let dir = da * co + perp * s;
+            let hit = line_crossing(&Ray::new(p, dir), light)?;
+            if hit.t.is_nan() || hit.t <= 0.0 {
+                return None;
+            }
+            Some(AngleSample {
+                point: light.point_at(hit.u),
+                dir,
+                distance: hit.t,
+                subtended,
+            })
+        })();
+    }
+}
+
 /// The angle that segment `light` subtends at `p` (0 on its line).
 pub fn subtended_angle(p: DVec2, light: &Segment) -> f64 {
     let va = light.a - p;
@@ -439,6 +505,29 @@ mod tests {
             }
             let chi2 = chi_square(&counts, &[1.0 / BINS as f64; BINS]);
             assert!(chi2 < CHI2_19_999, "chi-square {chi2}: {counts:?}");
+        }
+    }
+
+    #[test]
+    fn angle_samples_in_passes_are_the_single_samples() {
+        let light = Segment::new(DVec2::new(5.0, -3.0), DVec2::new(6.0, 9.0));
+        let mut stream = Stream::new(1, 1, 1);
+        let mut points: Vec<DVec2> = (0..2000)
+            .map(|_| DVec2::new(stream.uniform() * 20.0 - 5.0, stream.uniform() * 20.0 - 5.0))
+            .collect();
+        // On the light's line, on its ends, on the light itself.
+        points.extend([light.a, light.b, light.point_at(0.5), light.point_at(2.0)]);
+        let us: Vec<f64> = points.iter().map(|_| stream.uniform()).collect();
+        let (mut work, mut out) = (Vec::new(), Vec::new());
+        sample_subtended_angles(&points, &us, &light, &mut work, &mut out);
+        for k in 0..points.len() {
+            let one = sample_subtended_angle(points[k], &light, us[k]);
+            assert_eq!(
+                format!("{:?}", out[k]),
+                format!("{one:?}"),
+                "point {}",
+                points[k]
+            );
         }
     }
 
