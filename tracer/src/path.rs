@@ -95,6 +95,34 @@ pub(crate) fn path_finish(
         force,
         ..
     } = *trace;
+    // The common case, straight: one bounce, the first hit on a diffuse
+    // wall, its light read from the memo. The same operations, in the same
+    // order, as the loop below would make (a first flight crosses no glass
+    // it knows of, so its transmittance is exactly 1).
+    if bounces == 1
+        && !force
+        && let (Some(memo), Some((index, h))) = (memo, first_hit)
+    {
+        let wall = &scene.walls[index as usize];
+        if let Material::Diffuse { albedo } = wall.material
+            && h.u != 0.0
+            && h.u != 1.0
+            && let Some(side) = wall.segment.arrival_side(ray.dir)
+        {
+            stats.bounce_rays += 1;
+            stats.memo_lookups += 1;
+            stats.paths_bounce_limit += 1;
+            let x = wall.segment.point_at(h.u);
+            let rho = diffuse_albedo(scene, albedo, (index, h.u, x), stats);
+            let v = memo.lookup(Key {
+                wall: index,
+                side: side.index(),
+                u: h.u,
+            });
+            let irradiance = Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64);
+            return fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance;
+        }
+    }
     let mut fluence = fluence;
     let mut ray = ray;
     let mut first_hit = Some(first_hit);
