@@ -457,7 +457,15 @@ fn culled_samples(
             let hit = scene
                 .segments
                 .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
-            batch.values[k] = path_finish(trace, start.fluence, ray, hit, &mut start.stream, stats);
+            batch.values[k] = path_finish(
+                trace,
+                start.fluence,
+                ray,
+                hit,
+                Some(walls),
+                &mut start.stream,
+                stats,
+            );
         }
         for (k, &value) in batch.values.iter().enumerate() {
             add(value, first + k as u32, stats);
@@ -568,6 +576,7 @@ fn four_samples(context: &Context, pixel: &Pixel, first: u32, stats: &mut Stats)
             begun[k].fluence,
             ray,
             hits[k],
+            None,
             &mut streams[k],
             stats,
         ),
