@@ -231,6 +231,13 @@ pub fn uniform_half_circle(n: DVec2, u: f64) -> (DVec2, f64) {
     (n * c + n.perp() * s, c)
 }
 
+/// `(cos theta, sin theta)` for `theta` in `[0, 2 pi)`, by
+/// [`circle_point`] (no library call; within 1e-15).
+#[inline]
+fn turn(theta: f64) -> DVec2 {
+    circle_point(theta * (1.0 / std::f64::consts::TAU))
+}
+
 /// A point on segment `light` seen from `p`, drawn uniformly in the angle
 /// that the segment subtends at `p`.
 #[derive(Clone, Copy, Debug)]
@@ -257,8 +264,7 @@ pub fn sample_subtended_angle(p: DVec2, light: &Segment, u: f64) -> Option<Angle
     let subtended = c.abs().atan2(va.dot(vb));
     let da = va.normalize();
     // Rotate da towards vb by theta: the rotation's sign follows c.
-    let theta = subtended * u;
-    let (s, co) = theta.sin_cos();
+    let DVec2 { x: co, y: s } = turn(subtended * u);
     let perp = if c > 0.0 { da.perp() } else { -da.perp() };
     let dir = da * co + perp * s;
     let hit = line_crossing(&Ray::new(p, dir), light)?;
@@ -299,7 +305,7 @@ pub fn sample_subtended_angles(
     // Pass 3: the rotation of each angle's share.
     out.clear();
     out.extend(work.iter().zip(us).map(|(&(c, subtended), &u)| {
-        let (s, co) = (subtended * u).sin_cos();
+        let DVec2 { x: co, y: s } = turn(subtended * u);
         Some(AngleSample {
             point: DVec2::ZERO,
             dir: DVec2::new(co, s),
