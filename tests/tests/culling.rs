@@ -1,12 +1,13 @@
 //! The floor's rays are culled by direction (`geometry/src/cull.rs`): per
 //! block of 4x4 pixels and 1/64 turn, a ray tests only the walls such rays
 //! can meet; the floor memo's shadow rays test only the walls between the
-//! block and the light. That must change nothing but the work: every image
+//! block and the light (the floor memo's, or every sample's without the
+//! memo). That must change nothing but the work: every image
 //! here is bit-identical with culling on and off, and the counts show it
 //! ran.
 
 use flatray_tests::{render, scene, workspace_root};
-use flatray_tracer::{Image, RenderOptions, Scene, Stats};
+use flatray_tracer::{Image, MemoOptions, RenderOptions, Scene, Stats};
 
 fn image_and_stats(scene: &Scene, options: &RenderOptions, cull: bool) -> (Image, Stats) {
     let options = RenderOptions {
@@ -95,15 +96,25 @@ const HARD: &[&str] = &[
 fn hard_configurations_render_the_same() {
     for (k, text) in HARD.iter().enumerate() {
         let loaded = scene(text);
-        for (scale, bounces) in [(1.0, 1), (0.37, 2), (2.5, 1)] {
+        // Without the memo, every sample casts the floor's shadow rays.
+        for (scale, bounces, memo) in [
+            (1.0, 1, true),
+            (0.37, 2, true),
+            (2.5, 1, true),
+            (1.0, 2, false),
+        ] {
             let options = RenderOptions {
                 samples: 24,
                 scale,
                 bounces,
+                memo: MemoOptions {
+                    enabled: memo,
+                    ..loaded.options.memo
+                },
                 ..loaded.options
             };
             let stats = assert_same_image(
-                &format!("hard scene {k} at {scale}, {bounces} bounces"),
+                &format!("hard scene {k} at {scale}, {bounces} bounces, memo {memo}"),
                 &loaded.scene,
                 &options,
             );

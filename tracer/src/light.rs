@@ -14,18 +14,28 @@ pub(crate) struct Receiver<'a> {
     pub normal: Option<DVec2>,
     /// The wall the receiver lies on, skipped by its shadow rays.
     pub wall: Option<u32>,
-    /// The only walls its shadow rays can cross, in index order, where
-    /// that is known (floor points, culled per block of pixels and light:
-    /// `hull_candidates`); `None`: every wall.
-    pub shadow_walls: Option<&'a [u32]>,
+    /// Per light, the only walls its shadow rays can cross, in index
+    /// order, where that is known (floor points, culled per block of
+    /// pixels: `hull_candidates`; `None` for a light without a list, a
+    /// sun); `None`: every wall for every light.
+    pub shadow_walls: Option<&'a [Option<Vec<u32>>]>,
 }
 
-impl Receiver<'_> {
+impl<'a> Receiver<'a> {
     pub const FLOOR: Receiver<'static> = Receiver {
         normal: None,
         wall: None,
         shadow_walls: None,
     };
+
+    /// The walls that shadow rays towards light `index` can cross, if
+    /// known.
+    #[inline]
+    fn walls_towards(&self, index: usize) -> Option<&'a [u32]> {
+        self.shadow_walls
+            .and_then(|lists| lists.get(index))
+            .and_then(|list| list.as_deref())
+    }
 
     #[inline]
     fn cosine(&self, to_light: DVec2) -> f64 {
@@ -175,7 +185,7 @@ pub(crate) fn direct_light_strata(
                 // As `light_contribution` computes it for the floor, with
                 // the angle samples drawn in passes over all points.
                 let receiver = Receiver {
-                    shadow_walls: shadow_walls.and_then(|w| w[index].as_deref()),
+                    shadow_walls,
                     ..Receiver::FLOOR
                 };
                 us.clear();
@@ -197,7 +207,7 @@ pub(crate) fn direct_light_strata(
                             &Ray::new(x, s.point - x),
                             1.0,
                             skip,
-                            receiver.shadow_walls,
+                            receiver.walls_towards(index),
                             stats,
                         ),
                     };
@@ -209,7 +219,7 @@ pub(crate) fn direct_light_strata(
             // Spots, suns, and point lights behind shadow rays: no number.
             _ => {
                 let receiver = Receiver {
-                    shadow_walls: shadow_walls.and_then(|w| w[index].as_deref()),
+                    shadow_walls,
                     ..Receiver::FLOOR
                 };
                 for (value, &x) in values.iter_mut().zip(points.iter()) {
@@ -238,7 +248,14 @@ pub(crate) fn light_contribution(
     stats: &mut Stats,
 ) -> Rgb {
     let transmittance = |ray: &Ray, t_max: f64, skip: Skip, stats: &mut Stats| match vis {
-        Visibility::Trace => transmittance(scene, ray, t_max, skip, receiver.shadow_walls, stats),
+        Visibility::Trace => transmittance(
+            scene,
+            ray,
+            t_max,
+            skip,
+            receiver.walls_towards(index),
+            stats,
+        ),
         Visibility::Known(known) => known,
     };
     let light = &scene.lights[index];

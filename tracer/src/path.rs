@@ -19,7 +19,7 @@ use crate::{Integrator, Rgb, Stats};
 /// render loop has it from the memo). With a `memo`, next-event estimation
 /// at a diffuse wall reads it instead of casting shadow rays.
 pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &mut Stats) -> Rgb {
-    let begun = path_begin(trace, p, stream, stats);
+    let begun = path_begin(trace, p, None, stream, stats);
     let Some(ray) = begun.ray else {
         return begun.fluence;
     };
@@ -43,16 +43,21 @@ pub(crate) struct Begun {
 
 /// The first part of [`path_sample`]: draws from `stream` exactly what
 /// `path_sample` draws before its first ray.
-pub(crate) fn path_begin(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &mut Stats) -> Begun {
+/// With `shadow_walls` (per light, the walls that shadow rays from `p`
+/// can cross), the floor's shadow rays test only those.
+pub(crate) fn path_begin(
+    trace: &Trace,
+    p: DVec2,
+    shadow_walls: Option<&[Option<Vec<u32>>]>,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Begun {
     let fluence = if trace.floor_direct {
-        direct_light(
-            trace.scene,
-            p,
-            Receiver::FLOOR,
-            trace.shadows,
-            stream,
-            stats,
-        )
+        let receiver = Receiver {
+            shadow_walls,
+            ..Receiver::FLOOR
+        };
+        direct_light(trace.scene, p, receiver, trace.shadows, stream, stats)
     } else {
         Rgb::ZERO
     };

@@ -179,7 +179,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
                     let (bx1, by1) = ((bx + CULL_BLOCK).min(x1), (by + CULL_BLOCK).min(y1));
                     let culled = context.culling.then(|| {
                         let (lo, hi) = (corner(bx, by), corner(bx1, by1));
-                        block.fill(scene, lo, hi, &tile_arcs, context.floor_memo);
+                        block.fill(scene, lo, hi, &tile_arcs, context.trace.shadows);
                         &block
                     });
                     for y in by..by1 {
@@ -349,7 +349,7 @@ fn render_pixel(
         }
     };
     match culled {
-        Some(culled) => culled_samples(context, &pixel, &culled.arcs, batch, stats, add),
+        Some(culled) => culled_samples(context, &pixel, culled, batch, stats, add),
         None => {
             let quads = options.samples / 4;
             for quad in 0..quads {
@@ -409,7 +409,7 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
 fn culled_samples(
     context: &Context,
     pixel: &Pixel,
-    arcs: &ArcCandidates,
+    culled: &BlockCulling,
     batch: &mut Batch,
     stats: &mut Stats,
     mut add: impl FnMut(Rgb, u32, &mut Stats),
@@ -417,6 +417,7 @@ fn culled_samples(
     let trace = &context.trace;
     let scene = trace.scene;
     let samples = context.options.samples;
+    let (arcs, shadow_walls) = (&culled.arcs, Some(&culled.shadows[..]));
     for first in (0..samples).step_by(CHUNK) {
         let last = (first + CHUNK as u32).min(samples);
         let n = (last - first) as usize;
@@ -426,7 +427,7 @@ fn culled_samples(
             let mut stream = pixel.key.stream(sample as u64);
             let jitter = DVec2::new(stream.uniform(), stream.uniform());
             let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
-            let begun = path_begin(trace, p, &mut stream, stats);
+            let begun = path_begin(trace, p, shadow_walls, &mut stream, stats);
             // The plan culls only when paths bounce: every sample has a ray.
             start.dir = begun.ray.map_or(DVec2::ZERO, |ray| ray.dir);
             start.origin = p;
@@ -479,8 +480,8 @@ const CHUNK: usize = 512;
 
 /// The buffers of [`culled_samples`], kept by a tile for all its pixels.
 /// What a block of pixels culls: for each arc of directions, the walls its
-/// floor rays can meet; for each light, the walls the shadow rays of its
-/// floor memo can cross (`None` for a sun: every wall).
+/// floor rays can meet; for each light, the walls the shadow rays from its
+/// floor points can cross (`None` for a sun: every wall).
 #[derive(Default)]
 struct BlockCulling {
     arcs: ArcCandidates,
@@ -489,11 +490,11 @@ struct BlockCulling {
 
 impl BlockCulling {
     /// The lists for the block `[lo, hi]` of tile `tile`; the shadow lists
-    /// only with the floor memo (no other shadow ray leaves the floor).
-    fn fill(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, tile: &ArcCandidates, floor: bool) {
+    /// only when shadow rays are cast.
+    fn fill(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, tile: &ArcCandidates, shadows: bool) {
         self.arcs.fill(&scene.segments, lo, hi, ARCS, Some(tile));
         self.shadows.resize(scene.lights.len(), None);
-        if !floor {
+        if !shadows {
             return;
         }
         let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
@@ -559,7 +560,7 @@ fn four_samples(context: &Context, pixel: &Pixel, first: u32, stats: &mut Stats)
         let jitter = DVec2::new(stream.uniform(), stream.uniform());
         let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
         stats.camera_samples += 1;
-        path_begin(trace, p, stream, stats)
+        path_begin(trace, p, None, stream, stats)
     });
     let hits = match begun.map(|b| b.ray) {
         [Some(a), Some(b), Some(c), Some(d)] => {
