@@ -196,11 +196,21 @@ impl WallMemo {
             .unwrap_or(&spans[spans.len() - 1]);
         let n = span.bins as usize;
         let base = span.offset + key.side * n;
-        let local = (key.u - span.u0) / (span.u1 - span.u0);
-        let x = (local * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-        let i = (x as usize).min(n - 1);
-        let j = (i + 1).min(n - 1);
+        // A span of the whole wall (most are) needs no division: (u - 0) / 1
+        // is u exactly.
+        let local = if span.u0 == 0.0 && span.u1 == 1.0 {
+            key.u
+        } else {
+            (key.u - span.u0) / (span.u1 - span.u0)
+        };
+        // Conversions through i64 (one instruction each; usize takes a
+        // sequence of them on x86-64): the same values, as n < 2^32.
+        let last = (n - 1) as i64;
+        let x = (local * n as i64 as f64 - 0.5).clamp(0.0, last as f64);
+        let i = (x as i64).min(last);
+        let j = (i + 1).min(last);
         let f = (x - i as f64) as f32;
+        let (i, j) = (i as usize, j as usize);
         let (a, b) = (self.total[base + i], self.total[base + j]);
         [
             a[0] + (b[0] - a[0]) * f,
