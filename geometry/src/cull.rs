@@ -19,7 +19,7 @@
 //! misses it exactly when one of those lines, or the segment's own line,
 //! separates the two (the separating axis theorem).
 
-use crate::lanes::Best;
+use crate::lanes::{Best, visit_crossings};
 use crate::{DVec2, Hit, Ray, SegmentSet, Skip, cross, crossing_parts};
 
 /// The angular margin of an arc, in radians, on each side.
@@ -313,26 +313,11 @@ impl SegmentSet {
         candidates: &[u32],
         mut visit: impl FnMut(u32, Hit) -> bool,
     ) -> bool {
-        for &index in candidates {
+        let segments = candidates.iter().map(|&index| {
             let segment = self.get(index);
-            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, segment.a, segment.b)
-            else {
-                continue;
-            };
-            if !(t > 0.0 && t < t_max) || skip.contains(index) {
-                continue;
-            }
-            if !visit(
-                index,
-                Hit {
-                    t,
-                    u: sa / (sa - sb),
-                },
-            ) {
-                return false;
-            }
-        }
-        true
+            (index, segment.a, segment.b)
+        });
+        visit_crossings(ray, t_max, skip, segments, &mut visit)
     }
 
     /// [`SegmentSet::closest_hit`] among `candidates` only (ascending

@@ -199,26 +199,40 @@ impl Lanes {
         skip: Skip,
         visit: &mut F,
     ) -> bool {
-        for slot in slots {
-            let (a, b, index) = (self.a(slot), self.b(slot), self.order[slot]);
-            let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
-                continue;
-            };
-            if !(t > 0.0 && t < t_max) || skip.contains(index) {
-                continue;
-            }
-            if !visit(
-                index,
-                Hit {
-                    t,
-                    u: sa / (sa - sb),
-                },
-            ) {
-                return false;
-            }
-        }
-        true
+        let segments = slots.map(|slot| (self.order[slot], self.a(slot), self.b(slot)));
+        visit_crossings(ray, t_max, skip, segments, visit)
     }
+}
+
+/// Calls `visit(index, hit)` for each of `segments` (index and ends, in
+/// the order given) that `ray` crosses with `0 < t < t_max` and `skip`
+/// does not hold, until `visit` returns `false`; `false` when it did.
+#[inline(always)]
+pub(crate) fn visit_crossings<F: FnMut(u32, Hit) -> bool>(
+    ray: &Ray,
+    t_max: f64,
+    skip: Skip,
+    segments: impl Iterator<Item = (u32, DVec2, DVec2)>,
+    visit: &mut F,
+) -> bool {
+    for (index, a, b) in segments {
+        let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, a, b) else {
+            continue;
+        };
+        if !(t > 0.0 && t < t_max) || skip.contains(index) {
+            continue;
+        }
+        if !visit(
+            index,
+            Hit {
+                t,
+                u: sa / (sa - sb),
+            },
+        ) {
+            return false;
+        }
+    }
+    true
 }
 
 /// The nearest crossing so far.

@@ -162,4 +162,26 @@ fn images_are_bit_identical_with_and_without_the_plan() {
         let (forced, _) = stats_of(text, true);
         assert!(planned == forced, "the plan changed the image of {text}");
     }
+    // The example rooms at one bounce, where the path's shortcut for a
+    // diffuse first hit read from the memo runs (forced, it does not).
+    for name in ["room", "colour-bleed"] {
+        let loaded =
+            flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
+        let render_with = |force| {
+            let options = RenderOptions {
+                samples: 8,
+                scale: 0.2,
+                bounces: 1,
+                force_all_effects: force,
+                ..loaded.options
+            };
+            render(&loaded.scene, &options)
+        };
+        let (planned, forced) = (render_with(false), render_with(true));
+        assert!(planned.stats.memo_lookups > 0, "{name}");
+        assert!(
+            planned.image == forced.image,
+            "the plan changed the image of {name}"
+        );
+    }
 }

@@ -367,3 +367,133 @@ pub(crate) fn transmittance(
     };
     through
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Canvas, Falloff, Floor, Light, Wall};
+    use flatray_geometry::Segment;
+
+    /// The floor memo's light-by-light passes give every point exactly what
+    /// `direct_light_with` gives it, for every kind of light, with shadow
+    /// rays traced or known, and with culled shadow walls.
+    #[test]
+    fn strata_light_by_light_equal_each_point_alone() {
+        let light = |shape, falloff| Light {
+            shape,
+            color: Rgb::new(1.0, 0.8, 0.6),
+            intensity: 2.0,
+            falloff,
+        };
+        let walls = [
+            ((10.0, 10.0), (30.0, 12.0)),
+            ((25.0, 5.0), (25.0, 30.0)),
+            ((5.0, 25.0), (15.0, 35.0)),
+        ]
+        .map(|((ax, ay), (bx, by))| Wall {
+            segment: Segment::new(DVec2::new(ax, ay), DVec2::new(bx, by)),
+            material: Material::Diffuse { albedo: None },
+        })
+        .to_vec();
+        let lights = vec![
+            light(
+                LightShape::Point {
+                    at: DVec2::new(20.0, 20.0),
+                },
+                Falloff::Flatland,
+            ),
+            light(
+                LightShape::Line {
+                    segment: Segment::new(DVec2::new(2.0, 2.0), DVec2::new(8.0, 3.0)),
+                    one_sided: false,
+                    wall: None,
+                },
+                Falloff::Window { range: 50.0 },
+            ),
+            light(
+                LightShape::Line {
+                    segment: Segment::new(DVec2::new(35.0, 35.0), DVec2::new(38.0, 20.0)),
+                    one_sided: true,
+                    wall: None,
+                },
+                Falloff::InverseSquare,
+            ),
+            light(
+                LightShape::Spot {
+                    at: DVec2::new(5.0, 15.0),
+                    direction: DVec2::new(1.0, 0.0),
+                    cone: 0.8,
+                    softness: 0.3,
+                },
+                Falloff::Flatland,
+            ),
+            light(
+                LightShape::Directional {
+                    direction: DVec2::new(0.6, 0.8),
+                },
+                Falloff::Flatland,
+            ),
+            // On a wall: its shadow rays skip that wall.
+            light(
+                LightShape::Point {
+                    at: DVec2::new(25.0, 20.0),
+                },
+                Falloff::Flatland,
+            ),
+        ];
+        let canvas = Canvas {
+            width: 40,
+            height: 40,
+            origin: DVec2::ZERO,
+        };
+        let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights);
+        let lines = 2;
+        let mut stream = Stream::new(1, 2, 3);
+        let mut strata = Strata::default();
+        for _ in 0..300 {
+            strata
+                .points
+                .push(DVec2::new(stream.uniform() * 40.0, stream.uniform() * 40.0));
+            for _ in 0..lines {
+                strata.numbers.push(stream.uniform());
+            }
+        }
+        // Every wall as the culled list of every light but the sun.
+        let all: Vec<Option<Vec<u32>>> = scene
+            .lights
+            .iter()
+            .map(|l| (!matches!(l.shape, LightShape::Directional { .. })).then(|| vec![0, 1, 2]))
+            .collect();
+        for visibility in [
+            vec![Visibility::Trace; 6],
+            vec![Visibility::Known(Rgb::new(0.5, 1.0, 0.25)); 6],
+        ] {
+            for shadow_walls in [None, Some(&all[..])] {
+                let (mut a, mut b) = (Stats::default(), Stats::default());
+                direct_light_strata(&scene, &mut strata, &visibility, shadow_walls, &mut a);
+                for (k, &x) in strata.points.iter().enumerate() {
+                    // A stream that replays point k's line-light numbers.
+                    let numbers = strata.numbers[k * lines..(k + 1) * lines].to_vec();
+                    let mut next = numbers.into_iter();
+                    let one = (0..scene.lights.len()).fold(Rgb::ZERO, |sum, light| {
+                        let u = match scene.lights[light].shape {
+                            LightShape::Line { .. } => next.next().unwrap_or(0.0),
+                            _ => 0.0,
+                        };
+                        sum + light_contribution(
+                            &scene,
+                            light,
+                            x,
+                            Receiver::FLOOR,
+                            u,
+                            visibility[light],
+                            &mut b,
+                        )
+                    });
+                    assert_eq!(strata.values[k], one, "point {x}");
+                }
+                assert_eq!(a.shadow_rays, b.shadow_rays);
+            }
+        }
+    }
+}

@@ -328,11 +328,24 @@ pub fn sample_subtended_angle(p: DVec2, light: &Segment, u: f64) -> Option<Angle
         return None;
     }
     let subtended = atan2_upper(c.abs(), va.dot(vb));
-    let da = va.normalize();
-    // Rotate da towards vb by theta: the rotation's sign follows c.
-    let DVec2 { x: co, y: s } = turn(subtended * u);
+    angle_sample(p, light, c, subtended, turn(subtended * u))
+}
+
+/// The end of [`sample_subtended_angle`], given the cross product `c` of
+/// the light's ends seen from `p`, the angle it subtends, and the
+/// rotation `(cos, sin)` of the drawn share of that angle.
+#[inline]
+fn angle_sample(
+    p: DVec2,
+    light: &Segment,
+    c: f64,
+    subtended: f64,
+    rotation: DVec2,
+) -> Option<AngleSample> {
+    let da = (light.a - p).normalize();
+    // Rotate da towards b by the drawn angle: the rotation's sign follows c.
     let perp = if c > 0.0 { da.perp() } else { -da.perp() };
-    let dir = da * co + perp * s;
+    let dir = da * rotation.x + perp * rotation.y;
     let hit = line_crossing(&Ray::new(p, dir), light)?;
     if hit.t.is_nan() || hit.t <= 0.0 {
         return None;
@@ -368,46 +381,32 @@ pub fn sample_subtended_angles(
     for (c, d) in work.iter_mut() {
         *d = atan2_upper(c.abs(), *d);
     }
-    // Pass 3: the rotation of each angle's share.
+    // Pass 3: the rotation of each angle's share (kept in `dir`, with the
+    // cross product in `distance`, until pass 4).
     out.clear();
     out.extend(work.iter().zip(us).map(|(&(c, subtended), &u)| {
-        let DVec2 { x: co, y: s } = turn(subtended * u);
         Some(AngleSample {
             point: DVec2::ZERO,
-            dir: DVec2::new(co, s),
+            dir: turn(subtended * u),
             distance: c,
             subtended,
         })
     }));
     // Pass 4: the directions and the points on the light.
     for (sample, &p) in out.iter_mut().zip(points) {
-        let Some(AngleSample {
-            dir: DVec2 { x: co, y: s },
+        if let Some(AngleSample {
+            dir: rotation,
             distance: c,
             subtended,
             ..
         }) = *sample
-        else {
-            continue;
-        };
-        *sample = (|| {
-            if c == 0.0 {
-                return None;
-            }
-            let da = (light.a - p).normalize();
-            let perp = if c > 0.0 { da.perp() } else { -da.perp() };
-            let dir = da * co + perp * s;
-            let hit = line_crossing(&Ray::new(p, dir), light)?;
-            if hit.t.is_nan() || hit.t <= 0.0 {
-                return None;
-            }
-            Some(AngleSample {
-                point: light.point_at(hit.u),
-                dir,
-                distance: hit.t,
-                subtended,
-            })
-        })();
+        {
+            *sample = if c == 0.0 {
+                None
+            } else {
+                angle_sample(p, light, c, subtended, rotation)
+            };
+        }
     }
 }
 
