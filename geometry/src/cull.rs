@@ -28,8 +28,8 @@ const ARC_MARGIN: f64 = 1e-9;
 const DISTANCE_MARGIN: f64 = 1e-9;
 
 /// For each arc of directions, the indices (ascending) of the segments
-/// that rays leaving one box can meet. Filled again for each box without
-/// allocating once its buffers have grown.
+/// that rays leaving one box can meet. Filled again for each box within a
+/// larger one's lists without allocating, once its buffers have grown.
 #[derive(Clone, Debug, Default)]
 pub struct ArcCandidates {
     /// `indices[starts[k]..starts[k + 1]]` is arc `k`'s list.
@@ -173,68 +173,86 @@ impl Wedge {
     }
 }
 
+/// The most points [`hull_candidates`] takes a hull of.
+pub const MAX_HULL_POINTS: usize = 8;
+
 /// Writes to `out` (ascending) the indices of the segments of `set` that
 /// come within a relative `1e-9` of the convex hull of `points`: every
 /// segment that a ray from one point of the hull to another can cross.
-/// `points` may repeat or be collinear; with none, nothing is listed.
+/// `points` may repeat or be collinear. With none, nothing is listed; with
+/// more than [`MAX_HULL_POINTS`] or any not finite, every segment is
+/// (nothing is culled). Allocates nothing once `out` has grown.
 pub fn hull_candidates(set: &SegmentSet, points: &[DVec2], out: &mut Vec<u32>) {
     out.clear();
-    let hull = convex_hull(points);
-    if hull.is_empty() {
+    if points.is_empty() {
         return;
     }
+    let mut buffer = [DVec2::ZERO; 2 * MAX_HULL_POINTS + 1];
+    let Some(hull) = convex_hull(points, &mut buffer) else {
+        out.extend(0..set.len() as u32);
+        return;
+    };
     let scale = hull
         .iter()
         .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
     for index in 0..set.len() as u32 {
         let segment = set.get(index);
         let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
-        if meets_polygon(
-            &hull,
-            segment.a,
-            segment.b,
-            DISTANCE_MARGIN * (1.0 + extent),
-        ) {
+        if meets_polygon(hull, segment.a, segment.b, DISTANCE_MARGIN * (1.0 + extent)) {
             out.push(index);
         }
     }
 }
 
 /// The convex hull of `points`, counter-clockwise (in a y-up frame),
-/// without collinear points (Andrew's monotone chain). Non-finite points
-/// give an empty hull's stand-in: every point, so that nothing is culled.
-fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
-    let mut p: Vec<DVec2> = points.to_vec();
-    if p.iter().any(|q| !q.is_finite()) {
-        return p;
+/// without collinear points (Andrew's monotone chain), written in `hull`:
+/// one or two points for a point or a segment. `None` for more than
+/// [`MAX_HULL_POINTS`] points or any that is not finite.
+fn convex_hull<'h>(
+    points: &[DVec2],
+    hull: &'h mut [DVec2; 2 * MAX_HULL_POINTS + 1],
+) -> Option<&'h [DVec2]> {
+    if points.len() > MAX_HULL_POINTS || points.iter().any(|q| !q.is_finite()) {
+        return None;
     }
-    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    p.dedup();
-    if p.len() < 3 {
-        return p;
-    }
-    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * p.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let ordered: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
-            Box::new(p.iter())
-        } else {
-            Box::new(p.iter().rev())
-        };
-        for &q in ordered {
-            while hull.len() >= start + 2
-                && cross(
-                    hull[hull.len() - 1] - hull[hull.len() - 2],
-                    q - hull[hull.len() - 2],
-                ) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(q);
+    let mut sorted = [DVec2::ZERO; MAX_HULL_POINTS];
+    let sorted = &mut sorted[..points.len()];
+    sorted.copy_from_slice(points);
+    sorted.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    // Without repeats.
+    let mut n = 0;
+    for k in 0..sorted.len() {
+        if n == 0 || sorted[k] != sorted[n - 1] {
+            sorted[n] = sorted[k];
+            n += 1;
         }
-        hull.pop();
     }
-    hull
+    let sorted = &sorted[..n];
+    if n < 3 {
+        hull[..n].copy_from_slice(sorted);
+        return Some(&hull[..n]);
+    }
+    // The lower chain left to right, then the upper chain right to left;
+    // each chain's last point is the next one's first.
+    let mut len = 0;
+    for pass in 0..2 {
+        let start = len;
+        for k in 0..n {
+            let q = if pass == 0 {
+                sorted[k]
+            } else {
+                sorted[n - 1 - k]
+            };
+            while len >= start + 2 && cross(hull[len - 1] - hull[len - 2], q - hull[len - 2]) <= 0.0
+            {
+                len -= 1;
+            }
+            hull[len] = q;
+            len += 1;
+        }
+        len -= 1;
+    }
+    Some(&hull[..len])
 }
 
 /// Whether segment `a b` comes within about `margin` of the convex

@@ -365,4 +365,19 @@ fn hull_culling_keeps_only_the_walls_between_a_box_and_a_light() {
     with_line.push(DVec2::new(10.0, 9.0));
     hull_candidates(&set, &with_line, &mut list);
     assert_eq!(list, [0, 3]);
+    // Too many points, or one not finite: nothing is culled.
+    let many = vec![DVec2::ZERO; flatray_geometry::MAX_HULL_POINTS + 1];
+    hull_candidates(&set, &many, &mut list);
+    assert_eq!(list, [0, 1, 2, 3]);
+    hull_candidates(&set, &[DVec2::ZERO, DVec2::new(f64::NAN, 0.0)], &mut list);
+    assert_eq!(list, [0, 1, 2, 3]);
+    // Repeated and collinear points: a segment's hull.
+    let line = [
+        DVec2::ZERO,
+        DVec2::new(10.0, 0.0),
+        DVec2::new(5.0, 0.0),
+        DVec2::ZERO,
+    ];
+    hull_candidates(&set, &line, &mut list);
+    assert_eq!(list, [0]);
 }
