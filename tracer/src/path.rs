@@ -81,12 +81,12 @@ pub(crate) fn path_begin(
 /// `path_begin` returned, and where that ray meets the walls. Inlined:
 /// passed through memory, the hit was reloaded wider than it was stored,
 /// a stall that cost a tenth of the render.
-#[inline(always)]
 ///
 /// With `line_walls` (the walls the first ray's whole line can meet, in
 /// index order), the rays that continue it straight through transparent
 /// walls test only those: they start on that line (to within rounding,
 /// far inside the lists' margin), so the answers are the same.
+#[inline(always)]
 pub(crate) fn path_finish(
     trace: &Trace,
     fluence: Rgb,
