@@ -147,7 +147,7 @@ impl SegmentSet {
         match (self.strategy(), self.kernel()) {
             (Strategy::Bvh, _) => "BVH".into(),
             (Strategy::BruteForce, Kernel::Avx) => {
-                "brute force with AVX, four segments or four rays at a time".into()
+                "brute force with AVX, four segments at a time".into()
             }
             (Strategy::BruteForce, Kernel::Scalar) => "brute force, one segment at a time".into(),
         }

@@ -32,7 +32,8 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
 
 /// A path sample up to its first ray: the floor's direct light (when the
 /// sample includes it) and the ray that leaves the floor, if any bounce is
-/// allowed. The render loop traces four of these rays at once.
+/// allowed. The render loop draws a chunk of these, then traces their rays
+/// arc by arc (`render.rs::culled_samples`).
 #[derive(Clone, Copy)]
 pub(crate) struct Begun {
     pub fluence: Rgb,

@@ -9,7 +9,7 @@ use flatray_cache::WallMemo;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::light::{Strata, Visibility, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
-use crate::path::{Begun, Trace, path_begin, path_finish, path_sample};
+use crate::path::{Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
 use crate::sampling::{ARCS, Stream, StreamKey};
 use crate::scene::{LightShape, Scene};
@@ -351,14 +351,7 @@ fn render_pixel(
     match culled {
         Some(culled) => culled_samples(context, &pixel, culled, batch, stats, add),
         None => {
-            let quads = options.samples / 4;
-            for quad in 0..quads {
-                let values = four_samples(context, &pixel, 4 * quad, stats);
-                for (k, value) in values.into_iter().enumerate() {
-                    add(value, 4 * quad + k as u32, stats);
-                }
-            }
-            for sample in 4 * quads..options.samples {
+            for sample in 0..options.samples {
                 add(sample_with(context, &pixel, sample, stats), sample, stats);
             }
         }
@@ -546,43 +539,6 @@ impl Default for Start {
             arc: 0,
         }
     }
-}
-
-/// Samples `first..first + 4` of a pixel, exactly as four calls of
-/// [`sample_with`] make them, with their first rays traced together.
-fn four_samples(context: &Context, pixel: &Pixel, first: u32, stats: &mut Stats) -> [Rgb; 4] {
-    let trace = &context.trace;
-    let scene = trace.scene;
-    let mut streams: [Stream; 4] =
-        std::array::from_fn(|k| pixel.key.stream((first + k as u32) as u64));
-    let begun: [Begun; 4] = std::array::from_fn(|k| {
-        let stream = &mut streams[k];
-        let jitter = DVec2::new(stream.uniform(), stream.uniform());
-        let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
-        stats.camera_samples += 1;
-        path_begin(trace, p, None, stream, stats)
-    });
-    let hits = match begun.map(|b| b.ray) {
-        [Some(a), Some(b), Some(c), Some(d)] => {
-            scene
-                .segments
-                .closest_hits(&[a, b, c, d], f64::INFINITY, [Skip::NONE; 4])
-        }
-        // No bounce: no ray to trace.
-        _ => [None; 4],
-    };
-    std::array::from_fn(|k| match begun[k].ray {
-        Some(ray) => path_finish(
-            trace,
-            begun[k].fluence,
-            ray,
-            hits[k],
-            None,
-            &mut streams[k],
-            stats,
-        ),
-        None => begun[k].fluence,
-    })
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of
