@@ -361,7 +361,7 @@ fn angle_sample(
 /// [`sample_subtended_angle`] at every point of `points`, with the number
 /// `us[k]` for point `k`: for each point the same operations as one call,
 /// so the same samples, but in passes over all points, so that the long
-/// chain of one point's arithmetic (an `atan2`, then a `sin_cos`, then a
+/// chain of one point's arithmetic (an `atan2`, then a rotation and a
 /// division) overlaps the other points'. `work` holds the passes'
 /// intermediate values between calls.
 pub fn sample_subtended_angles(
@@ -381,33 +381,19 @@ pub fn sample_subtended_angles(
     for (c, d) in work.iter_mut() {
         *d = atan2_upper(c.abs(), *d);
     }
-    // Pass 3: the rotation of each angle's share (kept in `dir`, with the
-    // cross product in `distance`, until pass 4).
+    // Pass 3: the rotations, the directions and the points on the light.
     out.clear();
-    out.extend(work.iter().zip(us).map(|(&(c, subtended), &u)| {
-        Some(AngleSample {
-            point: DVec2::ZERO,
-            dir: turn(subtended * u),
-            distance: c,
-            subtended,
-        })
-    }));
-    // Pass 4: the directions and the points on the light.
-    for (sample, &p) in out.iter_mut().zip(points) {
-        if let Some(AngleSample {
-            dir: rotation,
-            distance: c,
-            subtended,
-            ..
-        }) = *sample
-        {
-            *sample = if c == 0.0 {
-                None
-            } else {
-                angle_sample(p, light, c, subtended, rotation)
-            };
-        }
-    }
+    out.extend(
+        points
+            .iter()
+            .zip(work.iter())
+            .zip(us)
+            .map(|((&p, &(c, subtended)), &u)| {
+                (c != 0.0)
+                    .then(|| angle_sample(p, light, c, subtended, turn(subtended * u)))
+                    .flatten()
+            }),
+    );
 }
 
 /// The angle that segment `light` subtends at `p` (0 on its line).
