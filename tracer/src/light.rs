@@ -183,7 +183,10 @@ pub(crate) fn direct_light_strata(
                 _,
             ) => {
                 // As `light_contribution` computes it for the floor, with
-                // the angle samples drawn in passes over all points.
+                // the angle samples drawn in passes over all points, and
+                // what every point shares taken out of the loop (one helper
+                // for both measured 6 % slower here); a test holds the two
+                // to the same bits.
                 let receiver = Receiver {
                     shadow_walls,
                     ..Receiver::FLOOR
