@@ -35,6 +35,9 @@ pub struct ArcCandidates {
     /// `indices[starts[k]..starts[k + 1]]` is arc `k`'s list.
     starts: Vec<u32>,
     indices: Vec<u32>,
+    /// Each arc's edge directions, widened by the margin: computed once
+    /// for a number of arcs, kept for every box after.
+    edges: Vec<(DVec2, DVec2)>,
 }
 
 impl ArcCandidates {
@@ -58,11 +61,23 @@ impl ArcCandidates {
             Some(_) => Vec::new(),
             None => (0..set.len() as u32).collect(),
         };
-        let angle = std::f64::consts::TAU / arcs as f64;
-        for k in 0..arcs {
-            let (s0, c0) = (angle * k as f64 - ARC_MARGIN).sin_cos();
-            let (s1, c1) = (angle * (k + 1) as f64 + ARC_MARGIN).sin_cos();
-            let wedge = Wedge::new(lo, hi, DVec2::new(c0, s0), DVec2::new(c1, s1));
+        if self.edges.len() != arcs {
+            let angle = std::f64::consts::TAU / arcs as f64;
+            let direction = |a: f64| {
+                let (sin, cos) = a.sin_cos();
+                DVec2::new(cos, sin)
+            };
+            self.edges = (0..arcs)
+                .map(|k| {
+                    (
+                        direction(angle * k as f64 - ARC_MARGIN),
+                        direction(angle * (k + 1) as f64 + ARC_MARGIN),
+                    )
+                })
+                .collect();
+        }
+        for (k, &(d0, d1)) in self.edges.iter().enumerate() {
+            let wedge = Wedge::new(lo, hi, d0, d1);
             let tested = within.map_or(&all[..], |parent| parent.arc(k));
             for &index in tested {
                 let segment = set.get(index);
