@@ -8,7 +8,7 @@ use flatray_geometry::{DVec2, Hit, Ray, Skip, intersect, reflect};
 
 use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::light::{Receiver, direct_light};
-use crate::sampling::{Stream, cosine_half_circle, uniform_circle_arc, uniform_half_circle};
+use crate::sampling::{Stream, circle_in_arc, cosine_half_circle, uniform_half_circle};
 use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
 use crate::{Integrator, Rgb, Stats};
 
@@ -18,8 +18,18 @@ use crate::{Integrator, Rgb, Stats};
 /// With `floor_direct` false the floor's own direct light is left out (the
 /// render loop has it from the memo). With a `memo`, next-event estimation
 /// at a diffuse wall reads it instead of casting shadow rays.
-pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &mut Stats) -> Rgb {
-    let begun = path_begin(trace, p, None, stream, stats);
+///
+/// The ray that leaves the floor takes a uniform direction inside `arc`
+/// (of [`crate::sampling::ARCS`]); the caller draws the arc uniformly
+/// (`sampling::sample_arc`), so that the direction is uniform.
+pub(crate) fn path_sample(
+    trace: &Trace,
+    p: DVec2,
+    arc: usize,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    let begun = path_begin(trace, p, arc, None, stream, stats);
     let Some(ray) = begun.ray else {
         return begun.fluence;
     };
@@ -32,14 +42,11 @@ pub(crate) fn path_sample(trace: &Trace, p: DVec2, stream: &mut Stream, stats: &
 
 /// A path sample up to its first ray: the floor's direct light (when the
 /// sample includes it) and the ray that leaves the floor, if any bounce is
-/// allowed. The render loop draws a chunk of these, then traces their rays
-/// arc by arc (`render.rs::culled_samples`).
+/// allowed.
 #[derive(Clone, Copy)]
 pub(crate) struct Begun {
     pub fluence: Rgb,
     pub ray: Option<Ray>,
-    /// The arc of [`crate::sampling::ARCS`] that holds the ray's direction.
-    pub arc: usize,
 }
 
 /// The first part of [`path_sample`]: draws from `stream` exactly what
@@ -49,6 +56,7 @@ pub(crate) struct Begun {
 pub(crate) fn path_begin(
     trace: &Trace,
     p: DVec2,
+    arc: usize,
     shadow_walls: Option<&[Option<Vec<u32>>]>,
     stream: &mut Stream,
     stats: &mut Stats,
@@ -62,19 +70,16 @@ pub(crate) fn path_begin(
     } else {
         Rgb::ZERO
     };
-    // The floor sees the whole circle: a uniform direction, weight 2pi.
+    // The floor sees the whole circle: a direction uniform in the sample's
+    // arc, the arc itself uniform (stratified over a pixel's samples), so
+    // the direction is uniform on the circle: weight 2pi.
     if trace.bounces == 0 {
-        return Begun {
-            fluence,
-            ray: None,
-            arc: 0,
-        };
+        return Begun { fluence, ray: None };
     }
-    let (dir, arc) = uniform_circle_arc(stream);
+    let dir = circle_in_arc(arc, stream);
     Begun {
         fluence,
         ray: Some(Ray::new(p, dir)),
-        arc,
     }
 }
 

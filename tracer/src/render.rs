@@ -1,7 +1,7 @@
 //! The render loop, written once: tiles in parallel, then pixels, then
 //! samples. Integrators only say how one sample is estimated.
 
-use flatray_geometry::{ArcCandidates, DVec2, Ray, Skip, hull_candidates};
+use flatray_geometry::{ArcCandidates, DVec2, Skip, hull_candidates};
 use rayon::prelude::*;
 
 use flatray_cache::WallMemo;
@@ -11,7 +11,7 @@ use crate::light::{Strata, Visibility, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::path::{Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
-use crate::sampling::{ARCS, Stream, StreamKey};
+use crate::sampling::{ARCS, StreamKey, first_sample_of_arc, sample_arc};
 use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
 
@@ -349,7 +349,7 @@ fn render_pixel(
         }
     };
     match culled {
-        Some(culled) => culled_samples(context, &pixel, culled, batch, stats, add),
+        Some(culled) => culled_samples(context, &pixel, culled, &mut batch.values, stats, add),
         None => {
             for sample in 0..options.samples {
                 add(sample_with(context, &pixel, sample, stats), sample, stats);
@@ -362,24 +362,34 @@ fn render_pixel(
     [value.x as f32, value.y as f32, value.z as f32]
 }
 
-/// A pixel's position, stream key and size, computed once for all its
-/// samples.
+/// A pixel's position, stream key, size and the turn of its samples'
+/// arcs, computed once for all its samples.
 struct Pixel {
     position: DVec2,
     key: StreamKey,
     step: DVec2,
+    /// Uniform in `0..ARCS`: see [`sample_arc`].
+    arc_offset: usize,
 }
 
 impl Pixel {
     fn new(scene: &Scene, size: (u32, u32), x: u32, y: u32, seed: u64) -> Pixel {
         let index = y as u64 * size.0 as u64 + x as u64;
+        let key = StreamKey::new(seed, index);
+        // Exact: 64 times a multiple of 2^-53 below 1.
+        let arc_offset = (key.stream(ARC_OFFSET_STREAM).uniform() * ARCS as f64) as usize;
         Pixel {
             position: DVec2::new(x as f64, y as f64),
-            key: StreamKey::new(seed, index),
+            key,
             step: pixel_size(scene, size),
+            arc_offset,
         }
     }
 }
+
+/// The stream sample index that draws a pixel's [`Pixel::arc_offset`],
+/// apart from every path sample's and the floor memo's.
+const ARC_OFFSET_STREAM: u64 = 1 << 41;
 
 /// One sample of a pixel: the receiver is jittered uniformly inside the
 /// pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
@@ -390,20 +400,24 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
     let jitter = DVec2::new(stream.uniform(), stream.uniform());
     let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
     stats.camera_samples += 1;
-    path_sample(trace, p, &mut stream, stats)
+    let arc = sample_arc(pixel.arc_offset, sample);
+    path_sample(trace, p, arc, &mut stream, stats)
 }
 
 /// The samples of a pixel whose floor rays are culled by direction, in
-/// chunks: first every sample of the chunk up to its first ray, then the
-/// rays and the rest of the paths taken arc by arc, so that neighbouring
-/// paths meet the same walls and their branches are predictable. Each
-/// value is exactly what [`sample_with`] gives; `add` receives them in
-/// sample order, so the pixel's sum does not depend on the grouping.
+/// chunks, arc by arc: the samples of one arc (see [`sample_arc`]) test
+/// the same walls and their paths branch alike. Each value is exactly
+/// what [`sample_with`] gives; `add` receives them in sample order, so
+/// the pixel's sum does not depend on the grouping.
+///
+/// Without the floor's direct light in the paths (the memo holds it), a
+/// path whose first ray escapes adds exactly nothing: where an arc meets
+/// no wall, its samples are known to be zero and are not drawn at all.
 fn culled_samples(
     context: &Context,
     pixel: &Pixel,
     culled: &BlockCulling,
-    batch: &mut Batch,
+    values: &mut Vec<Rgb>,
     stats: &mut Stats,
     mut add: impl FnMut(Rgb, u32, &mut Stats),
 ) {
@@ -411,65 +425,57 @@ fn culled_samples(
     let scene = trace.scene;
     let samples = context.options.samples;
     let (arcs, shadow_walls) = (&culled.arcs, Some(&culled.shadows[..]));
+    let empty_arcs_add_nothing = !trace.floor_direct && !trace.force;
     for first in (0..samples).step_by(CHUNK) {
         let last = (first + CHUNK as u32).min(samples);
-        let n = (last - first) as usize;
-        batch.starts.resize(n, Start::default());
-        let mut counts = [0u32; ARCS + 1];
-        for (start, sample) in batch.starts.iter_mut().zip(first..last) {
-            let mut stream = pixel.key.stream(sample as u64);
-            let jitter = DVec2::new(stream.uniform(), stream.uniform());
-            let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
-            let begun = path_begin(trace, p, shadow_walls, &mut stream, stats);
-            // The plan culls only when paths bounce: every sample has a ray.
-            start.dir = begun.ray.map_or(DVec2::ZERO, |ray| ray.dir);
-            start.origin = p;
-            start.fluence = begun.fluence;
-            start.arc = begun.arc as u8;
-            start.stream = stream;
-            counts[begun.arc + 1] += 1;
-        }
-        stats.camera_samples += n as u64;
-        // A counting sort of the chunk by arc.
+        values.clear();
+        values.resize((last - first) as usize, Rgb::ZERO);
+        stats.camera_samples += (last - first) as u64;
         for arc in 0..ARCS {
-            counts[arc + 1] += counts[arc];
+            let walls = arcs.arc(arc);
+            let of_arc = (first + first_sample_of_arc(pixel.arc_offset, arc)..last).step_by(ARCS);
+            stats.culled_rays += of_arc.len() as u64;
+            if walls.is_empty() && empty_arcs_add_nothing {
+                stats.culled_empty += of_arc.len() as u64;
+                stats.paths_escaped += of_arc.len() as u64;
+                continue;
+            }
+            for sample in of_arc {
+                let mut stream = pixel.key.stream(sample as u64);
+                let jitter = DVec2::new(stream.uniform(), stream.uniform());
+                let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
+                let begun = path_begin(trace, p, arc, shadow_walls, &mut stream, stats);
+                let value = &mut values[(sample - first) as usize];
+                // The plan culls only when paths bounce: every sample has a ray.
+                let Some(ray) = begun.ray else {
+                    *value = begun.fluence;
+                    continue;
+                };
+                stats.culled_walls_tested += walls.len() as u64;
+                let hit = scene
+                    .segments
+                    .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
+                *value = path_finish(
+                    trace,
+                    begun.fluence,
+                    ray,
+                    hit,
+                    Some(walls),
+                    &mut stream,
+                    stats,
+                );
+            }
         }
-        batch.order.resize(n, 0);
-        for (k, start) in batch.starts.iter().enumerate() {
-            let arc = start.arc as usize;
-            batch.order[counts[arc] as usize] = k as u32;
-            counts[arc] += 1;
-        }
-        batch.values.resize(n, Rgb::ZERO);
-        for &k in &batch.order {
-            let k = k as usize;
-            let start = &mut batch.starts[k];
-            let ray = Ray::new(start.origin, start.dir);
-            let walls = arcs.arc(start.arc as usize);
-            stats.culled_rays += 1;
-            stats.culled_walls_tested += walls.len() as u64;
-            let hit = scene
-                .segments
-                .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
-            batch.values[k] = path_finish(
-                trace,
-                start.fluence,
-                ray,
-                hit,
-                Some(walls),
-                &mut start.stream,
-                stats,
-            );
-        }
-        for (k, &value) in batch.values.iter().enumerate() {
-            add(value, first + k as u32, stats);
+        for (&value, sample) in values.iter().zip(first..) {
+            add(value, sample, stats);
         }
     }
 }
 
-/// Samples taken together by [`culled_samples`]: enough that most arcs
-/// hold several, few enough to stay in the processor's caches.
-const CHUNK: usize = 512;
+/// Samples taken together by [`culled_samples`]: a whole number of runs
+/// of [`ARCS`], few enough that their values stay in the processor's
+/// caches.
+const CHUNK: usize = 8 * ARCS;
 
 /// The buffers of [`culled_samples`], kept by a tile for all its pixels.
 /// What a block of pixels culls: for each arc of directions, the walls its
@@ -512,33 +518,8 @@ impl BlockCulling {
 struct Batch {
     /// The floor memo's strata of one pixel.
     floor: Strata,
-    starts: Vec<Start>,
-    order: Vec<u32>,
+    /// The values of a chunk of samples.
     values: Vec<Rgb>,
-}
-
-/// A sample up to its first ray. Read field by field: copied whole, the
-/// struct that held an `Option<Ray>` was reloaded across the halves of
-/// its stores, a stall that cost a sixth of the render.
-#[derive(Clone)]
-struct Start {
-    origin: DVec2,
-    dir: DVec2,
-    fluence: Rgb,
-    stream: Stream,
-    arc: u8,
-}
-
-impl Default for Start {
-    fn default() -> Start {
-        Start {
-            origin: DVec2::ZERO,
-            dir: DVec2::ZERO,
-            fluence: Rgb::ZERO,
-            stream: Stream::new(0, 0, 0),
-            arc: 0,
-        }
-    }
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of

@@ -20,6 +20,9 @@ pub struct Stats {
     pub culled_rays: u64,
     /// The walls those rays were tested against, in all.
     pub culled_walls_tested: u64,
+    /// Culled floor rays whose arc meets no wall: their paths escape and
+    /// add nothing, so they are neither traced nor in `bounce_rays`.
+    pub culled_empty: u64,
     /// Paths whose last ray hit nothing.
     pub paths_escaped: u64,
     /// Paths stopped by the bounce limit.
@@ -71,6 +74,7 @@ impl Stats {
         self.bounce_rays += other.bounce_rays;
         self.culled_rays += other.culled_rays;
         self.culled_walls_tested += other.culled_walls_tested;
+        self.culled_empty += other.culled_empty;
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
         self.paths_absorbed += other.paths_absorbed;
@@ -106,6 +110,7 @@ impl fmt::Display for Stats {
         writeln!(f, "  light paths      {:>14}", self.light_paths)?;
         writeln!(f, "  culled rays      {:>14}", self.culled_rays)?;
         writeln!(f, "  walls tested     {:>14}", self.culled_walls_tested)?;
+        writeln!(f, "  arc has no wall  {:>14}", self.culled_empty)?;
         writeln!(f, "paths ended by")?;
         writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;
