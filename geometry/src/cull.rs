@@ -20,7 +20,7 @@
 //! separates the two (the separating axis theorem).
 
 use crate::lanes::{Best, visit_crossings};
-use crate::{DVec2, Hit, Ray, SegmentSet, Skip, cross, crossing_parts};
+use crate::{DVec2, Hit, Ray, Segment, SegmentSet, Skip, cross, crossing_parts};
 
 /// The angular margin of an arc, in radians, on each side.
 const ARC_MARGIN: f64 = 1e-9;
@@ -386,5 +386,79 @@ impl SegmentSet {
             };
         }
         best.found()
+    }
+}
+
+/// Rays in lanes, structure-of-arrays: origins `(ox, oy)` and directions
+/// `(dx, dy)`, for [`SegmentSet::closest_hits_among`].
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes<const N: usize> {
+    pub ox: [f64; N],
+    pub oy: [f64; N],
+    pub dx: [f64; N],
+    pub dy: [f64; N],
+}
+
+impl<const N: usize> RayLanes<N> {
+    /// Lane `k`'s ray.
+    #[inline]
+    pub fn ray(&self, k: usize) -> Ray {
+        Ray::new(
+            DVec2::new(self.ox[k], self.oy[k]),
+            DVec2::new(self.dx[k], self.dy[k]),
+        )
+    }
+}
+
+impl SegmentSet {
+    /// [`SegmentSet::closest_hit_among`] for `N` rays at once, with no
+    /// limit and nothing skipped: each lane's answer is exactly that
+    /// query's (the same operations in the same order, ties to the lower
+    /// index). Rays that leave one box in one arc of directions share
+    /// their candidates, and here their tests: one segment against every
+    /// lane, with no branch, which the compiler turns into vector
+    /// instructions.
+    #[inline]
+    pub fn closest_hits_among<const N: usize>(
+        &self,
+        rays: &RayLanes<N>,
+        candidates: &[u32],
+    ) -> [Option<(u32, Hit)>; N] {
+        let mut best_t = [f64::INFINITY; N];
+        let mut best_index = [u32::MAX; N];
+        let mut best_sa = [0.0; N];
+        let mut best_sb = [0.0; N];
+        for &index in candidates {
+            let Segment { a, b } = self.get(index);
+            let e = b - a;
+            for k in 0..N {
+                // `crossing_parts`, lane by lane.
+                let (pax, pay) = (a.x - rays.ox[k], a.y - rays.oy[k]);
+                let (pbx, pby) = (b.x - rays.ox[k], b.y - rays.oy[k]);
+                let sa = rays.dx[k] * pay - rays.dy[k] * pax;
+                let sb = rays.dx[k] * pby - rays.dy[k] * pbx;
+                let apart =
+                    (sa > 0.0 && sb > 0.0) | (sa < 0.0 && sb < 0.0) | (sa == 0.0 && sb == 0.0);
+                let t = (pax * e.y - pay * e.x) / (sb - sa);
+                // Ascending indices: an equal `t` found later never wins.
+                let wins = !apart & (t > 0.0) & (t < best_t[k]);
+                best_t[k] = if wins { t } else { best_t[k] };
+                best_index[k] = if wins { index } else { best_index[k] };
+                best_sa[k] = if wins { sa } else { best_sa[k] };
+                best_sb[k] = if wins { sb } else { best_sb[k] };
+            }
+        }
+        std::array::from_fn(|k| {
+            (best_index[k] != u32::MAX).then(|| {
+                let (sa, sb) = (best_sa[k], best_sb[k]);
+                (
+                    best_index[k],
+                    Hit {
+                        t: best_t[k],
+                        u: sa / (sa - sb),
+                    },
+                )
+            })
+        })
     }
 }

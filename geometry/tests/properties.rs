@@ -2,8 +2,8 @@
 //! proptest configuration, so each run checks the same cases.
 
 use flatray_geometry::{
-    ArcCandidates, DVec2, Kernel, Ray, Segment, SegmentSet, Side, Skip, Strategy as Accel, cross,
-    hull_candidates, intersect, reflect,
+    ArcCandidates, DVec2, Kernel, Ray, RayLanes, Segment, SegmentSet, Side, Skip,
+    Strategy as Accel, cross, hull_candidates, intersect, reflect,
 };
 use proptest::prelude::*;
 
@@ -208,6 +208,18 @@ fn ties_at_a_shared_corner_go_to_the_lower_index_in_every_set() {
             );
             let quad = set.closest_hits(&[ray; 4], f64::INFINITY, [skip; 4]);
             assert_eq!(quad, [hit; 4]);
+            // In lanes, over the list of the walls not skipped.
+            let candidates: Vec<u32> = (0..set.len() as u32)
+                .filter(|&i| !skip.contains(i))
+                .collect();
+            let (o, d) = (ray.origin, ray.dir);
+            let lanes = RayLanes {
+                ox: [o.x; 8],
+                oy: [o.y; 8],
+                dx: [d.x; 8],
+                dy: [d.y; 8],
+            };
+            assert_eq!(set.closest_hits_among(&lanes, &candidates), [hit; 8]);
         }
     }
 }
@@ -271,6 +283,47 @@ proptest! {
                     true
                 });
             }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1000, rng_seed: proptest::test_runner::RngSeed::Fixed(13), ..ProptestConfig::default() })]
+
+    /// Eight rays in lanes against a list of candidates: lane by lane, the
+    /// answer of the one-ray query over the same list. Origins are often
+    /// segment ends (shared corners, rays along segments) and directions
+    /// small integer vectors (parallel to the segments often).
+    #[test]
+    fn rays_in_lanes_hit_what_each_ray_hits_alone(
+        segments in prop::collection::vec(segment(), 1..24),
+        keep in prop::collection::vec(any::<bool>(), 24),
+        rays in prop::collection::vec((0usize..3, 0usize..24, point(), direction()), 8),
+    ) {
+        let origins: Vec<DVec2> = rays
+            .iter()
+            .map(|&(kind, k, p, _)| match kind {
+                0 => segments[k % segments.len()].a,
+                1 => segments[k % segments.len()].b,
+                _ => p,
+            })
+            .collect();
+        let set = SegmentSet::new(segments);
+        // An ascending list, as culling makes them: some of the segments.
+        let candidates: Vec<u32> = (0..set.len() as u32).filter(|&i| keep[i as usize]).collect();
+        let mut lanes = RayLanes { ox: [0.0; 8], oy: [0.0; 8], dx: [0.0; 8], dy: [0.0; 8] };
+        for (k, (o, &(_, _, _, d))) in origins.iter().zip(&rays).enumerate() {
+            (lanes.ox[k], lanes.oy[k], lanes.dx[k], lanes.dy[k]) = (o.x, o.y, d.x, d.y);
+        }
+        let hits = set.closest_hits_among(&lanes, &candidates);
+        for (k, hit) in hits.iter().enumerate() {
+            let ray = lanes.ray(k);
+            prop_assert_eq!(ray, Ray::new(origins[k], rays[k].3));
+            prop_assert_eq!(
+                *hit,
+                set.closest_hit_among(&ray, f64::INFINITY, Skip::NONE, &candidates),
+                "lane {}", k
+            );
         }
     }
 }

@@ -1,7 +1,10 @@
 //! The render loop, written once: tiles in parallel, then pixels, then
 //! samples. Integrators only say how one sample is estimated.
 
-use flatray_geometry::{ArcCandidates, DVec2, Skip, hull_candidates};
+use std::iter::StepBy;
+use std::ops::Range;
+
+use flatray_geometry::{ArcCandidates, DVec2, RayLanes, Skip, hull_candidates};
 use rayon::prelude::*;
 
 use flatray_cache::WallMemo;
@@ -11,7 +14,7 @@ use crate::light::{Strata, Visibility, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::path::{Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
-use crate::sampling::{ARCS, StreamKey, first_sample_of_arc, sample_arc};
+use crate::sampling::{ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc};
 use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
 
@@ -145,6 +148,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         coherence: coherence.as_ref(),
         culling: plan.floor_ray_culling,
         trace: trace_for(scene, options, &plan, memo.as_ref()),
+        render_pixel: pixel_fn(),
     };
     let step = pixel_size(scene, (width, height));
     let tiles_x = width.div_ceil(TILE);
@@ -184,7 +188,8 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
                     });
                     for y in by..by1 {
                         for x in bx..bx1 {
-                            pixels[((y - y0) * tile_width + x - x0) as usize] = render_pixel(
+                            pixels[((y - y0) * tile_width + x - x0) as usize] = (context
+                                .render_pixel)(
                                 &context,
                                 x,
                                 y,
@@ -237,6 +242,59 @@ struct Context<'a> {
     /// Whether the floor's rays test only their arc's walls.
     culling: bool,
     trace: Trace<'a>,
+    /// [`render_pixel`], compiled for this processor.
+    render_pixel: PixelFn,
+}
+
+type PixelFn = fn(
+    &Context,
+    u32,
+    u32,
+    &mut Vec<Visibility>,
+    Option<&BlockCulling>,
+    &mut Batch,
+    &mut Stats,
+) -> [f32; 3];
+
+/// [`render_pixel`] compiled for any x86-64 processor (or any other).
+fn render_pixel_baseline(
+    context: &Context,
+    x: u32,
+    y: u32,
+    visibility: &mut Vec<Visibility>,
+    culled: Option<&BlockCulling>,
+    batch: &mut Batch,
+    stats: &mut Stats,
+) -> [f32; 3] {
+    render_pixel(context, x, y, visibility, culled, batch, stats)
+}
+
+/// [`render_pixel`] compiled with AVX2 (the same operations, so the same
+/// bits: no fused multiply-add is enabled).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn render_pixel_avx2(
+    context: &Context,
+    x: u32,
+    y: u32,
+    visibility: &mut Vec<Visibility>,
+    culled: Option<&BlockCulling>,
+    batch: &mut Batch,
+    stats: &mut Stats,
+) -> [f32; 3] {
+    render_pixel(context, x, y, visibility, culled, batch, stats)
+}
+
+/// The fastest [`render_pixel`] this processor runs.
+fn pixel_fn() -> PixelFn {
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") {
+        return |context, x, y, visibility, culled, batch, stats| {
+            // SAFETY: the processor has AVX2, checked just above.
+            unsafe { render_pixel_avx2(context, x, y, visibility, culled, batch, stats) }
+        };
+    }
+    render_pixel_baseline
 }
 
 /// The switches of a path sample, from the plan.
@@ -267,6 +325,7 @@ const FLOOR_STREAMS: u64 = 1 << 40;
 /// pixel over a stratified grid and every path sample reuses it; without,
 /// each sample estimates it anew. A sample whose estimate is not finite is
 /// left out and reported in `stats`.
+#[inline(always)]
 fn render_pixel(
     context: &Context,
     x: u32,
@@ -413,6 +472,7 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
 /// Without the floor's direct light in the paths (the memo holds it), a
 /// path whose first ray escapes adds exactly nothing: where an arc meets
 /// no wall, its samples are known to be zero and are not drawn at all.
+#[inline(always)]
 fn culled_samples(
     context: &Context,
     pixel: &Pixel,
@@ -435,9 +495,14 @@ fn culled_samples(
             let walls = arcs.arc(arc);
             let of_arc = (first + first_sample_of_arc(pixel.arc_offset, arc)..last).step_by(ARCS);
             stats.culled_rays += of_arc.len() as u64;
-            if walls.is_empty() && empty_arcs_add_nothing {
-                stats.culled_empty += of_arc.len() as u64;
-                stats.paths_escaped += of_arc.len() as u64;
+            if empty_arcs_add_nothing {
+                // Paths start with nothing and leave the floor at once.
+                if walls.is_empty() {
+                    stats.culled_empty += of_arc.len() as u64;
+                    stats.paths_escaped += of_arc.len() as u64;
+                    continue;
+                }
+                arc_in_lanes(context, pixel, arc, walls, of_arc, first, values, stats);
                 continue;
             }
             for sample in of_arc {
@@ -471,6 +536,70 @@ fn culled_samples(
         }
     }
 }
+
+/// The samples `of_arc` of a chunk that starts at sample `first`, all of
+/// arc `arc`, whose paths start with nothing (no floor light of their
+/// own): drawn, their first rays built and tested against `walls` in
+/// lanes, one lane per sample, then each path finished alone. The same
+/// values as [`sample_with`] gives, into `values`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn arc_in_lanes(
+    context: &Context,
+    pixel: &Pixel,
+    arc: usize,
+    walls: &[u32],
+    of_arc: StepBy<Range<u32>>,
+    first: u32,
+    values: &mut [Rgb],
+    stats: &mut Stats,
+) {
+    let trace = &context.trace;
+    let scene = trace.scene;
+    let count = of_arc.len();
+    // Every lane is drawn, those past the chunk's end for samples that
+    // are not taken: the loops below have a fixed length.
+    let start = of_arc.clone().next().unwrap_or(first);
+    let mut streams: [Stream; LANES] =
+        std::array::from_fn(|k| pixel.key.stream(start as u64 + (k * ARCS) as u64));
+    let (mut jx, mut jy, mut fractions) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    for (k, stream) in streams.iter_mut().enumerate() {
+        // In the order `sample_with` draws them: jitter, then direction.
+        jx[k] = stream.uniform();
+        jy[k] = stream.uniform();
+        fractions[k] = stream.uniform();
+    }
+    let (origin, position, step) = (scene.canvas.origin, pixel.position, pixel.step);
+    let mut rays = RayLanes {
+        ox: [0.0; LANES],
+        oy: [0.0; LANES],
+        dx: [0.0; LANES],
+        dy: [0.0; LANES],
+    };
+    for k in 0..LANES {
+        // `origin + (position + jitter) * step`, component by component.
+        rays.ox[k] = origin.x + (position.x + jx[k]) * step.x;
+        rays.oy[k] = origin.y + (position.y + jy[k]) * step.y;
+    }
+    (rays.dx, rays.dy) = arc_points(arc, &fractions);
+    let hits = scene.segments.closest_hits_among(&rays, walls);
+    stats.culled_walls_tested += (walls.len() * count) as u64;
+    for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
+        values[(sample - first) as usize] = path_finish(
+            trace,
+            Rgb::ZERO,
+            rays.ray(k),
+            hits[k],
+            Some(walls),
+            stream,
+            stats,
+        );
+    }
+}
+
+/// Samples of one arc in one chunk, at most: [`arc_in_lanes`] takes them
+/// in this many lanes.
+const LANES: usize = CHUNK / ARCS;
 
 /// Samples taken together by [`culled_samples`]: a whole number of runs
 /// of [`ARCS`], few enough that their values stay in the processor's
@@ -549,6 +678,7 @@ pub fn pixel_sample(
         coherence: None,
         culling: false,
         trace: trace_for(scene, &options, &plan, None),
+        render_pixel: render_pixel_baseline,
     };
     sample_with(
         &context,

@@ -137,13 +137,33 @@ pub fn circle_point(u: f64) -> DVec2 {
 /// `arc`.
 #[inline]
 fn arc_point(arc: usize, fraction: f64) -> DVec2 {
+    let (x, y) = arc_turn(ARC_CENTRES[arc & (ARCS - 1)], fraction);
+    DVec2::new(x, y)
+}
+
+/// [`circle_in_arc`] for `N` samples of one arc at once, each lane's
+/// fraction of the way through it given: the same directions, computed in
+/// vector instructions.
+#[inline]
+pub fn arc_points<const N: usize>(arc: usize, fractions: &[f64; N]) -> ([f64; N], [f64; N]) {
+    // `& (ARCS - 1)` keeps the index in bounds without a check.
+    let centre = ARC_CENTRES[arc & (ARCS - 1)];
+    let (mut xs, mut ys) = ([0.0; N], [0.0; N]);
+    for k in 0..N {
+        (xs[k], ys[k]) = arc_turn(centre, fractions[k]);
+    }
+    (xs, ys)
+}
+
+/// The point `fraction` of the way through the arc whose centre is at
+/// `(cc, sc)`: the centre turned by Taylor polynomials.
+#[inline(always)]
+fn arc_turn((cc, sc): (f64, f64), fraction: f64) -> (f64, f64) {
     let a = (fraction - 0.5) * (std::f64::consts::TAU / ARCS as f64);
     let a2 = a * a;
     let s = a * (1.0 + a2 * (-1.0 / 6.0 + a2 * (1.0 / 120.0 + a2 * (-1.0 / 5040.0))));
     let c = 1.0 + a2 * (-0.5 + a2 * (1.0 / 24.0 + a2 * (-1.0 / 720.0 + a2 * (1.0 / 40_320.0))));
-    // `& (ARCS - 1)` keeps the index in bounds without a check.
-    let (cc, sc) = ARC_CENTRES[arc & (ARCS - 1)];
-    DVec2::new(cc * c - sc * s, sc * c + cc * s)
+    (cc * c - sc * s, sc * c + cc * s)
 }
 
 /// The arcs of [`circle_point`]'s table. A pixel's floor directions are
