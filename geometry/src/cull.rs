@@ -410,6 +410,30 @@ impl<const N: usize> RayLanes<N> {
     }
 }
 
+/// The answers of [`SegmentSet::closest_hits_among`], lane by lane:
+/// structure-of-arrays, so that each is read back as it was written.
+#[derive(Clone, Copy, Debug)]
+pub struct HitLanes<const N: usize> {
+    /// The segment hit, `u32::MAX` for none.
+    pub index: [u32; N],
+    pub t: [f64; N],
+    pub u: [f64; N],
+}
+
+impl<const N: usize> HitLanes<N> {
+    /// Lane `k`'s answer, as `closest_hit_among` gives it.
+    #[inline(always)]
+    pub fn hit(&self, k: usize) -> Option<(u32, Hit)> {
+        (self.index[k] != u32::MAX).then_some((
+            self.index[k],
+            Hit {
+                t: self.t[k],
+                u: self.u[k],
+            },
+        ))
+    }
+}
+
 impl SegmentSet {
     /// [`SegmentSet::closest_hit_among`] for `N` rays at once, with no
     /// limit and nothing skipped: each lane's answer is exactly that
@@ -417,13 +441,13 @@ impl SegmentSet {
     /// index). Rays that leave one box in one arc of directions share
     /// their candidates, and here their tests: one segment against every
     /// lane, with no branch, which the compiler turns into vector
-    /// instructions.
-    #[inline]
+    /// instructions (of the caller's target features: inlined always).
+    #[inline(always)]
     pub fn closest_hits_among<const N: usize>(
         &self,
         rays: &RayLanes<N>,
         candidates: &[u32],
-    ) -> [Option<(u32, Hit)>; N] {
+    ) -> HitLanes<N> {
         let mut best_t = [f64::INFINITY; N];
         let mut best_index = [u32::MAX; N];
         let mut best_sa = [0.0; N];
@@ -448,17 +472,14 @@ impl SegmentSet {
                 best_sb[k] = if wins { sb } else { best_sb[k] };
             }
         }
-        std::array::from_fn(|k| {
-            (best_index[k] != u32::MAX).then(|| {
-                let (sa, sb) = (best_sa[k], best_sb[k]);
-                (
-                    best_index[k],
-                    Hit {
-                        t: best_t[k],
-                        u: sa / (sa - sb),
-                    },
-                )
-            })
-        })
+        let mut u = [0.0; N];
+        for k in 0..N {
+            u[k] = best_sa[k] / (best_sa[k] - best_sb[k]);
+        }
+        HitLanes {
+            index: best_index,
+            t: best_t,
+            u,
+        }
     }
 }

@@ -32,7 +32,7 @@ pub use glam::DVec2;
 mod cull;
 mod lanes;
 mod segment_set;
-pub use cull::{ArcCandidates, MAX_HULL_POINTS, RayLanes, hull_candidates};
+pub use cull::{ArcCandidates, HitLanes, MAX_HULL_POINTS, RayLanes, hull_candidates};
 pub use lanes::Kernel;
 pub use segment_set::{BVH_THRESHOLD, BVH_THRESHOLD_AVX, SegmentSet, Skip, Strategy};
 

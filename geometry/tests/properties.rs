@@ -219,7 +219,8 @@ fn ties_at_a_shared_corner_go_to_the_lower_index_in_every_set() {
                 dx: [d.x; 8],
                 dy: [d.y; 8],
             };
-            assert_eq!(set.closest_hits_among(&lanes, &candidates), [hit; 8]);
+            let hits = set.closest_hits_among(&lanes, &candidates);
+            assert_eq!(std::array::from_fn(|k| hits.hit(k)), [hit; 8]);
         }
     }
 }
@@ -316,11 +317,11 @@ proptest! {
             (lanes.ox[k], lanes.oy[k], lanes.dx[k], lanes.dy[k]) = (o.x, o.y, d.x, d.y);
         }
         let hits = set.closest_hits_among(&lanes, &candidates);
-        for (k, hit) in hits.iter().enumerate() {
+        for k in 0..8 {
             let ray = lanes.ray(k);
             prop_assert_eq!(ray, Ray::new(origins[k], rays[k].3));
             prop_assert_eq!(
-                *hit,
+                hits.hit(k),
                 set.closest_hit_among(&ray, f64::INFINITY, Skip::NONE, &candidates),
                 "lane {}", k
             );

@@ -400,18 +400,12 @@ fn render_pixel(
         stats.floor_memo_reuses += options.samples as u64;
     }
     let mut sum = Rgb::ZERO;
-    let mut add = |value: Rgb, sample: u32, stats: &mut Stats| {
-        if value.is_finite() {
-            sum += value;
-        } else {
-            stats.record_nonfinite(x, y, sample);
-        }
-    };
     match culled {
-        Some(culled) => culled_samples(context, &pixel, culled, &mut batch.values, stats, add),
+        Some(culled) => culled_samples(context, &pixel, culled, &mut batch.values, &mut sum, stats),
         None => {
             for sample in 0..options.samples {
-                add(sample_with(context, &pixel, sample, stats), sample, stats);
+                let value = sample_with(context, &pixel, sample, stats);
+                add_sample(&mut sum, value, (x, y, sample), stats);
             }
         }
     }
@@ -466,7 +460,7 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
 /// The samples of a pixel whose floor rays are culled by direction, in
 /// chunks, arc by arc: the samples of one arc (see [`sample_arc`]) test
 /// the same walls and their paths branch alike. Each value is exactly
-/// what [`sample_with`] gives; `add` receives them in sample order, so
+/// what [`sample_with`] gives; they are added to `sum` in sample order, so
 /// the pixel's sum does not depend on the grouping.
 ///
 /// Without the floor's direct light in the paths (the memo holds it), a
@@ -478,8 +472,8 @@ fn culled_samples(
     pixel: &Pixel,
     culled: &BlockCulling,
     values: &mut Vec<Rgb>,
+    sum: &mut Rgb,
     stats: &mut Stats,
-    mut add: impl FnMut(Rgb, u32, &mut Stats),
 ) {
     let trace = &context.trace;
     let scene = trace.scene;
@@ -531,9 +525,36 @@ fn culled_samples(
                 );
             }
         }
-        for (&value, sample) in values.iter().zip(first..) {
-            add(value, sample, stats);
-        }
+        let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
+        *sum = add_samples(*sum, values, (x, y, first), stats);
+    }
+}
+
+/// `sum` plus `values`, samples `first` onwards of pixel `(x, y)`, in
+/// order. A function of its own, so that the sum stays in registers:
+/// inlined in the pixel loop, it was kept in memory, and each addition
+/// waited for the last one's store.
+#[inline(never)]
+fn add_samples(
+    mut sum: Rgb,
+    values: &[Rgb],
+    (x, y, first): (u32, u32, u32),
+    stats: &mut Stats,
+) -> Rgb {
+    for (&value, sample) in values.iter().zip(first..) {
+        add_sample(&mut sum, value, (x, y, sample), stats);
+    }
+    sum
+}
+
+/// Adds a sample's value to its pixel's sum, or, if it is not finite,
+/// leaves it out and reports it.
+#[inline(always)]
+fn add_sample(sum: &mut Rgb, value: Rgb, (x, y, sample): (u32, u32, u32), stats: &mut Stats) {
+    if value.is_finite() {
+        *sum += value;
+    } else {
+        stats.record_nonfinite(x, y, sample);
     }
 }
 
@@ -589,7 +610,7 @@ fn arc_in_lanes(
             trace,
             Rgb::ZERO,
             rays.ray(k),
-            hits[k],
+            hits.hit(k),
             Some(walls),
             stream,
             stats,

@@ -143,8 +143,8 @@ fn arc_point(arc: usize, fraction: f64) -> DVec2 {
 
 /// [`circle_in_arc`] for `N` samples of one arc at once, each lane's
 /// fraction of the way through it given: the same directions, computed in
-/// vector instructions.
-#[inline]
+/// vector instructions (of the caller's target features: inlined always).
+#[inline(always)]
 pub fn arc_points<const N: usize>(arc: usize, fractions: &[f64; N]) -> ([f64; N], [f64; N]) {
     // `& (ARCS - 1)` keeps the index in bounds without a check.
     let centre = ARC_CENTRES[arc & (ARCS - 1)];
