@@ -635,7 +635,10 @@ fn a_non_finite_sample_is_reported_not_written() {
         assert!(r.image.pixels.iter().flatten().all(|v| !v.is_nan()));
     }
     assert!(rendered2.stats.nonfinite_samples > 0);
-    assert_eq!(rendered2.stats.first_nonfinite, Some((0, 0, 0)));
+    // The first pixel's first sample taken (samples go arc by arc: either
+    // of its two).
+    let first = rendered2.stats.first_nonfinite;
+    assert!(matches!(first, Some((0, 0, 0 | 1))), "{first:?}");
 }
 
 /// Renders `text` with both integrators and many bounces: finite, no

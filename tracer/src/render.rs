@@ -375,9 +375,11 @@ fn render_pixel(
         let floor = &mut batch.floor;
         floor.points.clear();
         floor.numbers.clear();
-        for k in 0..grid * grid {
+        // Stratum `k` is cell `(k % grid, k / grid)`, without dividing.
+        let cells = (0..grid).flat_map(|row| (0..grid).map(move |column| (column, row)));
+        for (k, (column, row)) in cells.enumerate() {
             let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
-            let cell = DVec2::new((k % grid) as f64, (k / grid) as f64);
+            let cell = DVec2::new(column as f64, row as f64);
             let jitter = (cell + DVec2::new(stream.uniform(), stream.uniform())) / grid as f64;
             floor.points.push(corner + jitter * step);
             for light in &scene.lights {
@@ -401,11 +403,13 @@ fn render_pixel(
     }
     let mut sum = Rgb::ZERO;
     match culled {
-        Some(culled) => culled_samples(context, &pixel, culled, &mut batch.values, &mut sum, stats),
+        Some(culled) => culled_samples(context, &pixel, culled, &mut sum, stats),
         None => {
-            for sample in 0..options.samples {
-                let value = sample_with(context, &pixel, sample, stats);
-                add_sample(&mut sum, value, (x, y, sample), stats);
+            for (_, of_arc) in sample_order(pixel.arc_offset, options.samples) {
+                for sample in of_arc {
+                    let value = sample_with(context, &pixel, sample, stats);
+                    add_sample(&mut sum, value, (x, y, sample), stats);
+                }
             }
         }
     }
@@ -457,11 +461,26 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
     path_sample(trace, p, arc, &mut stream, stats)
 }
 
+/// The order in which a pixel's samples are taken and summed, whether
+/// culled or not: chunk by chunk of [`CHUNK`] samples, in each arc by arc
+/// (see [`sample_arc`]), in each by index. Yields each arc with its
+/// samples in the chunk (at most [`LANES`]).
+fn sample_order(offset: usize, samples: u32) -> impl Iterator<Item = (usize, StepBy<Range<u32>>)> {
+    (0..samples).step_by(CHUNK).flat_map(move |first| {
+        let last = (first + CHUNK as u32).min(samples);
+        (0..ARCS).map(move |arc| {
+            (
+                arc,
+                (first + first_sample_of_arc(offset, arc)..last).step_by(ARCS),
+            )
+        })
+    })
+}
+
 /// The samples of a pixel whose floor rays are culled by direction, in
-/// chunks, arc by arc: the samples of one arc (see [`sample_arc`]) test
-/// the same walls and their paths branch alike. Each value is exactly
-/// what [`sample_with`] gives; they are added to `sum` in sample order, so
-/// the pixel's sum does not depend on the grouping.
+/// [`sample_order`]: the samples of one arc test the same walls and their
+/// paths branch alike. Each value is exactly what [`sample_with`] gives,
+/// added to `sum` in the same order as without culling.
 ///
 /// Without the floor's direct light in the paths (the memo holds it), a
 /// path whose first ray escapes adds exactly nothing: where an arc meets
@@ -471,7 +490,6 @@ fn culled_samples(
     context: &Context,
     pixel: &Pixel,
     culled: &BlockCulling,
-    values: &mut Vec<Rgb>,
     sum: &mut Rgb,
     stats: &mut Stats,
 ) {
@@ -480,71 +498,49 @@ fn culled_samples(
     let samples = context.options.samples;
     let (arcs, shadow_walls) = (&culled.arcs, Some(&culled.shadows[..]));
     let empty_arcs_add_nothing = !trace.floor_direct && !trace.force;
-    for first in (0..samples).step_by(CHUNK) {
-        let last = (first + CHUNK as u32).min(samples);
-        values.clear();
-        values.resize((last - first) as usize, Rgb::ZERO);
-        stats.camera_samples += (last - first) as u64;
-        for arc in 0..ARCS {
-            let walls = arcs.arc(arc);
-            let of_arc = (first + first_sample_of_arc(pixel.arc_offset, arc)..last).step_by(ARCS);
-            stats.culled_rays += of_arc.len() as u64;
-            if empty_arcs_add_nothing {
-                // Paths start with nothing and leave the floor at once.
-                if walls.is_empty() {
-                    stats.culled_empty += of_arc.len() as u64;
-                    stats.paths_escaped += of_arc.len() as u64;
-                    continue;
-                }
-                arc_in_lanes(context, pixel, arc, walls, of_arc, first, values, stats);
+    stats.camera_samples += samples as u64;
+    let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
+    for (arc, of_arc) in sample_order(pixel.arc_offset, samples) {
+        let walls = arcs.arc(arc);
+        stats.culled_rays += of_arc.len() as u64;
+        if empty_arcs_add_nothing {
+            // Paths start with nothing and leave the floor at once.
+            if walls.is_empty() {
+                stats.culled_empty += of_arc.len() as u64;
+                stats.paths_escaped += of_arc.len() as u64;
                 continue;
             }
-            for sample in of_arc {
-                let mut stream = pixel.key.stream(sample as u64);
-                let jitter = DVec2::new(stream.uniform(), stream.uniform());
-                let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
-                let begun = path_begin(trace, p, arc, shadow_walls, &mut stream, stats);
-                let value = &mut values[(sample - first) as usize];
-                // The plan culls only when paths bounce: every sample has a ray.
-                let Some(ray) = begun.ray else {
-                    *value = begun.fluence;
-                    continue;
-                };
-                stats.culled_walls_tested += walls.len() as u64;
-                let hit = scene
-                    .segments
-                    .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
-                *value = path_finish(
-                    trace,
-                    begun.fluence,
-                    ray,
-                    hit,
-                    Some(walls),
-                    &mut stream,
-                    stats,
-                );
-            }
+            arc_in_lanes(context, pixel, arc, walls, of_arc, sum, stats);
+            continue;
         }
-        let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
-        *sum = add_samples(*sum, values, (x, y, first), stats);
+        for sample in of_arc {
+            let mut stream = pixel.key.stream(sample as u64);
+            let jitter = DVec2::new(stream.uniform(), stream.uniform());
+            let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
+            let begun = path_begin(trace, p, arc, shadow_walls, &mut stream, stats);
+            // The plan culls only when paths bounce: every sample has a ray.
+            let value = match begun.ray {
+                Some(ray) => {
+                    stats.culled_walls_tested += walls.len() as u64;
+                    let hit =
+                        scene
+                            .segments
+                            .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
+                    path_finish(
+                        trace,
+                        begun.fluence,
+                        ray,
+                        hit,
+                        Some(walls),
+                        &mut stream,
+                        stats,
+                    )
+                }
+                None => begun.fluence,
+            };
+            add_sample(sum, value, (x, y, sample), stats);
+        }
     }
-}
-
-/// `sum` plus `values`, samples `first` onwards of pixel `(x, y)`, in
-/// order. A function of its own, so that the sum stays in registers:
-/// inlined in the pixel loop, it was kept in memory, and each addition
-/// waited for the last one's store.
-#[inline(never)]
-fn add_samples(
-    mut sum: Rgb,
-    values: &[Rgb],
-    (x, y, first): (u32, u32, u32),
-    stats: &mut Stats,
-) -> Rgb {
-    for (&value, sample) in values.iter().zip(first..) {
-        add_sample(&mut sum, value, (x, y, sample), stats);
-    }
-    sum
 }
 
 /// Adds a sample's value to its pixel's sum, or, if it is not finite,
@@ -558,12 +554,11 @@ fn add_sample(sum: &mut Rgb, value: Rgb, (x, y, sample): (u32, u32, u32), stats:
     }
 }
 
-/// The samples `of_arc` of a chunk that starts at sample `first`, all of
-/// arc `arc`, whose paths start with nothing (no floor light of their
-/// own): drawn, their first rays built and tested against `walls` in
-/// lanes, one lane per sample, then each path finished alone. The same
-/// values as [`sample_with`] gives, into `values`.
-#[allow(clippy::too_many_arguments)]
+/// The samples `of_arc` (at most [`LANES`]), all of arc `arc`, whose
+/// paths start with nothing (no floor light of their own): drawn, their
+/// first rays built and tested against `walls` in lanes, one lane per
+/// sample, then each path finished alone and added to `sum` in order.
+/// The same values as [`sample_with`] gives.
 #[inline(always)]
 fn arc_in_lanes(
     context: &Context,
@@ -571,8 +566,7 @@ fn arc_in_lanes(
     arc: usize,
     walls: &[u32],
     of_arc: StepBy<Range<u32>>,
-    first: u32,
-    values: &mut [Rgb],
+    sum: &mut Rgb,
     stats: &mut Stats,
 ) {
     let trace = &context.trace;
@@ -580,7 +574,9 @@ fn arc_in_lanes(
     let count = of_arc.len();
     // Every lane is drawn, those past the chunk's end for samples that
     // are not taken: the loops below have a fixed length.
-    let start = of_arc.clone().next().unwrap_or(first);
+    let Some(start) = of_arc.clone().next() else {
+        return;
+    };
     let mut streams: [Stream; LANES] =
         std::array::from_fn(|k| pixel.key.stream(start as u64 + (k * ARCS) as u64));
     let (mut jx, mut jy, mut fractions) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
@@ -605,8 +601,9 @@ fn arc_in_lanes(
     (rays.dx, rays.dy) = arc_points(arc, &fractions);
     let hits = scene.segments.closest_hits_among(&rays, walls);
     stats.culled_walls_tested += (walls.len() * count) as u64;
+    let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
     for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
-        values[(sample - first) as usize] = path_finish(
+        let value = path_finish(
             trace,
             Rgb::ZERO,
             rays.ray(k),
@@ -615,6 +612,7 @@ fn arc_in_lanes(
             stream,
             stats,
         );
+        add_sample(sum, value, (x, y, sample), stats);
     }
 }
 
@@ -622,12 +620,11 @@ fn arc_in_lanes(
 /// in this many lanes.
 const LANES: usize = CHUNK / ARCS;
 
-/// Samples taken together by [`culled_samples`]: a whole number of runs
-/// of [`ARCS`], few enough that their values stay in the processor's
-/// caches.
+/// The samples of one stretch of [`sample_order`]: a whole number of runs
+/// of [`ARCS`], so that each arc holds the same number of them, and as
+/// many as [`arc_in_lanes`] takes in one go.
 const CHUNK: usize = 8 * ARCS;
 
-/// The buffers of [`culled_samples`], kept by a tile for all its pixels.
 /// What a block of pixels culls: for each arc of directions, the walls its
 /// floor rays can meet; for each light, the walls the shadow rays from its
 /// floor points can cross (`None` for a sun: every wall).
@@ -664,12 +661,11 @@ impl BlockCulling {
     }
 }
 
+/// The buffers of a pixel's floor memo, kept by a tile for all its pixels.
 #[derive(Default)]
 struct Batch {
     /// The floor memo's strata of one pixel.
     floor: Strata,
-    /// The values of a chunk of samples.
-    values: Vec<Rgb>,
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of

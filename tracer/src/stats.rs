@@ -54,7 +54,8 @@ pub struct Stats {
     pub emission_tests: u64,
     /// Samples whose estimate was NaN or infinite, left out of the image.
     pub nonfinite_samples: u64,
-    /// The first such sample in tile order: (x, y, sample index).
+    /// The first such sample taken, in tile order, then in the pixel's
+    /// order of samples: (x, y, sample index).
     pub first_nonfinite: Option<(u32, u32, u32)>,
 }
 
