@@ -9,7 +9,9 @@
 //!
 //! What it never does: read or write files, parse text, or print. Scenes
 //! come in as plain data ([`Scene`]); images go out as linear floats
-//! ([`Image`]); progress goes out through a callback.
+//! ([`Image`]); progress goes out through a callback. Its one `unsafe`
+//! block calls the pixel loop compiled with AVX2, after checking that the
+//! processor has it (`render.rs::pixel_fn`).
 
 mod coherence;
 mod glass;

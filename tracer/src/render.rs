@@ -270,7 +270,8 @@ fn render_pixel_baseline(
 }
 
 /// [`render_pixel`] compiled with AVX2 (the same operations, so the same
-/// bits: no fused multiply-add is enabled).
+/// bits: no fused multiply-add is enabled). The same body as
+/// [`render_pixel_baseline`]: only the target feature differs.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn render_pixel_avx2(
