@@ -256,22 +256,8 @@ type PixelFn = fn(
     &mut Stats,
 ) -> [f32; 3];
 
-/// [`render_pixel`] compiled for any x86-64 processor (or any other).
-fn render_pixel_baseline(
-    context: &Context,
-    x: u32,
-    y: u32,
-    visibility: &mut Vec<Visibility>,
-    culled: Option<&BlockCulling>,
-    batch: &mut Batch,
-    stats: &mut Stats,
-) -> [f32; 3] {
-    render_pixel(context, x, y, visibility, culled, batch, stats)
-}
-
 /// [`render_pixel`] compiled with AVX2 (the same operations, so the same
-/// bits: no fused multiply-add is enabled). The same body as
-/// [`render_pixel_baseline`]: only the target feature differs.
+/// bits: no fused multiply-add is enabled).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn render_pixel_avx2(
@@ -295,7 +281,8 @@ fn pixel_fn() -> PixelFn {
             unsafe { render_pixel_avx2(context, x, y, visibility, culled, batch, stats) }
         };
     }
-    render_pixel_baseline
+    // Out of line, compiled for any x86-64 processor (or any other).
+    render_pixel
 }
 
 /// The switches of a path sample, from the plan.
@@ -445,6 +432,17 @@ impl Pixel {
     }
 }
 
+impl Pixel {
+    /// A sample's receiver point, jittered uniformly inside the pixel (the
+    /// box filter): the first two numbers of the sample's stream.
+    /// [`arc_in_lanes`] computes the same, component by component.
+    #[inline(always)]
+    fn receiver(&self, scene: &Scene, stream: &mut Stream) -> DVec2 {
+        let jitter = DVec2::new(stream.uniform(), stream.uniform());
+        scene.canvas.origin + (self.position + jitter) * self.step
+    }
+}
+
 /// The stream sample index that draws a pixel's [`Pixel::arc_offset`],
 /// apart from every path sample's and the floor memo's.
 const ARC_OFFSET_STREAM: u64 = 1 << 41;
@@ -455,8 +453,7 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
     let trace = &context.trace;
     let scene = trace.scene;
     let mut stream = pixel.key.stream(sample as u64);
-    let jitter = DVec2::new(stream.uniform(), stream.uniform());
-    let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
+    let p = pixel.receiver(scene, &mut stream);
     stats.camera_samples += 1;
     let arc = sample_arc(pixel.arc_offset, sample);
     path_sample(trace, p, arc, &mut stream, stats)
@@ -516,8 +513,7 @@ fn culled_samples(
         }
         for sample in of_arc {
             let mut stream = pixel.key.stream(sample as u64);
-            let jitter = DVec2::new(stream.uniform(), stream.uniform());
-            let p = scene.canvas.origin + (pixel.position + jitter) * pixel.step;
+            let p = pixel.receiver(scene, &mut stream);
             let begun = path_begin(trace, p, arc, shadow_walls, &mut stream, stats);
             // The plan culls only when paths bounce: every sample has a ray.
             let value = match begun.ray {
@@ -696,7 +692,7 @@ pub fn pixel_sample(
         coherence: None,
         culling: false,
         trace: trace_for(scene, &options, &plan, None),
-        render_pixel: render_pixel_baseline,
+        render_pixel,
     };
     sample_with(
         &context,
