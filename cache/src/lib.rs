@@ -28,13 +28,28 @@ pub type Value = [f32; 3];
 #[derive(Clone, Debug, Default)]
 pub struct WallMemo {
     lights: usize,
-    /// For each wall, its first span and its number of spans.
-    walls: Vec<(u32, u32)>,
+    /// For each wall, its first span, its number of spans, and what a
+    /// lookup finds its span with.
+    walls: Vec<SpanRange>,
     spans: Vec<Span>,
     /// Per (span, side, bin, light), laid out span by span.
     per_light: Vec<Value>,
     /// Per (span, side, bin): the sum over lights, what a lookup reads.
     total: Vec<Value>,
+}
+
+/// A wall of at most this many spans finds a lookup's span without a
+/// branch.
+const SHORT_SPANS: usize = 4;
+
+/// A wall's first span and number of spans, and the ends of its first
+/// spans but the last (`+inf` past them): the span holding `u` is the
+/// first plus the number of these ends before `u`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SpanRange {
+    first: u32,
+    count: u32,
+    ends: [f64; SHORT_SPANS - 1],
 }
 
 /// A stretch of a wall between junctions: `[u0, u1]` along the wall, cut
@@ -100,12 +115,19 @@ impl WallMemo {
                 });
                 next += 2 * bins as usize;
             }
-            walls.push((first, spans.len() as u32 - first));
+            let count = spans.len() as u32 - first;
+            let mut ends = [f64::INFINITY; SHORT_SPANS - 1];
+            // The last span ends at 1, and u is at most 1.
+            let inner = &spans[first as usize..spans.len() - 1];
+            for (end, span) in ends.iter_mut().zip(inner) {
+                *end = span.u1;
+            }
+            walls.push(SpanRange { first, count, ends });
         }
         let owner: Vec<u32> = walls
             .iter()
             .enumerate()
-            .flat_map(|(w, &(_, count))| std::iter::repeat_n(w as u32, count as usize))
+            .flat_map(|(w, range)| std::iter::repeat_n(w as u32, range.count as usize))
             .collect();
         let per_light: Vec<Value> = spans
             .par_iter()
@@ -150,7 +172,7 @@ impl WallMemo {
 
     /// The number of bins of `wall`, over all its spans.
     pub fn bins(&self, wall: u32) -> u32 {
-        let (first, count) = self.walls[wall as usize];
+        let SpanRange { first, count, .. } = self.walls[wall as usize];
         self.spans[first as usize..(first + count) as usize]
             .iter()
             .map(|s| s.bins)
@@ -159,7 +181,7 @@ impl WallMemo {
 
     /// The number of spans of `wall`.
     pub fn spans(&self, wall: u32) -> u32 {
-        self.walls[wall as usize].1
+        self.walls[wall as usize].count
     }
 
     /// Entries stored per light: (wall, side, bin, light) keys.
@@ -171,29 +193,43 @@ impl WallMemo {
     pub fn memory_bytes(&self) -> usize {
         (self.per_light.len() + self.total.len()) * std::mem::size_of::<Value>()
             + self.spans.len() * std::mem::size_of::<Span>()
-            + self.walls.len() * std::mem::size_of::<(u32, u32)>()
+            + self.walls.len() * std::mem::size_of::<SpanRange>()
     }
 
     /// The value stored for one light in bin `bin` of span `span` of
     /// `wall`.
     pub fn entry(&self, wall: u32, span: u32, side: usize, bin: u32, light: usize) -> Value {
-        let s = self.spans[(self.walls[wall as usize].0 + span) as usize];
+        let s = self.spans[(self.walls[wall as usize].first + span) as usize];
         let base = s.offset + side * s.bins as usize + bin as usize;
         self.per_light[base * self.lights + light]
+    }
+
+    /// The span of `wall` that holds `u`: the first whose end is not
+    /// before `u`, or else the last.
+    #[inline(always)]
+    fn span_of(&self, wall: u32, u: f64) -> usize {
+        let wall = &self.walls[wall as usize];
+        if wall.count as usize <= SHORT_SPANS && !u.is_nan() {
+            // The ends ascend, and the padding is never passed: count
+            // them, without a branch that a mispredicted lookup pays for.
+            let passed: u32 = wall.ends.iter().map(|&end| (u > end) as u32).sum();
+            (wall.first + passed) as usize
+        } else {
+            // A linear scan.
+            let (mut s, last) = (wall.first, wall.first + wall.count - 1);
+            while s < last && (u > self.spans[s as usize].u1 || u.is_nan()) {
+                s += 1;
+            }
+            s as usize
+        }
     }
 
     /// The summed value over all lights at `key`, linearly interpolated
     /// between the centres of the two nearest bins of its span (constant
     /// beyond the span's first and last centre).
-    #[inline]
+    #[inline(always)]
     pub fn lookup(&self, key: Key) -> Value {
-        let (first, count) = self.walls[key.wall as usize];
-        let spans = &self.spans[first as usize..(first + count) as usize];
-        // Spans are few: a linear scan finds the one holding u.
-        let span = spans
-            .iter()
-            .find(|s| key.u <= s.u1)
-            .unwrap_or(&spans[spans.len() - 1]);
+        let span = &self.spans[self.span_of(key.wall, key.u)];
         let n = span.bins as usize;
         let base = span.offset + key.side * n;
         // A span of the whole wall (most are) needs no division: (u - 0) / 1
@@ -314,6 +350,38 @@ mod tests {
             }),
             [1.0; 3]
         );
+    }
+
+    #[test]
+    fn a_lookup_finds_the_span_a_linear_scan_finds() {
+        // Walls of 1 to 7 spans: up to SHORT_SPANS without a branch, more
+        // by the scan. u at every junction, a hair either side of it, the
+        // ends, beyond them, and NaN.
+        let junctions: Vec<Vec<f64>> = (0..7)
+            .map(|k| (1..=k).map(|j| j as f64 / (k + 1) as f64 - 0.01).collect())
+            .collect();
+        let memo = WallMemo::build(&[10.0; 7], &junctions, 1.0, 1, |_, _, _, _| [0.0; 3]);
+        for (wall, cuts) in junctions.iter().enumerate() {
+            let wall = wall as u32;
+            assert_eq!(memo.spans(wall), cuts.len() as u32 + 1);
+            let range = memo.walls[wall as usize];
+            let spans = &memo.spans[range.first as usize..(range.first + range.count) as usize];
+            let mut us = vec![0.0, 1.0, -0.5, 1.5, f64::NAN, 0.5];
+            for &c in cuts {
+                us.extend([c, c.next_down(), c.next_up()]);
+            }
+            for u in us {
+                let scan = spans
+                    .iter()
+                    .position(|s| u <= s.u1)
+                    .unwrap_or(spans.len() - 1);
+                assert_eq!(
+                    memo.span_of(wall, u),
+                    range.first as usize + scan,
+                    "wall {wall}, u {u}"
+                );
+            }
+        }
     }
 
     #[test]

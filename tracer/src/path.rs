@@ -140,6 +140,13 @@ pub(crate) fn path_finish(
             return fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance;
         }
     }
+    if first_hit.is_none() && !force {
+        // Escaped at once, as the loop below would find, with nothing met
+        // on the way (emission is looked for only after a mirror).
+        stats.bounce_rays += 1;
+        stats.paths_escaped += 1;
+        return fluence;
+    }
     let mut fluence = fluence;
     let mut ray = ray;
     let mut first_hit = Some(first_hit);
@@ -196,10 +203,13 @@ pub(crate) fn path_finish(
         }
         let x = wall.segment.point_at(h.u);
         unfolded += h.t;
-        throughput *= transmit(
-            absorption(scene, glass.flight_body(&wall.material, side)),
-            h.t,
-        );
+        if !scene.glass.is_empty() {
+            // Times exactly 1 in a scene without glass.
+            throughput *= transmit(
+                absorption(scene, glass.flight_body(&wall.material, side)),
+                h.t,
+            );
+        }
         if after_mirror && let Some(light) = scene.light_of_wall(index) {
             let light = &scene.lights[light as usize];
             fluence += throughput * line_emission(light, side, unfolded, scene.small_radius);
