@@ -107,3 +107,41 @@ fn hard_configurations_render_the_same() {
         }
     }
 }
+
+/// A line light behind a pane, with an opaque wall casting a full shadow
+/// and a small obstacle casting a soft one: where every wall that cuts the
+/// light off stands between the whole pixel and the whole light (the
+/// umbra, and the floor seen only through the pane), one ray from the
+/// pixel's centre serves every stratum. The image is the same, with most
+/// shadow rays saved; the soft shadow still traces its own.
+#[test]
+fn a_line_light_shares_one_ray_where_walls_cut_it_off_whole() {
+    let loaded = scene(
+        "Scene(canvas: (60, 40), floor: Color((0.8, 0.8, 0.8)),
+            walls: [Wall(a: (20, -5), b: (20, 45)),
+                    Wall(a: (35, -5), b: (35, 45), material: Transparent(tint: (0.5, 0.8, 0.9))),
+                    Wall(a: (28, 12), b: (30, 24))],
+            lights: [Line(a: (50, 10), b: (55, 30), intensity: 1.0)])",
+    );
+    let options = RenderOptions {
+        samples: 16,
+        scale: 2.0,
+        ..loaded.options
+    };
+    let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
+    let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
+    assert!(with == without, "the masks changed the image");
+    // Without the shared umbra and pane, the floor left of the pane
+    // traces every stratum (two thirds of all rays, with the pixels near
+    // the other walls and the light's line); with them, only the pixels
+    // near an edge or in the soft shadow do (two fifths).
+    assert!(
+        with_stats.shadow_rays * 2 < without_stats.shadow_rays,
+        "{} shadow rays with the masks, {} without",
+        with_stats.shadow_rays,
+        without_stats.shadow_rays
+    );
+    // The pane lets light through, tinted; the umbra is dark.
+    let behind_pane = with.get(54, 70)[0];
+    assert!(behind_pane > 0.0 && with.get(20, 40) == [0.0; 3]);
+}

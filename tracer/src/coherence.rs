@@ -16,15 +16,19 @@
 //!   every stratum: one shadow ray from the pixel's centre gives it, the
 //!   very product of tints each stratum's own ray would give (same walls,
 //!   same order), so the image is bit-identical;
-//! - a line light is either cut by some wall for every stratum (its rays
-//!   are traced) or for none: then every transmittance is exactly 1 and no
-//!   ray is cast.
+//! - a line light is cut by no wall for any stratum: every transmittance
+//!   is exactly 1 and no ray is cast; or every wall that cuts it stands
+//!   between the whole pixel and the whole light (an umbra, or panes that
+//!   every ray crosses): one shadow ray from the centre gives every
+//!   stratum's transmittance, as for a point light; or else each stratum
+//!   traces its own.
 //!
 //! Scenes with more wall-light pairs than [`MAX_PAIRS`] skip this (every
 //! pixel traces), since drawing their boundaries would cost more than it
 //! saves.
 
 use flatray_geometry::{DVec2, Ray, Segment, Skip, clip_to_box};
+use rayon::prelude::*;
 
 use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
@@ -39,7 +43,8 @@ pub(crate) enum Coherence {
     Varies,
     /// The same transmittance everywhere in the pixel: one shadow ray.
     Same,
-    /// A line light that no wall cuts off anywhere in the pixel.
+    /// A line light that no wall cuts off anywhere in the pixel: a
+    /// transmittance of exactly 1, and no ray.
     Clear,
 }
 
@@ -118,25 +123,29 @@ impl FloorCoherence {
             if !complete || mask.overflow {
                 continue;
             }
-            for y in 0..height {
-                for x in 0..width {
-                    if mask.marked[y * width + x] {
-                        continue;
-                    }
-                    let state = match light.shape {
-                        LightShape::Line { segment, .. } => {
-                            let centre =
-                                scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-                            if walls().any(|w| cuts_triangle(&w, centre, &segment)) {
-                                Coherence::Varies
-                            } else {
-                                Coherence::Clear
-                            }
+            // Rows in parallel: a line light tests every wall at every
+            // unmarked pixel.
+            let marked = &mask.marked;
+            let states: Vec<Coherence> = (0..height)
+                .into_par_iter()
+                .flat_map_iter(|y| {
+                    (0..width).map(move |x| {
+                        if marked[y * width + x] {
+                            return Coherence::Varies;
                         }
-                        _ => Coherence::Same,
-                    };
-                    cells[(y * width + x) * lights + index] = state;
-                }
+                        match light.shape {
+                            LightShape::Line { segment, .. } => {
+                                let centre = scene.canvas.origin
+                                    + (DVec2::new(x as f64, y as f64) + 0.5) * step;
+                                line_coherence(walls(), centre, &segment)
+                            }
+                            _ => Coherence::Same,
+                        }
+                    })
+                })
+                .collect();
+            for (cell, state) in cells.iter_mut().skip(index).step_by(lights).zip(states) {
+                *cell = state;
             }
         }
         Some(FloorCoherence {
@@ -223,11 +232,49 @@ fn near(p: DVec2, segment: &Segment) -> bool {
     d.is_nan() || d <= 1e-9 * scale
 }
 
+/// What the strata of an unmarked pixel of centre `centre` need for line
+/// light `light`, given the `walls` its shadow rays can meet: `Clear` when
+/// none cuts the triangle of the centre and the light's ends; `Same` when
+/// every wall that cuts it crosses both of its sides from the centre, so
+/// that it stands between the whole pixel and the whole light (an umbra,
+/// or a pane every ray goes through); `Varies` otherwise.
+///
+/// In an unmarked pixel no wall end crosses the lines from the pixel to
+/// the light's ends, and no wall comes near the pixel or the light (or
+/// `cuts_triangle` says so): which sides each wall crosses is the same for
+/// every point of the pixel, and a wall that crosses both separates the
+/// point from every point of the light, far from the ends of the shadow
+/// ray and from its own ends. So every stratum's shadow ray, wherever it
+/// aims on the light, crosses exactly those walls, in index order, like
+/// the one ray from the centre that `centre_transmittance` casts.
+fn line_coherence(
+    walls: impl Iterator<Item = Segment>,
+    centre: DVec2,
+    light: &Segment,
+) -> Coherence {
+    let mut state = Coherence::Clear;
+    for wall in walls {
+        if !cuts_triangle(&wall, centre, light) {
+            continue;
+        }
+        // Near the light, a shadow ray's `t < 1` test is left to rounding.
+        let separates = !near_light(&wall, light)
+            && [light.a, light.b]
+                .iter()
+                .all(|&end| segments_meet(wall.a, wall.b, centre, end));
+        if !separates {
+            return Coherence::Varies;
+        }
+        state = Coherence::Same;
+    }
+    state
+}
+
 /// Whether `wall` meets the closed triangle of `x` and `light`'s ends, or
 /// comes within rounding distance of the light (so that its rays' `t < 1`
 /// test could go either way).
 fn cuts_triangle(wall: &Segment, x: DVec2, light: &Segment) -> bool {
-    if near(light.a, wall) || near(light.b, wall) || near(wall.a, light) || near(wall.b, light) {
+    if near_light(wall, light) {
         return true;
     }
     let corners = [x, light.a, light.b];
@@ -240,6 +287,12 @@ fn cuts_triangle(wall: &Segment, x: DVec2, light: &Segment) -> bool {
     inside(wall.a)
         || inside(wall.b)
         || (0..3).any(|k| segments_meet(wall.a, wall.b, corners[k], corners[(k + 1) % 3]))
+}
+
+/// Whether an end of `wall` or of `light` lies within rounding distance
+/// of the other.
+fn near_light(wall: &Segment, light: &Segment) -> bool {
+    near(light.a, wall) || near(light.b, wall) || near(wall.a, light) || near(wall.b, light)
 }
 
 /// Whether closed segments `p q` and `r s` share a point.
@@ -264,8 +317,9 @@ fn segments_meet(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
     on(p, q, r, d1) || on(p, q, s, d2) || on(r, s, p, d3) || on(r, s, q, d4)
 }
 
-/// The transmittance from a pixel's `centre` to point, spot or
-/// directional light `index`: what every stratum of a `Same` pixel gets.
+/// The transmittance from a pixel's `centre` to light `index`: what every
+/// stratum of a `Same` pixel gets (aimed at the middle of a line light,
+/// though any point of it would do: see `line_coherence`).
 pub(crate) fn centre_transmittance(
     scene: &Scene,
     index: usize,
@@ -290,6 +344,13 @@ pub(crate) fn centre_transmittance(
             None,
             stats,
         ),
-        LightShape::Line { .. } => Rgb::ONE,
+        LightShape::Line { segment, .. } => crate::light::transmittance(
+            scene,
+            &Ray::new(centre, segment.point_at(0.5) - centre),
+            1.0,
+            skip,
+            None,
+            stats,
+        ),
     }
 }

@@ -162,6 +162,17 @@ pub(crate) fn direct_light_strata(
     let mut line = 0;
     for (index, light) in scene.lights.iter().enumerate() {
         let vis = visibility[index];
+        if vis == Visibility::Known(Rgb::ZERO) {
+            // A pixel in the light's full shadow (the coherence masks
+            // keep out the pixel of a point light itself, the one point
+            // that ignores its transmittance): every stratum would add
+            // exactly +0, a zero transmittance times a finite value.
+            // The numbers were drawn all the same: no other light's change.
+            if let LightShape::Line { .. } = light.shape {
+                line += 1;
+            }
+            continue;
+        }
         match (light.shape, vis) {
             (LightShape::Point { at }, Visibility::Known(known)) => {
                 let (intensity, falloff, r0) = (light.intensity, light.falloff, scene.small_radius);
