@@ -60,6 +60,25 @@ struct Span {
     u1: f64,
     bins: u32,
     offset: usize,
+    /// `u1 - u0`, `bins` and `bins - 1` as a lookup computes with them.
+    width: f64,
+    scale: f64,
+    last: f64,
+}
+
+impl Span {
+    fn new(u0: f64, u1: f64, bins: u32, offset: usize) -> Span {
+        Span {
+            u0,
+            u1,
+            bins,
+            offset,
+            width: u1 - u0,
+            // Through i64: the same values, as bins < 2^32.
+            scale: bins as i64 as f64,
+            last: (bins as i64 - 1) as f64,
+        }
+    }
 }
 
 /// Where a lookup lands: a wall, a side (0 or 1) and a position `u` in
@@ -107,12 +126,7 @@ impl WallMemo {
                 } else {
                     1
                 };
-                spans.push(Span {
-                    u0: pair[0],
-                    u1: pair[1],
-                    bins,
-                    offset: next,
-                });
+                spans.push(Span::new(pair[0], pair[1], bins, next));
                 next += 2 * bins as usize;
             }
             let count = spans.len() as u32 - first;
@@ -232,19 +246,14 @@ impl WallMemo {
         let span = &self.spans[self.span_of(key.wall, key.u)];
         let n = span.bins as usize;
         let base = span.offset + key.side * n;
-        // A span of the whole wall (most are) needs no division: (u - 0) / 1
-        // is u exactly.
-        let local = if span.u0 == 0.0 && span.u1 == 1.0 {
-            key.u
-        } else {
-            (key.u - span.u0) / (span.u1 - span.u0)
-        };
+        // (u - 0) / 1 is u exactly for a span of the whole wall (most are):
+        // one division rather than a branch that mispredicts.
+        let local = (key.u - span.u0) / span.width;
         // Conversions through i64 (one instruction each; usize takes a
-        // sequence of them on x86-64): the same values, as n < 2^32.
-        let last = (n - 1) as i64;
-        let x = (local * n as i64 as f64 - 0.5).clamp(0.0, last as f64);
-        let i = (x as i64).min(last);
-        let j = (i + 1).min(last);
+        // sequence of them on x86-64). x is at most `last`, so is i.
+        let x = (local * span.scale - 0.5).clamp(0.0, span.last);
+        let i = x as i64;
+        let j = (i + 1).min(n as i64 - 1);
         let f = (x - i as f64) as f32;
         let (i, j) = (i as usize, j as usize);
         let (a, b) = (self.total[base + i], self.total[base + j]);

@@ -123,9 +123,19 @@ impl FloorCoherence {
             if !complete || mask.overflow {
                 continue;
             }
+            // A wall that touches the light's ends (or the light, its
+            // ends) leaves its rays' `t < 1` test to rounding: then every
+            // pixel traces the line light.
+            let far_walls: Option<Vec<Segment>> = match light.shape {
+                LightShape::Line { segment, .. } => {
+                    let all: Vec<Segment> = walls().collect();
+                    (!all.iter().any(|w| near_light(w, &segment))).then_some(all)
+                }
+                _ => None,
+            };
             // Rows in parallel: a line light tests every wall at every
             // unmarked pixel.
-            let marked = &mask.marked;
+            let (marked, far_walls) = (&mask.marked, far_walls.as_deref());
             let states: Vec<Coherence> = (0..height)
                 .into_par_iter()
                 .flat_map_iter(|y| {
@@ -133,12 +143,13 @@ impl FloorCoherence {
                         if marked[y * width + x] {
                             return Coherence::Varies;
                         }
-                        match light.shape {
-                            LightShape::Line { segment, .. } => {
+                        match (light.shape, far_walls) {
+                            (LightShape::Line { segment, .. }, Some(walls)) => {
                                 let centre = scene.canvas.origin
                                     + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-                                line_coherence(walls(), centre, &segment)
+                                line_coherence(walls, centre, &segment)
                             }
+                            (LightShape::Line { .. }, None) => Coherence::Varies,
                             _ => Coherence::Same,
                         }
                     })
@@ -233,35 +244,30 @@ fn near(p: DVec2, segment: &Segment) -> bool {
 }
 
 /// What the strata of an unmarked pixel of centre `centre` need for line
-/// light `light`, given the `walls` its shadow rays can meet: `Clear` when
+/// light `light`, given the `walls` its shadow rays can meet (none of
+/// them near the light: see `near_light`): `Clear` when
 /// none cuts the triangle of the centre and the light's ends; `Same` when
 /// every wall that cuts it crosses both of its sides from the centre, so
 /// that it stands between the whole pixel and the whole light (an umbra,
 /// or a pane every ray goes through); `Varies` otherwise.
 ///
 /// In an unmarked pixel no wall end crosses the lines from the pixel to
-/// the light's ends, and no wall comes near the pixel or the light (or
-/// `cuts_triangle` says so): which sides each wall crosses is the same for
+/// the light's ends, and no wall comes near the pixel or the light:
+/// which sides each wall crosses is the same for
 /// every point of the pixel, and a wall that crosses both separates the
 /// point from every point of the light, far from the ends of the shadow
 /// ray and from its own ends. So every stratum's shadow ray, wherever it
 /// aims on the light, crosses exactly those walls, in index order, like
 /// the one ray from the centre that `centre_transmittance` casts.
-fn line_coherence(
-    walls: impl Iterator<Item = Segment>,
-    centre: DVec2,
-    light: &Segment,
-) -> Coherence {
+fn line_coherence(walls: &[Segment], centre: DVec2, light: &Segment) -> Coherence {
     let mut state = Coherence::Clear;
     for wall in walls {
-        if !cuts_triangle(&wall, centre, light) {
+        if !meets_triangle(wall, centre, light) {
             continue;
         }
-        // Near the light, a shadow ray's `t < 1` test is left to rounding.
-        let separates = !near_light(&wall, light)
-            && [light.a, light.b]
-                .iter()
-                .all(|&end| segments_meet(wall.a, wall.b, centre, end));
+        let separates = [light.a, light.b]
+            .iter()
+            .all(|&end| segments_meet(wall.a, wall.b, centre, end));
         if !separates {
             return Coherence::Varies;
         }
@@ -270,13 +276,8 @@ fn line_coherence(
     state
 }
 
-/// Whether `wall` meets the closed triangle of `x` and `light`'s ends, or
-/// comes within rounding distance of the light (so that its rays' `t < 1`
-/// test could go either way).
-fn cuts_triangle(wall: &Segment, x: DVec2, light: &Segment) -> bool {
-    if near_light(wall, light) {
-        return true;
-    }
+/// Whether `wall` meets the closed triangle of `x` and `light`'s ends.
+fn meets_triangle(wall: &Segment, x: DVec2, light: &Segment) -> bool {
     let corners = [x, light.a, light.b];
     let inside = |p: DVec2| {
         let s: [f64; 3] = std::array::from_fn(|k| {
