@@ -136,7 +136,9 @@ pub(crate) struct Strata {
 /// loop of its own.
 /// With `shadow_walls` (per light: the walls its shadow rays from these
 /// points can cross, or `None` for every wall), shadow rays test only
-/// those.
+/// those. Inlined always, with the line lights' angle samples: into the
+/// pixel loop compiled with AVX2, it runs 3 % fewer instructions there.
+#[inline(always)]
 pub(crate) fn direct_light_strata(
     scene: &Scene,
     strata: &mut Strata,

@@ -274,7 +274,7 @@ pub fn uniform_half_circle(n: DVec2, u: f64) -> (DVec2, f64) {
 
 /// `(cos theta, sin theta)` for `theta` in `[0, 2 pi)`, by
 /// [`circle_point`] (no library call; within 1e-15).
-#[inline]
+#[inline(always)]
 fn turn(theta: f64) -> DVec2 {
     circle_point(theta * (1.0 / std::f64::consts::TAU))
 }
@@ -285,7 +285,7 @@ fn turn(theta: f64) -> DVec2 {
 /// nearest `k / 32` plus `atan` of the small remainder
 /// `(t - k/32) / (1 + t k/32)` (at most 1/64), a series whose first
 /// omitted term is below 1e-21. Not finite, or `(0, 0)`: not an angle.
-#[inline]
+#[inline(always)]
 fn atan2_upper(y: f64, x: f64) -> f64 {
     let (ax, steep) = (x.abs(), y > x.abs());
     let t = if steep { ax / y } else { y / ax };
@@ -375,7 +375,7 @@ pub fn sample_subtended_angle(p: DVec2, light: &Segment, u: f64) -> Option<Angle
 /// The end of [`sample_subtended_angle`], given the cross product `c` of
 /// the light's ends seen from `p`, the angle it subtends, and the
 /// rotation `(cos, sin)` of the drawn share of that angle.
-#[inline]
+#[inline(always)]
 fn angle_sample(
     p: DVec2,
     light: &Segment,
@@ -405,6 +405,7 @@ fn angle_sample(
 /// chain of one point's arithmetic (an `atan2`, then a rotation and a
 /// division) overlaps the other points'. `work` holds the passes'
 /// intermediate values between calls.
+#[inline(always)]
 pub fn sample_subtended_angles(
     points: &[DVec2],
     us: &[f64],

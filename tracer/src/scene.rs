@@ -246,8 +246,9 @@ impl AlbedoAlong {
         let cells = &self.cells[wall as usize];
         let n = cells.len();
         if n > 0 {
-            // u in [0, 1]; the cast saturates, and NaN gives 0.
-            let cell = cells[((u * n as f64) as usize).min(n - 1)];
+            // u in [0, 1]; the casts saturate, and NaN gives 0. Through
+            // i64: one instruction, where usize takes a dozen on x86-64.
+            let cell = cells[((u * n as f64) as i64).clamp(0, n as i64 - 1) as usize];
             if !cell.x.is_nan() {
                 return cell;
             }
