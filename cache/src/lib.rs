@@ -131,7 +131,8 @@ impl WallMemo {
             }
             let count = spans.len() as u32 - first;
             let mut ends = [f64::INFINITY; SHORT_SPANS - 1];
-            // The last span ends at 1, and u is at most 1.
+            // The last span's end is never needed: a u beyond every other
+            // end lies in the last span.
             let inner = &spans[first as usize..spans.len() - 1];
             for (end, span) in ends.iter_mut().zip(inner) {
                 *end = span.u1;
