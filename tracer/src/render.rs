@@ -166,8 +166,6 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             let mut stats = Stats::default();
             let tile_width = x1 - x0;
             let mut pixels = vec![[0.0; 3]; (tile_width * (y1 - y0)) as usize];
-            // Reused by every pixel of the tile: no allocation per pixel.
-            let mut visibility = Vec::with_capacity(scene.lights.len());
             // The walls each arc of directions can meet, for the tile and
             // then for each block of it (tested against the tile's lists).
             let mut tile_arcs = ArcCandidates::default();
@@ -190,13 +188,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
                         for x in bx..bx1 {
                             pixels[((y - y0) * tile_width + x - x0) as usize] = (context
                                 .render_pixel)(
-                                &context,
-                                x,
-                                y,
-                                &mut visibility,
-                                culled,
-                                &mut batch,
-                                &mut stats,
+                                &context, x, y, culled, &mut batch, &mut stats,
                             );
                         }
                     }
@@ -246,15 +238,7 @@ struct Context<'a> {
     render_pixel: PixelFn,
 }
 
-type PixelFn = fn(
-    &Context,
-    u32,
-    u32,
-    &mut Vec<Visibility>,
-    Option<&BlockCulling>,
-    &mut Batch,
-    &mut Stats,
-) -> [f32; 3];
+type PixelFn = fn(&Context, u32, u32, Option<&BlockCulling>, &mut Batch, &mut Stats) -> [f32; 3];
 
 /// [`render_pixel`] compiled with AVX2 (the same operations, so the same
 /// bits: no fused multiply-add is enabled).
@@ -264,21 +248,20 @@ fn render_pixel_avx2(
     context: &Context,
     x: u32,
     y: u32,
-    visibility: &mut Vec<Visibility>,
     culled: Option<&BlockCulling>,
     batch: &mut Batch,
     stats: &mut Stats,
 ) -> [f32; 3] {
-    render_pixel(context, x, y, visibility, culled, batch, stats)
+    render_pixel(context, x, y, culled, batch, stats)
 }
 
 /// The fastest [`render_pixel`] this processor runs.
 fn pixel_fn() -> PixelFn {
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx2") {
-        return |context, x, y, visibility, culled, batch, stats| {
+        return |context, x, y, culled, batch, stats| {
             // SAFETY: the processor has AVX2, checked just above.
-            unsafe { render_pixel_avx2(context, x, y, visibility, culled, batch, stats) }
+            unsafe { render_pixel_avx2(context, x, y, culled, batch, stats) }
         };
     }
     // Out of line, compiled for any x86-64 processor (or any other).
@@ -318,7 +301,6 @@ fn render_pixel(
     context: &Context,
     x: u32,
     y: u32,
-    visibility: &mut Vec<Visibility>,
     culled: Option<&BlockCulling>,
     batch: &mut Batch,
     stats: &mut Stats,
@@ -340,6 +322,7 @@ fn render_pixel(
         let grid = floor_grid(&options.memo, options.samples);
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
+        let visibility = &mut batch.visibility;
         visibility.clear();
         match coherence {
             Some(coherence) => visibility.extend(coherence.pixel(x, y).iter().enumerate().map(
@@ -658,9 +641,12 @@ impl BlockCulling {
     }
 }
 
-/// The buffers of a pixel's floor memo, kept by a tile for all its pixels.
+/// The buffers of a pixel's floor memo, kept by a tile for all its pixels:
+/// no allocation per pixel.
 #[derive(Default)]
 struct Batch {
+    /// Each light's visibility over the pixel.
+    visibility: Vec<Visibility>,
     /// The floor memo's strata of one pixel.
     floor: Strata,
 }
