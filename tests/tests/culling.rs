@@ -157,3 +157,28 @@ fn scenes_queried_through_a_bvh_are_not_culled() {
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
     assert!(!plan.floor_ray_culling);
 }
+
+#[test]
+fn samples_that_are_not_finite_are_left_out_as_without_culling() {
+    // The memo keeps wall light in f32: a light this strong fills it with
+    // infinities, so every path that reads a wall is not finite, while the
+    // floor's own light (f64) is. Culled, the samples are summed unchecked
+    // and a pixel whose sum is not finite takes them again, checked.
+    let loaded = scene(
+        "Scene(canvas: (12, 12), floor: Color((0.8, 0.8, 0.8)),
+            walls: [Wall(a: (2, 2), b: (10, 2)), Wall(a: (10, 2), b: (10, 10))],
+            lights: [Point(at: (6, 6), intensity: 1e200)],
+            render: (samples: 16, exposure: 1e-200))",
+    );
+    let stats = assert_same_image("overflow", &loaded.scene, &loaded.options);
+    assert!(stats.culled_rays > 0);
+    // Many samples meet a wall: all dropped and counted, the first of them
+    // the same (compared above).
+    assert!(
+        stats.nonfinite_samples > stats.camera_samples / 10,
+        "{stats:?}"
+    );
+    let (image, _) = image_and_stats(&loaded.scene, &loaded.options, true);
+    assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
+    assert!(image.get(6, 8)[0] > 0.0);
+}

@@ -361,12 +361,19 @@ fn render_pixel(
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
         direct_light_strata(scene, floor, visibility, shadow_walls, stats);
-        let mut sum = Rgb::ZERO;
-        for &value in &floor.values {
-            if value.is_finite() {
-                sum += value;
-            } else {
-                stats.record_nonfinite(x, y, u32::MAX);
+        // Checked only when the sum is not finite, as the samples are.
+        let mut sum = floor
+            .values
+            .iter()
+            .fold(Rgb::ZERO, |sum, &value| sum + value);
+        if !sum.is_finite() {
+            sum = Rgb::ZERO;
+            for &value in &floor.values {
+                if value.is_finite() {
+                    sum += value;
+                } else {
+                    stats.record_nonfinite(x, y, u32::MAX);
+                }
             }
         }
         direct = sum / (grid * grid) as f64;
@@ -374,12 +381,23 @@ fn render_pixel(
     }
     let mut sum = Rgb::ZERO;
     match culled {
-        Some(culled) => culled_samples(context, &pixel, culled, &mut sum, stats),
+        Some(culled) => {
+            // Unchecked, a sample that is not finite makes the sum not
+            // finite; then the pixel's samples are taken again, each
+            // checked (a rare case: no test per sample in the common one).
+            let before = *stats;
+            culled_samples::<false>(context, &pixel, culled, &mut sum, stats);
+            if !sum.is_finite() {
+                *stats = before;
+                sum = Rgb::ZERO;
+                checked_culled_samples(context, &pixel, culled, &mut sum, stats);
+            }
+        }
         None => {
             for (_, of_arc) in sample_order(pixel.arc_offset, options.samples) {
                 for sample in of_arc {
                     let value = sample_with(context, &pixel, sample, stats);
-                    add_sample(&mut sum, value, (x, y, sample), stats);
+                    add_sample::<true>(&mut sum, value, (x, y, sample), stats);
                 }
             }
         }
@@ -467,7 +485,7 @@ fn sample_order(offset: usize, samples: u32) -> impl Iterator<Item = (usize, Ste
 /// path whose first ray escapes adds exactly nothing: where an arc meets
 /// no wall, its samples are known to be zero and are not drawn at all.
 #[inline(always)]
-fn culled_samples(
+fn culled_samples<const CHECKED: bool>(
     context: &Context,
     pixel: &Pixel,
     culled: &BlockCulling,
@@ -491,7 +509,7 @@ fn culled_samples(
                 stats.paths_escaped += of_arc.len() as u64;
                 continue;
             }
-            arc_in_lanes(context, pixel, arc, walls, of_arc, sum, stats);
+            arc_in_lanes::<CHECKED>(context, pixel, arc, walls, of_arc, sum, stats);
             continue;
         }
         for sample in of_arc {
@@ -518,16 +536,35 @@ fn culled_samples(
                 }
                 None => begun.fluence,
             };
-            add_sample(sum, value, (x, y, sample), stats);
+            add_sample::<CHECKED>(sum, value, (x, y, sample), stats);
         }
     }
 }
 
-/// Adds a sample's value to its pixel's sum, or, if it is not finite,
-/// leaves it out and reports it.
+/// [`culled_samples`] with every sample checked, out of line: for the
+/// rare pixel whose unchecked sum is not finite.
+#[inline(never)]
+fn checked_culled_samples(
+    context: &Context,
+    pixel: &Pixel,
+    culled: &BlockCulling,
+    sum: &mut Rgb,
+    stats: &mut Stats,
+) {
+    culled_samples::<true>(context, pixel, culled, sum, stats);
+}
+
+/// Adds a sample's value to its pixel's sum. `CHECKED`, a value that is
+/// not finite is left out and reported; unchecked, it is added (and the
+/// sum is no longer finite: the caller checks the sum).
 #[inline(always)]
-fn add_sample(sum: &mut Rgb, value: Rgb, (x, y, sample): (u32, u32, u32), stats: &mut Stats) {
-    if value.is_finite() {
+fn add_sample<const CHECKED: bool>(
+    sum: &mut Rgb,
+    value: Rgb,
+    (x, y, sample): (u32, u32, u32),
+    stats: &mut Stats,
+) {
+    if !CHECKED || value.is_finite() {
         *sum += value;
     } else {
         stats.record_nonfinite(x, y, sample);
@@ -540,7 +577,7 @@ fn add_sample(sum: &mut Rgb, value: Rgb, (x, y, sample): (u32, u32, u32), stats:
 /// sample, then each path finished alone and added to `sum` in order.
 /// The same values as [`sample_with`] gives.
 #[inline(always)]
-fn arc_in_lanes(
+fn arc_in_lanes<const CHECKED: bool>(
     context: &Context,
     pixel: &Pixel,
     arc: usize,
@@ -592,7 +629,7 @@ fn arc_in_lanes(
             stream,
             stats,
         );
-        add_sample(sum, value, (x, y, sample), stats);
+        add_sample::<CHECKED>(sum, value, (x, y, sample), stats);
     }
 }
 
