@@ -351,7 +351,8 @@ fn render_pixel(
         for (k, (column, row)) in cells.enumerate() {
             let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
             let cell = DVec2::new(column as f64, row as f64);
-            let jitter = (cell + DVec2::new(stream.uniform(), stream.uniform())) / grid as f64;
+            let (jx, jy) = stream.uniform_pair();
+            let jitter = (cell + DVec2::new(jx, jy)) / grid as f64;
             floor.points.push(corner + jitter * step);
             for light in &scene.lights {
                 if let LightShape::Line { .. } = light.shape {
@@ -435,11 +436,12 @@ impl Pixel {
 
 impl Pixel {
     /// A sample's receiver point, jittered uniformly inside the pixel (the
-    /// box filter): the first two numbers of the sample's stream.
+    /// box filter): the first pair of numbers of the sample's stream.
     /// [`arc_in_lanes`] computes the same, component by component.
     #[inline(always)]
     fn receiver(&self, scene: &Scene, stream: &mut Stream) -> DVec2 {
-        let jitter = DVec2::new(stream.uniform(), stream.uniform());
+        let (jx, jy) = stream.uniform_pair();
+        let jitter = DVec2::new(jx, jy);
         scene.canvas.origin + (self.position + jitter) * self.step
     }
 }
@@ -599,8 +601,7 @@ fn arc_in_lanes<const CHECKED: bool>(
     let (mut jx, mut jy, mut fractions) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
     for (k, stream) in streams.iter_mut().enumerate() {
         // In the order `sample_with` draws them: jitter, then direction.
-        jx[k] = stream.uniform();
-        jy[k] = stream.uniform();
+        (jx[k], jy[k]) = stream.uniform_pair();
         fractions[k] = stream.uniform();
     }
     let (origin, position, step) = (scene.canvas.origin, pixel.position, pixel.step);
