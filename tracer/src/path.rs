@@ -112,33 +112,10 @@ pub(crate) fn path_finish(
         force,
         ..
     } = *trace;
-    // The common case, straight: one bounce, the first hit on a diffuse
-    // wall, its light read from the memo. The same operations, in the same
-    // order, as the loop below would make (a first flight crosses no glass
-    // it knows of, so its transmittance is exactly 1).
-    if bounces == 1
-        && !force
-        && let (Some(memo), Some((index, h))) = (memo, first_hit)
+    if let Some((index, h)) = first_hit
+        && let Some(value) = memo_bounce(trace, fluence, index, h.u, ray.dir, stats)
     {
-        let wall = &scene.walls[index as usize];
-        if let Material::Diffuse { albedo } = wall.material
-            && h.u != 0.0
-            && h.u != 1.0
-            && let Some(side) = wall.segment.arrival_side(ray.dir)
-        {
-            stats.bounce_rays += 1;
-            stats.memo_lookups += 1;
-            stats.paths_bounce_limit += 1;
-            let x = wall.segment.point_at(h.u);
-            let rho = diffuse_albedo(scene, albedo, (index, h.u, x), stats);
-            let v = memo.lookup(Key {
-                wall: index,
-                side: side.index(),
-                u: h.u,
-            });
-            let irradiance = Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64);
-            return fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance;
-        }
+        return value;
     }
     if first_hit.is_none() && !force {
         // Escaped at once, as the loop below would find, with nothing met
@@ -371,6 +348,59 @@ pub(crate) struct Trace<'a> {
     pub mirror_emission: bool,
     /// Forced mode: look for them after every bounce (adding nothing).
     pub force: bool,
+    /// The wall memo when paths take the one-bounce shortcut of
+    /// [`path_finish`] (one bounce, not forced): one test per path.
+    pub one_bounce_memo: Option<&'a WallMemo>,
+}
+
+impl<'a> Trace<'a> {
+    /// [`Trace::one_bounce_memo`], from the other fields.
+    pub fn with_shortcut(self) -> Trace<'a> {
+        Trace {
+            one_bounce_memo: self.memo.filter(|_| self.bounces == 1 && !self.force),
+            ..self
+        }
+    }
+}
+
+/// The common case of [`path_finish`], straight: one bounce, the first
+/// ray from the floor (direction `dir`) meeting diffuse wall `index` at
+/// `u`, its light read from the memo. The same operations, in the same
+/// order, as the path loop would make (a first flight crosses no glass it
+/// knows of, so its transmittance is exactly 1). `None` where the path
+/// takes the loop: another material, a wall's end, no memo or more
+/// bounces, and an `index` of no wall.
+#[inline(always)]
+pub(crate) fn memo_bounce(
+    trace: &Trace,
+    fluence: Rgb,
+    index: u32,
+    u: f64,
+    dir: DVec2,
+    stats: &mut Stats,
+) -> Option<Rgb> {
+    let memo = trace.one_bounce_memo?;
+    let scene = trace.scene;
+    let wall = scene.walls.get(index as usize)?;
+    let Material::Diffuse { albedo } = wall.material else {
+        return None;
+    };
+    if u == 0.0 || u == 1.0 {
+        return None;
+    }
+    let side = wall.segment.arrival_side(dir)?;
+    stats.bounce_rays += 1;
+    stats.memo_lookups += 1;
+    stats.paths_bounce_limit += 1;
+    let x = wall.segment.point_at(u);
+    let rho = diffuse_albedo(scene, albedo, (index, u, x), stats);
+    let v = memo.lookup(Key {
+        wall: index,
+        side: side.index(),
+        u,
+    });
+    let irradiance = Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64);
+    Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
 }
 
 /// Radiance-like emission of non-solid line lights that `ray` crosses

@@ -12,7 +12,7 @@ use flatray_cache::WallMemo;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::light::{Strata, Visibility, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
-use crate::path::{Trace, path_begin, path_finish, path_sample};
+use crate::path::{Trace, memo_bounce, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
 use crate::sampling::{ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc};
 use crate::scene::{LightShape, Scene};
@@ -284,7 +284,9 @@ fn trace_for<'a>(
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
         force: options.force_all_effects,
+        one_bounce_memo: None,
     }
+    .with_shortcut()
 }
 
 /// Stream sample indices from here up key the floor memo's strata, apart
@@ -621,15 +623,20 @@ fn arc_in_lanes<const CHECKED: bool>(
     stats.culled_walls_tested += (walls.len() * count) as u64;
     let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
     for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
-        let value = path_finish(
-            trace,
-            Rgb::ZERO,
-            rays.ray(k),
-            hits.hit(k),
-            Some(walls),
-            stream,
-            stats,
-        );
+        // `path_finish`'s common case first, from the lanes as they are.
+        let dir = DVec2::new(rays.dx[k], rays.dy[k]);
+        let value = match memo_bounce(trace, Rgb::ZERO, hits.index[k], hits.u[k], dir, stats) {
+            Some(value) => value,
+            None => path_finish(
+                trace,
+                Rgb::ZERO,
+                rays.ray(k),
+                hits.hit(k),
+                Some(walls),
+                stream,
+                stats,
+            ),
+        };
         add_sample::<CHECKED>(sum, value, (x, y, sample), stats);
     }
 }

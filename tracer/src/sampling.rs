@@ -124,11 +124,23 @@ pub fn first_sample_of_arc(offset: usize, arc: usize) -> u32 {
     reverse_arc_bits(arc.wrapping_sub(offset)) as u32
 }
 
-/// The low `log2(ARCS)` bits of `k`, reversed: its own inverse.
+/// The low `log2(ARCS)` bits of `k`, reversed: its own inverse. From a
+/// table: x86 has no instruction to reverse bits.
 #[inline]
 fn reverse_arc_bits(k: usize) -> usize {
-    (k & (ARCS - 1)).reverse_bits() >> (usize::BITS - ARCS.trailing_zeros())
+    REVERSED_ARC_BITS[k & (ARCS - 1)] as usize
 }
+
+/// [`reverse_arc_bits`] of each arc.
+const REVERSED_ARC_BITS: [u8; ARCS] = {
+    let mut table = [0; ARCS];
+    let mut k = 0;
+    while k < ARCS {
+        table[k] = (k.reverse_bits() >> (usize::BITS - ARCS.trailing_zeros())) as u8;
+        k += 1;
+    }
+    table
+};
 
 /// A uniform direction inside arc `arc` of [`ARCS`] (arc `k` spans the
 /// angles `2 pi k / ARCS` to `2 pi (k + 1) / ARCS`, as
