@@ -311,6 +311,14 @@ fn turn(theta: f64) -> DVec2 {
     circle_point(theta * (1.0 / std::f64::consts::TAU))
 }
 
+/// [`turn`], as two numbers: the same operations.
+#[inline(always)]
+fn turn_parts(theta: f64) -> (f64, f64) {
+    let x = theta * (1.0 / std::f64::consts::TAU) * ARCS as f64;
+    let arc = x as i64;
+    arc_turn(ARC_CENTRES[arc as usize & (ARCS - 1)], x - arc as f64)
+}
+
 /// `atan2(y, x)` for `y >= 0` (an angle in `[0, pi]`), to within a
 /// relative 1e-15, with no library call: the ratio of the smaller to the
 /// larger of `|x|` and `y` is `t` in `[0, 1]`; `atan t` is the table's value at the
@@ -431,43 +439,68 @@ fn angle_sample(
     })
 }
 
-/// [`sample_subtended_angle`] at every point of `points`, with the number
-/// `us[k]` for point `k`: for each point the same operations as one call,
-/// so the same samples, but in passes over all points, so that the long
-/// chain of one point's arithmetic (an `atan2`, then a rotation and a
-/// division) overlaps the other points'. `work` holds the passes'
-/// intermediate values between calls.
+/// [`sample_subtended_angle`] at `N` points at once, point `k` at
+/// `(px[k], py[k])` with the number `us[k]`: for each point the same
+/// operations as one call, so the same samples, but with no branch (both
+/// ways computed and one chosen), so that the compiler turns the lanes
+/// into vector instructions (of the caller's target features: inlined
+/// always) and the long chain of one point's arithmetic (an `atan2`, a
+/// rotation, a division) overlaps the others'.
 #[inline(always)]
-pub fn sample_subtended_angles(
-    points: &[DVec2],
-    us: &[f64],
+pub fn angle_sample_lanes<const N: usize>(
+    px: &[f64; N],
+    py: &[f64; N],
+    us: &[f64; N],
     light: &Segment,
-    work: &mut Vec<(f64, f64)>,
-    out: &mut Vec<Option<AngleSample>>,
-) {
-    // Pass 1: the cross and dot products.
-    work.clear();
-    work.extend(points.iter().map(|&p| {
-        let (va, vb) = (light.a - p, light.b - p);
-        (cross(va, vb), va.dot(vb))
-    }));
-    // Pass 2: the subtended angles (the cross product's sign is kept).
-    for (c, d) in work.iter_mut() {
-        *d = atan2_upper(c.abs(), *d);
+) -> AngleLanes<N> {
+    let (a, b) = (light.a, light.b);
+    let e = b - a;
+    let mut lanes = AngleLanes {
+        x: [0.0; N],
+        y: [0.0; N],
+        distance: [0.0; N],
+        subtended: [0.0; N],
+        valid: [false; N],
+    };
+    for k in 0..N {
+        // `sample_subtended_angle`, term by term.
+        let (vax, vay) = (a.x - px[k], a.y - py[k]);
+        let (vbx, vby) = (b.x - px[k], b.y - py[k]);
+        let c = vax * vby - vay * vbx;
+        let subtended = atan2_upper(c.abs(), vax * vbx + vay * vby);
+        let (rx, ry) = turn_parts(subtended * us[k]);
+        // `angle_sample`: `da` normalised as glam does it.
+        let recip = 1.0 / (vax * vax + vay * vay).sqrt();
+        let (dax, day) = (vax * recip, vay * recip);
+        let (perpx, perpy) = if c > 0.0 { (-day, dax) } else { (day, -dax) };
+        let (dx, dy) = (dax * rx + perpx * ry, day * rx + perpy * ry);
+        // `line_crossing` from `p` along the direction.
+        let sa = dx * vay - dy * vax;
+        let sb = dx * vby - dy * vbx;
+        let apart = (sa > 0.0 && sb > 0.0) | (sa < 0.0 && sb < 0.0) | (sa == 0.0 && sb == 0.0);
+        let t = (vax * e.y - vay * e.x) / (sb - sa);
+        let u = sa / (sa - sb);
+        // `t > 0` is false for NaN, as `!(t.is_nan() || t <= 0)` is.
+        lanes.valid[k] = (c != 0.0) & !apart & (t > 0.0);
+        lanes.x[k] = a.x + u * e.x;
+        lanes.y[k] = a.y + u * e.y;
+        lanes.distance[k] = t;
+        lanes.subtended[k] = subtended;
     }
-    // Pass 3: the rotations, the directions and the points on the light.
-    out.clear();
-    out.extend(
-        points
-            .iter()
-            .zip(work.iter())
-            .zip(us)
-            .map(|((&p, &(c, subtended)), &u)| {
-                (c != 0.0)
-                    .then(|| angle_sample(p, light, c, subtended, turn(subtended * u)))
-                    .flatten()
-            }),
-    );
+    lanes
+}
+
+/// What [`angle_sample_lanes`] gives, lane by lane: each lane's
+/// [`AngleSample`] where `valid`, without its direction.
+#[derive(Clone, Copy, Debug)]
+pub struct AngleLanes<const N: usize> {
+    /// The sampled point on the light.
+    pub x: [f64; N],
+    pub y: [f64; N],
+    pub distance: [f64; N],
+    pub subtended: [f64; N],
+    /// Whether the lane has a sample (`sample_subtended_angle` is `Some`).
+    pub valid: [bool; N],
 }
 
 /// The angle that segment `light` subtends at `p` (0 on its line).
@@ -757,25 +790,41 @@ mod tests {
     }
 
     #[test]
-    fn angle_samples_in_passes_are_the_single_samples() {
+    fn angle_samples_in_lanes_are_the_single_samples() {
         let light = Segment::new(DVec2::new(5.0, -3.0), DVec2::new(6.0, 9.0));
         let mut stream = Stream::new(1, 1, 1);
-        let mut points: Vec<DVec2> = (0..2000)
+        let mut points: Vec<DVec2> = (0..1998)
             .map(|_| DVec2::new(stream.uniform() * 20.0 - 5.0, stream.uniform() * 20.0 - 5.0))
             .collect();
-        // On the light's line, on its ends, on the light itself.
+        // On the light's line, on its ends, on the light itself, and where
+        // the drawn direction grazes an end (u = 0 and just below 1).
         points.extend([light.a, light.b, light.point_at(0.5), light.point_at(2.0)]);
-        let us: Vec<f64> = points.iter().map(|_| stream.uniform()).collect();
-        let (mut work, mut out) = (Vec::new(), Vec::new());
-        sample_subtended_angles(&points, &us, &light, &mut work, &mut out);
-        for k in 0..points.len() {
-            let one = sample_subtended_angle(points[k], &light, us[k]);
-            assert_eq!(
-                format!("{:?}", out[k]),
-                format!("{one:?}"),
-                "point {}",
-                points[k]
-            );
+        points.extend([DVec2::new(-3.0, 1.0), DVec2::new(11.0, 2.0)]);
+        let mut us: Vec<f64> = points.iter().map(|_| stream.uniform()).collect();
+        let n = us.len();
+        assert_eq!(n % 4, 0);
+        us[n - 2] = 0.0;
+        us[n - 1] = 1.0 - f64::EPSILON / 2.0;
+        for (chunk, numbers) in points.chunks_exact(4).zip(us.chunks_exact(4)) {
+            let px = std::array::from_fn(|k| chunk[k].x);
+            let py = std::array::from_fn(|k| chunk[k].y);
+            let lanes = angle_sample_lanes::<4>(&px, &py, numbers.try_into().unwrap(), &light);
+            for k in 0..4 {
+                let one = sample_subtended_angle(chunk[k], &light, numbers[k]);
+                let lane = lanes.valid[k].then(|| {
+                    (
+                        DVec2::new(lanes.x[k], lanes.y[k]),
+                        lanes.distance[k],
+                        lanes.subtended[k],
+                    )
+                });
+                assert_eq!(
+                    format!("{lane:?}"),
+                    format!("{:?}", one.map(|s| (s.point, s.distance, s.subtended))),
+                    "point {}",
+                    chunk[k]
+                );
+            }
         }
     }
 
