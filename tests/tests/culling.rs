@@ -2,7 +2,8 @@
 //! block of 4x4 pixels and 1/64 turn, a ray tests only the walls such rays
 //! can meet; the floor memo's shadow rays test only the walls between the
 //! block and the light (the floor memo's, or every sample's without the
-//! memo). That must change nothing but the work: every image
+//! memo); a ray off a mirror, only the walls that rays from its piece of
+//! the mirror (4 pixels long) in its 1/64 turn can meet. That must change nothing but the work: every image
 //! here is bit-identical with culling on and off, and the counts show it
 //! ran.
 
@@ -26,11 +27,18 @@ fn assert_same_image(name: &str, scene: &Scene, options: &RenderOptions) -> Stat
     assert_eq!(without_stats.culled_rays, 0, "{name}");
     // The same paths: only the walls tested differ, and the rays of arcs
     // that meet no wall, which culling does not trace (their paths escape).
+    // Rays off mirrors are culled too (a reflection at the bounce limit
+    // casts none).
+    assert!(
+        with_stats.culled_mirror_rays <= with_stats.mirror_reflections,
+        "{name}"
+    );
     assert_eq!(
         Stats {
             culled_rays: 0,
             culled_walls_tested: 0,
             culled_empty: 0,
+            culled_mirror_rays: 0,
             bounce_rays: with_stats.bounce_rays + with_stats.culled_empty,
             ..with_stats
         },
@@ -52,6 +60,8 @@ fn the_example_rooms_render_the_same_testing_an_eighth_of_the_walls() {
         };
         let stats = assert_same_image(name, &loaded.scene, &options);
         assert_eq!(stats.culled_rays, stats.camera_samples, "{name}");
+        // One flat mirror, one bounce: every reflection casts a ray.
+        assert_eq!(stats.culled_mirror_rays, stats.mirror_reflections);
         // Half the room's floor rays meet no wall (at full size, 61 M of
         // 125 M): they are not traced.
         assert!(

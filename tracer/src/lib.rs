@@ -19,6 +19,7 @@ mod light;
 mod light_tracer;
 mod memo;
 pub mod metrics;
+mod mirror;
 pub mod optics;
 mod path;
 pub mod plan;

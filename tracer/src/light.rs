@@ -228,8 +228,11 @@ pub(crate) fn direct_light_strata(
                             ),
                         };
                         let per_angle = light.intensity
-                            * light.falloff.per_radian(lanes.distance[k], scene.small_radius);
-                        *value += Rgb::splat(per_angle * lanes.subtended[k] * 1.0) * vis * light.color;
+                            * light
+                                .falloff
+                                .per_radian(lanes.distance[k], scene.small_radius);
+                        *value +=
+                            Rgb::splat(per_angle * lanes.subtended[k] * 1.0) * vis * light.color;
                     }
                 }
             }

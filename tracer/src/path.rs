@@ -8,6 +8,7 @@ use flatray_geometry::{DVec2, Hit, Ray, Skip, intersect, reflect};
 
 use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::light::{Receiver, direct_light};
+use crate::mirror::MirrorArcs;
 use crate::sampling::{Stream, circle_in_arc, cosine_half_circle, uniform_half_circle};
 use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
 use crate::{Integrator, Rgb, Stats};
@@ -91,7 +92,9 @@ pub(crate) fn path_begin(
 /// With `line_walls` (the walls the first ray's whole line can meet, in
 /// index order), the rays that continue it straight through transparent
 /// walls test only those: they start on that line (to within rounding,
-/// far inside the lists' margin), so the answers are the same.
+/// far inside the lists' margin), so the answers are the same. A ray off a
+/// mirror likewise tests only its mirror piece's list for its direction
+/// (`Trace::mirror_arcs`), as do those that continue it.
 #[inline(always)]
 pub(crate) fn path_finish(
     trace: &Trace,
@@ -137,19 +140,17 @@ pub(crate) fn path_finish(
     // a light seen through mirrors is that far away.
     let mut unfolded = 0.0;
     let mut glass = GlassState::default();
-    // Whether the ray still runs along the first ray's line.
-    let mut straight = true;
+    // The walls the current ray's line can meet, while it is known.
+    let mut line_walls = line_walls;
 
     loop {
         stats.bounce_rays += 1;
         let hit = match first_hit.take() {
             Some(hit) => hit,
             None => match line_walls {
-                Some(walls) if straight => {
-                    scene
-                        .segments
-                        .closest_hit_among(&ray, f64::INFINITY, skip, walls)
-                }
+                Some(walls) => scene
+                    .segments
+                    .closest_hit_among(&ray, f64::INFINITY, skip, walls),
                 _ => scene.segments.closest_hit(&ray, f64::INFINITY, skip),
             },
         };
@@ -225,7 +226,7 @@ pub(crate) fn path_finish(
                 );
                 throughput *= event.colour * event.radiance_scale;
                 ray = Ray::new(x, event.dir);
-                straight = false;
+                line_walls = None;
                 skip = Skip::one(index);
                 // Like a mirror, glass is specular: no shadow ray, and a
                 // line light met next counts.
@@ -246,7 +247,12 @@ pub(crate) fn path_finish(
                 ray = Ray::new(x, reflect(ray.dir, normal()));
                 skip = Skip::one(index);
                 after_mirror = true;
-                straight = false;
+                line_walls = trace
+                    .mirror_arcs
+                    .and_then(|arcs| arcs.walls(index, h.u, ray.dir));
+                if line_walls.is_some() {
+                    stats.culled_mirror_rays += 1;
+                }
             }
             Material::Diffuse { albedo } => {
                 bounce += 1;
@@ -302,7 +308,7 @@ pub(crate) fn path_finish(
                 skip = Skip::one(index);
                 after_mirror = false;
                 unfolded = 0.0;
-                straight = false;
+                line_walls = None;
             }
         }
     }
@@ -351,6 +357,9 @@ pub(crate) struct Trace<'a> {
     /// The wall memo when paths take the one-bounce shortcut of
     /// [`path_finish`] (one bounce, not forced): one test per path.
     pub one_bounce_memo: Option<&'a WallMemo>,
+    /// The walls that rays leaving each mirror can meet, when the plan
+    /// culls rays by direction.
+    pub mirror_arcs: Option<&'a MirrorArcs>,
 }
 
 impl<'a> Trace<'a> {

@@ -6,6 +6,7 @@ use std::fmt;
 
 use flatray_geometry::Strategy;
 
+use crate::mirror::MIRROR_PIECE;
 use crate::render::{CULL_BLOCK, Integrator, RenderOptions};
 use crate::sampling::ARCS;
 use crate::scene::{LightShape, Material, Scene};
@@ -343,8 +344,13 @@ impl Plan {
             } else if !options.cull_floor_rays {
                 "switched off".into()
             } else {
+                let off_mirrors = if mirrors > 0 {
+                    format!(", and so for rays off mirrors per {MIRROR_PIECE} pixels of mirror")
+                } else {
+                    String::new()
+                };
                 format!(
-                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet; the floor memo's shadow rays, only the walls between the pixels and the light"
+                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet{off_mirrors}; the floor memo's shadow rays, only the walls between the pixels and the light"
                 )
             },
         );

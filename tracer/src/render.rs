@@ -12,6 +12,7 @@ use flatray_cache::WallMemo;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::light::{Strata, Visibility, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
+use crate::mirror::MirrorArcs;
 use crate::path::{Trace, memo_bounce, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
 use crate::sampling::{ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc};
@@ -137,6 +138,11 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             &mut memo_stats,
         )
     });
+    // Rays off mirrors are culled wherever the floor's are.
+    let mirror_arcs = plan
+        .floor_ray_culling
+        .then(|| MirrorArcs::build(scene, options.scale))
+        .flatten();
     let coherence = plan
         .floor_coherence
         .then(|| FloorCoherence::build(scene, (width, height)))
@@ -147,7 +153,10 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         floor_memo: plan.floor_memo,
         coherence: coherence.as_ref(),
         culling: plan.floor_ray_culling,
-        trace: trace_for(scene, options, &plan, memo.as_ref()),
+        trace: Trace {
+            mirror_arcs: mirror_arcs.as_ref(),
+            ..trace_for(scene, options, &plan, memo.as_ref())
+        },
         render_pixel: pixel_fn(),
     };
     let step = pixel_size(scene, (width, height));
@@ -285,6 +294,7 @@ fn trace_for<'a>(
         mirror_emission: plan.mirror_emission,
         force: options.force_all_effects,
         one_bounce_memo: None,
+        mirror_arcs: None,
     }
     .with_shortcut()
 }

@@ -23,6 +23,9 @@ pub struct Stats {
     /// Culled floor rays whose arc meets no wall: their paths escape and
     /// add nothing, so they are neither traced nor in `bounce_rays`.
     pub culled_empty: u64,
+    /// Rays off mirrors tested only against the walls of their mirror
+    /// piece's arc of directions (a part of `bounce_rays`).
+    pub culled_mirror_rays: u64,
     /// Paths whose last ray hit nothing.
     pub paths_escaped: u64,
     /// Paths stopped by the bounce limit.
@@ -76,6 +79,7 @@ impl Stats {
         self.culled_rays += other.culled_rays;
         self.culled_walls_tested += other.culled_walls_tested;
         self.culled_empty += other.culled_empty;
+        self.culled_mirror_rays += other.culled_mirror_rays;
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
         self.paths_absorbed += other.paths_absorbed;
@@ -112,6 +116,7 @@ impl fmt::Display for Stats {
         writeln!(f, "  culled rays      {:>14}", self.culled_rays)?;
         writeln!(f, "  walls tested     {:>14}", self.culled_walls_tested)?;
         writeln!(f, "  arc has no wall  {:>14}", self.culled_empty)?;
+        writeln!(f, "  culled off mirrors {:>12}", self.culled_mirror_rays)?;
         writeln!(f, "paths ended by")?;
         writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;

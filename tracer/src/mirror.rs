@@ -1,0 +1,113 @@
+//! Culling the rays that leave mirrors: each mirror is cut into short
+//! pieces, and for each piece and arc of directions the walls its
+//! reflected rays can meet are listed once per render
+//! (`flatray_geometry::ArcCandidates` of the piece's bounding box). A ray
+//! off a mirror then tests only its list, with the same answer as a test
+//! of every wall.
+
+use flatray_geometry::{ArcCandidates, DVec2, SegmentSet};
+
+use crate::sampling::{ARCS, atan2_upper};
+use crate::scene::{Material, Scene};
+
+/// The lists of every mirror's pieces, by wall.
+#[derive(Debug, Default)]
+pub(crate) struct MirrorArcs {
+    /// Per wall: its pieces' lists (empty for a wall that is no mirror).
+    walls: Vec<Vec<ArcCandidates>>,
+}
+
+/// The length of a piece, in pixels of the rendered image.
+pub(crate) const MIRROR_PIECE: u32 = 4;
+/// At most this many pieces per mirror.
+const MAX_PIECES: usize = 256;
+/// A piece's box holds the points a little beyond its ends in `u`, for
+/// the rounding of the piece found from a hit's `u`.
+const REACH: f64 = 1e-9;
+
+impl MirrorArcs {
+    /// The lists for `scene` rendered at `scale` pixels per unit; `None`
+    /// without mirrors.
+    pub(crate) fn build(scene: &Scene, scale: f64) -> Option<MirrorArcs> {
+        let mirror = |m: &Material| matches!(m, Material::Mirror { .. });
+        if !scene.walls.iter().any(|w| mirror(&w.material)) {
+            return None;
+        }
+        let piece = MIRROR_PIECE as f64 / scale;
+        let walls = scene
+            .walls
+            .iter()
+            .map(|wall| {
+                if !mirror(&wall.material) {
+                    return Vec::new();
+                }
+                let s = wall.segment;
+                let pieces = (s.length() / piece).ceil();
+                let n = if pieces.is_finite() {
+                    (pieces as usize).clamp(1, MAX_PIECES)
+                } else {
+                    1
+                };
+                (0..n)
+                    .map(|i| {
+                        let u0 = (i as f64 / n as f64 - REACH).max(0.0);
+                        let u1 = ((i + 1) as f64 / n as f64 + REACH).min(1.0);
+                        let (p, q) = (s.point_at(u0), s.point_at(u1));
+                        fill(&scene.segments, p.min(q), p.max(q))
+                    })
+                    .collect()
+            })
+            .collect();
+        Some(MirrorArcs { walls })
+    }
+
+    /// The walls that a ray leaving mirror `wall` from its point at `u`,
+    /// in direction `dir`, can meet; `None` for a wall that is no mirror.
+    #[inline]
+    pub(crate) fn walls(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]> {
+        let pieces = self.walls.get(wall as usize)?;
+        let n = pieces.len();
+        // u in [0, 1]: the cast saturates (NaN gives 0).
+        let piece = pieces.get(((u * n as f64) as usize).min(n.checked_sub(1)?))?;
+        Some(piece.arc(arc_of(dir)))
+    }
+}
+
+fn fill(set: &SegmentSet, lo: DVec2, hi: DVec2) -> ArcCandidates {
+    let mut arcs = ArcCandidates::default();
+    arcs.fill(set, lo, hi, ARCS, None);
+    arcs
+}
+
+/// The arc of [`ARCS`] that holds direction `dir` (arc `k` spans the
+/// angles `2 pi k / ARCS` to `2 pi (k + 1) / ARCS`). The angle, from the
+/// tabled `atan2`, is within 1e-15 radians; the lists reach 1e-9 radians
+/// beyond each arc.
+#[inline]
+fn arc_of(dir: DVec2) -> usize {
+    let angle = if dir.y >= 0.0 {
+        atan2_upper(dir.y, dir.x)
+    } else {
+        std::f64::consts::TAU - atan2_upper(-dir.y, dir.x)
+    };
+    // The cast saturates (NaN gives 0).
+    ((angle * (ARCS as f64 / std::f64::consts::TAU)) as usize).min(ARCS - 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_direction_falls_in_the_arc_that_spans_its_angle() {
+        for k in 0..ARCS {
+            for f in [1e-6, 0.5, 1.0 - 1e-6] {
+                let a = (k as f64 + f) * std::f64::consts::TAU / ARCS as f64;
+                let dir = DVec2::new(a.cos(), a.sin()) * 3.0;
+                assert_eq!(arc_of(dir), k, "arc {k}, fraction {f}");
+            }
+        }
+        assert!(arc_of(DVec2::new(1.0, -1e-300)) < ARCS);
+        assert!(arc_of(DVec2::new(f64::NAN, 1.0)) < ARCS);
+    }
+}
