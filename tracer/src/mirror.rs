@@ -7,7 +7,7 @@
 
 use flatray_geometry::{ArcCandidates, DVec2, SegmentSet};
 
-use crate::sampling::{ARCS, atan2_upper};
+use crate::sampling::ARCS;
 use crate::scene::{Material, Scene};
 
 /// The lists of every mirror's pieces, by wall.
@@ -63,7 +63,7 @@ impl MirrorArcs {
 
     /// The walls that a ray leaving mirror `wall` from its point at `u`,
     /// in direction `dir`, can meet; `None` for a wall that is no mirror.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn walls(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]> {
         let pieces = self.walls.get(wall as usize)?;
         let n = pieces.len();
@@ -80,19 +80,47 @@ fn fill(set: &SegmentSet, lo: DVec2, hi: DVec2) -> ArcCandidates {
 }
 
 /// The arc of [`ARCS`] that holds direction `dir` (arc `k` spans the
-/// angles `2 pi k / ARCS` to `2 pi (k + 1) / ARCS`). The angle, from the
-/// tabled `atan2`, is within 1e-15 radians; the lists reach 1e-9 radians
-/// beyond each arc.
-#[inline]
+/// angles `2 pi k / ARCS` to `2 pi (k + 1) / ARCS`), with no division: the
+/// quadrant from the signs, the arc within it from how many of the arc
+/// edges' tangents `|y| / |x|` reaches. Wrong only within 1e-15 radians of
+/// an edge, where either arc's list holds the walls (they reach 1e-9
+/// radians beyond the arc).
+#[inline(always)]
 fn arc_of(dir: DVec2) -> usize {
-    let angle = if dir.y >= 0.0 {
-        atan2_upper(dir.y, dir.x)
-    } else {
-        std::f64::consts::TAU - atan2_upper(-dir.y, dir.x)
+    let (ax, ay) = (dir.x.abs(), dir.y.abs());
+    let mut j = 0;
+    for t in EDGE_TANGENTS {
+        j += (ay >= t * ax) as usize;
+    }
+    // j in 0..16: the arc of the first quadrant that (|x|, |y|) lies in.
+    let arc = match (dir.x < 0.0, dir.y < 0.0) {
+        (false, false) => j,
+        (true, false) => 31 - j,
+        (true, true) => 32 + j,
+        (false, true) => 63 - j,
     };
-    // The cast saturates (NaN gives 0).
-    ((angle * (ARCS as f64 / std::f64::consts::TAU)) as usize).min(ARCS - 1)
+    arc & (ARCS - 1)
 }
+
+/// `tan(k pi / 32)` for `k` in `1..16`: the arcs' edges in the first
+/// quadrant.
+const EDGE_TANGENTS: [f64; 15] = [
+    0.09849140335716425,
+    0.198912367379658,
+    0.3033466836073424,
+    0.41421356237309503,
+    0.5345111359507916,
+    0.6681786379192989,
+    0.8206787908286602,
+    0.9999999999999999,
+    1.2185035255879764,
+    1.496605762665489,
+    1.8708684117893888,
+    2.414213562373095,
+    3.296558208938321,
+    5.027339492125846,
+    10.153170387608842,
+];
 
 #[cfg(test)]
 mod tests {
@@ -100,8 +128,9 @@ mod tests {
 
     #[test]
     fn a_direction_falls_in_the_arc_that_spans_its_angle() {
+        assert_eq!(ARCS, 64, "the edge tangents are for 64 arcs");
         for k in 0..ARCS {
-            for f in [1e-6, 0.5, 1.0 - 1e-6] {
+            for f in [1e-9, 1e-6, 0.25, 0.5, 0.75, 1.0 - 1e-6, 1.0 - 1e-9] {
                 let a = (k as f64 + f) * std::f64::consts::TAU / ARCS as f64;
                 let dir = DVec2::new(a.cos(), a.sin()) * 3.0;
                 assert_eq!(arc_of(dir), k, "arc {k}, fraction {f}");

@@ -326,7 +326,7 @@ fn turn_parts(theta: f64) -> (f64, f64) {
 /// `(t - k/32) / (1 + t k/32)` (at most 1/64), a series whose first
 /// omitted term is below 1e-21. Not finite, or `(0, 0)`: not an angle.
 #[inline(always)]
-pub(crate) fn atan2_upper(y: f64, x: f64) -> f64 {
+fn atan2_upper(y: f64, x: f64) -> f64 {
     let (ax, steep) = (x.abs(), y > x.abs());
     let t = if steep { ax / y } else { y / ax };
     let k = (t * 32.0 + 0.5) as i64;
