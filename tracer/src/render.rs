@@ -523,7 +523,16 @@ fn culled_samples<const CHECKED: bool>(
                 stats.paths_escaped += of_arc.len() as u64;
                 continue;
             }
-            arc_in_lanes::<CHECKED>(context, pixel, arc, walls, of_arc, sum, stats);
+            // As many lanes as the arc has samples, rounded up to a power
+            // of two: few samples per arc draw no idle lanes.
+            let count = of_arc.len();
+            let args = (context, pixel, arc, walls, of_arc);
+            match count {
+                1 => arc_in_lanes::<CHECKED, 1>(args, sum, stats),
+                2 => arc_in_lanes::<CHECKED, 2>(args, sum, stats),
+                3 | 4 => arc_in_lanes::<CHECKED, 4>(args, sum, stats),
+                _ => arc_in_lanes::<CHECKED, LANES>(args, sum, stats),
+            }
             continue;
         }
         for sample in of_arc {
@@ -585,18 +594,14 @@ fn add_sample<const CHECKED: bool>(
     }
 }
 
-/// The samples `of_arc` (at most [`LANES`]), all of arc `arc`, whose
-/// paths start with nothing (no floor light of their own): drawn, their
-/// first rays built and tested against `walls` in lanes, one lane per
-/// sample, then each path finished alone and added to `sum` in order.
-/// The same values as [`sample_with`] gives.
+/// The samples `of_arc` (at most `N`, of [`LANES`] at most), all of arc
+/// `arc`, whose paths start with nothing (no floor light of their own):
+/// drawn, their first rays built and tested against `walls` in `N` lanes,
+/// one lane per sample, then each path finished alone and added to `sum`
+/// in order. The same values as [`sample_with`] gives.
 #[inline(always)]
-fn arc_in_lanes<const CHECKED: bool>(
-    context: &Context,
-    pixel: &Pixel,
-    arc: usize,
-    walls: &[u32],
-    of_arc: StepBy<Range<u32>>,
+fn arc_in_lanes<const CHECKED: bool, const N: usize>(
+    (context, pixel, arc, walls, of_arc): (&Context, &Pixel, usize, &[u32], StepBy<Range<u32>>),
     sum: &mut Rgb,
     stats: &mut Stats,
 ) {
@@ -608,9 +613,9 @@ fn arc_in_lanes<const CHECKED: bool>(
     let Some(start) = of_arc.clone().next() else {
         return;
     };
-    let mut streams: [Stream; LANES] =
+    let mut streams: [Stream; N] =
         std::array::from_fn(|k| pixel.key.stream(start as u64 + (k * ARCS) as u64));
-    let (mut jx, mut jy, mut fractions) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    let (mut jx, mut jy, mut fractions) = ([0.0; N], [0.0; N], [0.0; N]);
     for (k, stream) in streams.iter_mut().enumerate() {
         // In the order `sample_with` draws them: jitter, then direction.
         (jx[k], jy[k]) = stream.uniform_pair();
@@ -618,12 +623,12 @@ fn arc_in_lanes<const CHECKED: bool>(
     }
     let (origin, position, step) = (scene.canvas.origin, pixel.position, pixel.step);
     let mut rays = RayLanes {
-        ox: [0.0; LANES],
-        oy: [0.0; LANES],
-        dx: [0.0; LANES],
-        dy: [0.0; LANES],
+        ox: [0.0; N],
+        oy: [0.0; N],
+        dx: [0.0; N],
+        dy: [0.0; N],
     };
-    for k in 0..LANES {
+    for k in 0..N {
         // `origin + (position + jitter) * step`, component by component.
         rays.ox[k] = origin.x + (position.x + jx[k]) * step.x;
         rays.oy[k] = origin.y + (position.y + jy[k]) * step.y;
