@@ -440,14 +440,22 @@ impl SegmentSet {
     /// query's (the same operations in the same order, ties to the lower
     /// index). Rays that leave one box in one arc of directions share
     /// their candidates, and here their tests: one segment against every
-    /// lane, with no branch, which the compiler turns into vector
-    /// instructions (of the caller's target features: inlined always).
+    /// lane, with no branch. With the AVX kernel and a multiple of four
+    /// lanes, four lanes at a time in AVX registers, written out
+    /// (`lanes.rs`); otherwise as the compiler vectorises the loop (of the
+    /// caller's target features: inlined always).
     #[inline(always)]
     pub fn closest_hits_among<const N: usize>(
         &self,
         rays: &RayLanes<N>,
         candidates: &[u32],
     ) -> HitLanes<N> {
+        #[cfg(target_arch = "x86_64")]
+        if N.is_multiple_of(4) && self.kernel() == crate::lanes::Kernel::Avx {
+            // SAFETY: the set's kernel is AVX only where the processor
+            // has it (`Kernel::detect`, `SegmentSet::with_kernel`).
+            return unsafe { crate::lanes::closest_hits_avx(self.segments(), rays, candidates) };
+        }
         let mut best_t = [f64::INFINITY; N];
         let mut best_index = [u32::MAX; N];
         let mut best_sa = [0.0; N];

@@ -266,6 +266,9 @@ impl Best {
 }
 
 #[cfg(target_arch = "x86_64")]
+pub(crate) use avx::closest_hits as closest_hits_avx;
+
+#[cfg(target_arch = "x86_64")]
 mod avx {
     //! The crossing rule on four segments at once. Every lane computes
     //! exactly what `crossing_parts` computes for its segment.
@@ -273,7 +276,8 @@ mod avx {
     use std::arch::x86_64::*;
 
     use super::{BLOCK, Best, Lanes};
-    use crate::{Hit, Ray, Skip, crossing_parts};
+    use crate::cull::{HitLanes, RayLanes};
+    use crate::{Hit, Ray, Segment, Skip, crossing_parts};
 
     /// The lanes of one block, and the mask of its crossings with
     /// `0 < t < t_max` that are not skipped.
@@ -582,5 +586,76 @@ mod avx {
             slot += BLOCK;
         }
         true
+    }
+
+    /// `SegmentSet::closest_hits_among` for `N` rays (a multiple of four),
+    /// four lanes at a time, each lane a ray against one candidate at a
+    /// time: the crossing rule as above, so each lane's answer is exactly
+    /// the scalar query's. Written out, a group's rays and best hits stay
+    /// in registers (the compiler's own vectors of eight lanes kept them
+    /// on the stack, written back with masked stores).
+    ///
+    /// Inlined always, without AVX as its own target feature: only so
+    /// can it be inlined (with the helpers it calls) into the caller's
+    /// loop compiled with AVX2; called elsewhere, its helpers run out of
+    /// line.
+    ///
+    /// # Safety
+    /// The processor must have AVX.
+    #[inline(always)]
+    pub(crate) unsafe fn closest_hits<const N: usize>(
+        segments: &[Segment],
+        rays: &RayLanes<N>,
+        candidates: &[u32],
+    ) -> HitLanes<N> {
+        // SAFETY: the caller guarantees AVX, all these functions need.
+        unsafe {
+            let mut hits = HitLanes {
+                index: [u32::MAX; N],
+                t: [f64::INFINITY; N],
+                u: [0.0; N],
+            };
+            let zero = _mm256_setzero_pd();
+            let both = |p: __m256d, q: __m256d| _mm256_and_pd(p, q);
+            for first in (0..N).step_by(BLOCK) {
+                let o = (load(&rays.ox, first), load(&rays.oy, first));
+                let d = (load(&rays.dx, first), load(&rays.dy, first));
+                let mut best_t = _mm256_set1_pd(f64::INFINITY);
+                let mut best_id = _mm256_set1_pd(u32::MAX as f64);
+                let (mut best_sa, mut best_sb) = (zero, zero);
+                for &index in candidates {
+                    let Segment { a, b } = segments[index as usize];
+                    let e = b - a;
+                    let c = crossing(
+                        o,
+                        d,
+                        (_mm256_set1_pd(a.x), _mm256_set1_pd(a.y)),
+                        (_mm256_set1_pd(b.x), _mm256_set1_pd(b.y)),
+                        (_mm256_set1_pd(e.x), _mm256_set1_pd(e.y)),
+                    );
+                    // Ascending indices: an equal `t` found later never wins.
+                    let wins = both(
+                        c.crosses,
+                        both(
+                            _mm256_cmp_pd::<_CMP_GT_OQ>(c.t, zero),
+                            _mm256_cmp_pd::<_CMP_LT_OQ>(c.t, best_t),
+                        ),
+                    );
+                    best_t = _mm256_blendv_pd(best_t, c.t, wins);
+                    best_sa = _mm256_blendv_pd(best_sa, c.sa, wins);
+                    best_sb = _mm256_blendv_pd(best_sb, c.sb, wins);
+                    best_id = _mm256_blendv_pd(best_id, _mm256_set1_pd(index as f64), wins);
+                }
+                let u = _mm256_div_pd(best_sa, _mm256_sub_pd(best_sa, best_sb));
+                let (t, u, id) = (lanes(best_t), lanes(u), lanes(best_id));
+                for k in 0..BLOCK {
+                    hits.t[first + k] = t[k];
+                    hits.u[first + k] = u[k];
+                    // Exact: a u32, or u32::MAX, held as an f64.
+                    hits.index[first + k] = id[k] as u32;
+                }
+            }
+            hits
+        }
     }
 }

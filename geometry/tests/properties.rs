@@ -316,15 +316,21 @@ proptest! {
         for (k, (o, &(_, _, _, d))) in origins.iter().zip(&rays).enumerate() {
             (lanes.ox[k], lanes.oy[k], lanes.dx[k], lanes.dy[k]) = (o.x, o.y, d.x, d.y);
         }
-        let hits = set.closest_hits_among(&lanes, &candidates);
-        for k in 0..8 {
-            let ray = lanes.ray(k);
-            prop_assert_eq!(ray, Ray::new(origins[k], rays[k].3));
-            prop_assert_eq!(
-                hits.hit(k),
-                set.closest_hit_among(&ray, f64::INFINITY, Skip::NONE, &candidates),
-                "lane {}", k
-            );
+        // The AVX kernel where the processor has it, and the portable one.
+        let scalar = set.clone().with_kernel(Kernel::Scalar);
+        for (hits, kernel) in [
+            (set.closest_hits_among(&lanes, &candidates), set.kernel()),
+            (scalar.closest_hits_among(&lanes, &candidates), Kernel::Scalar),
+        ] {
+            for k in 0..8 {
+                let ray = lanes.ray(k);
+                prop_assert_eq!(ray, Ray::new(origins[k], rays[k].3));
+                prop_assert_eq!(
+                    hits.hit(k),
+                    set.closest_hit_among(&ray, f64::INFINITY, Skip::NONE, &candidates),
+                    "lane {}, {:?}", k, kernel
+                );
+            }
         }
     }
 }
@@ -434,4 +440,56 @@ fn hull_culling_keeps_only_the_walls_between_a_box_and_a_light() {
     ];
     hull_candidates(&set, &line, &mut list);
     assert_eq!(list, [0]);
+}
+
+#[test]
+fn rays_in_lanes_break_ties_as_each_ray_alone() {
+    // Four walls through (5, 5), and eight rays through that point from
+    // grid points: small integers, so every crossing there is at t = 1
+    // exactly, a tie that the lower index wins.
+    let p = DVec2::new(5.0, 5.0);
+    let walls = [
+        ((3.0, 5.0), (7.0, 5.0)),
+        ((5.0, 3.0), (5.0, 7.0)),
+        ((3.0, 3.0), (7.0, 7.0)),
+        ((3.0, 7.0), (7.0, 3.0)),
+    ];
+    let set = SegmentSet::new(
+        walls
+            .iter()
+            .map(|&((ax, ay), (bx, by))| Segment::new(DVec2::new(ax, ay), DVec2::new(bx, by)))
+            .collect(),
+    );
+    let origins = [
+        (1.0, 2.0),
+        (9.0, 2.0),
+        (1.0, 8.0),
+        (9.0, 8.0),
+        (2.0, 1.0),
+        (8.0, 1.0),
+        (2.0, 9.0),
+        (8.0, 9.0),
+    ];
+    let mut lanes = RayLanes {
+        ox: [0.0; 8],
+        oy: [0.0; 8],
+        dx: [0.0; 8],
+        dy: [0.0; 8],
+    };
+    for (k, &(x, y)) in origins.iter().enumerate() {
+        (lanes.ox[k], lanes.oy[k]) = (x, y);
+        (lanes.dx[k], lanes.dy[k]) = (p.x - x, p.y - y);
+    }
+    for candidates in [vec![0, 1, 2, 3], vec![1, 2, 3], vec![2, 3]] {
+        for set in [set.clone(), set.clone().with_kernel(Kernel::Scalar)] {
+            let hits = set.closest_hits_among(&lanes, &candidates);
+            for k in 0..8 {
+                let alone =
+                    set.closest_hit_among(&lanes.ray(k), f64::INFINITY, Skip::NONE, &candidates);
+                assert_eq!(alone.map(|(_, h)| h.t), Some(1.0), "lane {k}");
+                assert_eq!(alone.map(|(i, _)| i), Some(candidates[0]), "lane {k}");
+                assert_eq!(hits.hit(k), alone, "lane {k}, {:?}", set.kernel());
+            }
+        }
+    }
 }
