@@ -374,22 +374,7 @@ fn render_pixel(
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
         direct_light_strata(scene, floor, visibility, shadow_walls, stats);
-        // Checked only when the sum is not finite, as the samples are.
-        let mut sum = floor
-            .values
-            .iter()
-            .fold(Rgb::ZERO, |sum, &value| sum + value);
-        if !sum.is_finite() {
-            sum = Rgb::ZERO;
-            for &value in &floor.values {
-                if value.is_finite() {
-                    sum += value;
-                } else {
-                    stats.record_nonfinite(x, y, u32::MAX);
-                }
-            }
-        }
-        direct = sum / (grid * grid) as f64;
+        direct = strata_sum(&floor.values, (x, y), stats) / (grid * grid) as f64;
         stats.floor_memo_reuses += options.samples as u64;
     }
     let mut sum = Rgb::ZERO;
@@ -419,6 +404,26 @@ fn render_pixel(
     let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
     let value = mean * albedo * options.exposure;
     [value.x as f32, value.y as f32, value.z as f32]
+}
+
+/// The sum of a pixel's floor strata, those that are not finite left out
+/// and counted (as sample `u32::MAX` of pixel `(x, y)`). Checked only when
+/// the plain sum is not finite, as the samples are: a value that is not
+/// finite makes it so.
+fn strata_sum(values: &[Rgb], (x, y): (u32, u32), stats: &mut Stats) -> Rgb {
+    let sum = values.iter().fold(Rgb::ZERO, |sum, &value| sum + value);
+    if sum.is_finite() {
+        return sum;
+    }
+    let mut sum = Rgb::ZERO;
+    for &value in values {
+        if value.is_finite() {
+            sum += value;
+        } else {
+            stats.record_nonfinite(x, y, u32::MAX);
+        }
+    }
+    sum
 }
 
 /// A pixel's position, stream key, size and the turn of its samples'
@@ -746,4 +751,33 @@ pub fn pixel_sample(
         sample,
         stats,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strata_that_are_not_finite_are_left_out_and_counted() {
+        let v = |x: f64| Rgb::new(x, 1.0, 2.0);
+        let mut stats = Stats::default();
+        let finite = [v(1.0), v(2.0), v(3.0)];
+        assert_eq!(
+            strata_sum(&finite, (4, 5), &mut stats),
+            Rgb::new(6.0, 3.0, 6.0)
+        );
+        assert_eq!(stats.nonfinite_samples, 0);
+        // An infinity, a NaN, and finite values whose sum overflows (all
+        // finite: kept, as before the check moved).
+        let mixed = [v(1.0), v(f64::INFINITY), v(2.0), v(f64::NAN), v(3.0)];
+        assert_eq!(
+            strata_sum(&mixed, (4, 5), &mut stats),
+            Rgb::new(6.0, 3.0, 6.0)
+        );
+        assert_eq!(stats.nonfinite_samples, 2);
+        assert_eq!(stats.first_nonfinite, Some((4, 5, u32::MAX)));
+        let huge = [v(f64::MAX), v(f64::MAX)];
+        assert_eq!(strata_sum(&huge, (4, 5), &mut stats).x, f64::INFINITY);
+        assert_eq!(stats.nonfinite_samples, 2);
+    }
 }
