@@ -60,8 +60,7 @@ struct Span {
     u1: f64,
     bins: u32,
     offset: usize,
-    /// `u1 - u0`, `bins` and `bins - 1` as a lookup computes with them.
-    width: f64,
+    /// `bins / (u1 - u0)` and `bins - 1`, as a lookup computes with them.
     scale: f64,
     last: f64,
 }
@@ -73,9 +72,9 @@ impl Span {
             u1,
             bins,
             offset,
-            width: u1 - u0,
-            // Through i64: the same values, as bins < 2^32.
-            scale: bins as i64 as f64,
+            // Through i64: the same values, as bins < 2^32. For a span of
+            // the whole wall (most are) the division is by 1: exact.
+            scale: bins as i64 as f64 / (u1 - u0),
             last: (bins as i64 - 1) as f64,
         }
     }
@@ -247,12 +246,11 @@ impl WallMemo {
         let span = &self.spans[self.span_of(key.wall, key.u)];
         let n = span.bins as usize;
         let base = span.offset + key.side * n;
-        // (u - 0) / 1 is u exactly for a span of the whole wall (most are):
-        // one division rather than a branch that mispredicts.
-        let local = (key.u - span.u0) / span.width;
+        // No division: the span's bins per unit of `u` are kept (exactly
+        // its bin count for a span of the whole wall, as most are).
         // Conversions through i64 (one instruction each; usize takes a
         // sequence of them on x86-64). x is at most `last`, so is i.
-        let x = (local * span.scale - 0.5).clamp(0.0, span.last);
+        let x = ((key.u - span.u0) * span.scale - 0.5).clamp(0.0, span.last);
         let i = x as i64;
         let j = (i + 1).min(n as i64 - 1);
         let f = (x - i as f64) as f32;
