@@ -450,11 +450,10 @@ impl SegmentSet {
         rays: &RayLanes<N>,
         candidates: &[u32],
     ) -> HitLanes<N> {
-        #[cfg(target_arch = "x86_64")]
-        if N.is_multiple_of(4) && self.kernel() == crate::lanes::Kernel::Avx {
-            // SAFETY: the set's kernel is AVX only where the processor
-            // has it (`Kernel::detect`, `SegmentSet::with_kernel`).
-            return unsafe { crate::lanes::closest_hits_avx(self.segments(), rays, candidates) };
+        if let Some(hits) =
+            crate::lanes::closest_hits_avx(self.kernel(), self.segments(), rays, candidates)
+        {
+            return hits;
         }
         let mut best_t = [f64::INFINITY; N];
         let mut best_index = [u32::MAX; N];

@@ -265,8 +265,25 @@ impl Best {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-pub(crate) use avx::closest_hits as closest_hits_avx;
+/// `SegmentSet::closest_hits_among` with the AVX kernel, where `kernel`
+/// is AVX and the lanes come in fours; `None` otherwise. Inlined always,
+/// like the kernel, into the caller's loop.
+#[inline(always)]
+pub(crate) fn closest_hits_avx<const N: usize>(
+    kernel: Kernel,
+    segments: &[crate::Segment],
+    rays: &crate::RayLanes<N>,
+    candidates: &[u32],
+) -> Option<crate::HitLanes<N>> {
+    #[cfg(target_arch = "x86_64")]
+    if kernel == Kernel::Avx && N.is_multiple_of(BLOCK) {
+        // SAFETY: a set's kernel is AVX only where the processor has it
+        // (`Kernel::detect`, `SegmentSet::with_kernel`).
+        return Some(unsafe { avx::closest_hits(segments, rays, candidates) });
+    }
+    let _ = (kernel, segments, rays, candidates);
+    None
+}
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
