@@ -4,7 +4,7 @@
 use std::f64::consts::{PI, TAU};
 
 use flatray_cache::{Key, WallMemo};
-use flatray_geometry::{DVec2, Hit, Ray, Skip, intersect, reflect};
+use flatray_geometry::{DVec2, Hit, Ray, Side, Skip, intersect, reflect};
 
 use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::light::{Receiver, direct_light};
@@ -265,12 +265,7 @@ pub(crate) fn path_finish(
                 let irradiance = match memo {
                     Some(memo) => {
                         stats.memo_lookups += 1;
-                        let v = memo.lookup(Key {
-                            wall: index,
-                            side: side.index(),
-                            u: h.u,
-                        });
-                        Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64)
+                        memo_irradiance(memo, index, side, h.u)
                     }
                     None => {
                         let receiver = Receiver {
@@ -362,16 +357,6 @@ pub(crate) struct Trace<'a> {
     pub mirror_arcs: Option<&'a MirrorArcs>,
 }
 
-impl<'a> Trace<'a> {
-    /// [`Trace::one_bounce_memo`], from the other fields.
-    pub fn with_shortcut(self) -> Trace<'a> {
-        Trace {
-            one_bounce_memo: self.memo.filter(|_| self.bounces == 1 && !self.force),
-            ..self
-        }
-    }
-}
-
 /// The common case of [`path_finish`], straight: one bounce, the first
 /// ray from the floor (direction `dir`) meeting diffuse wall `index` at
 /// `u`, its light read from the memo. The same operations, in the same
@@ -403,13 +388,19 @@ pub(crate) fn memo_bounce(
     stats.paths_bounce_limit += 1;
     let x = wall.segment.point_at(u);
     let rho = diffuse_albedo(scene, albedo, (index, u, x), stats);
+    let irradiance = memo_irradiance(memo, index, side, u);
+    Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
+}
+
+/// The memo's irradiance on side `side` of wall `index` at `u`.
+#[inline(always)]
+fn memo_irradiance(memo: &WallMemo, index: u32, side: Side, u: f64) -> Rgb {
     let v = memo.lookup(Key {
         wall: index,
         side: side.index(),
         u,
     });
-    let irradiance = Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64);
-    Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
+    Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64)
 }
 
 /// Radiance-like emission of non-solid line lights that `ray` crosses

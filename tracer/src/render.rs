@@ -153,10 +153,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         floor_memo: plan.floor_memo,
         coherence: coherence.as_ref(),
         culling: plan.floor_ray_culling,
-        trace: Trace {
-            mirror_arcs: mirror_arcs.as_ref(),
-            ..trace_for(scene, options, &plan, memo.as_ref())
-        },
+        trace: trace_for(scene, options, &plan, memo.as_ref(), mirror_arcs.as_ref()),
         render_pixel: pixel_fn(),
     };
     let step = pixel_size(scene, (width, height));
@@ -283,20 +280,22 @@ fn trace_for<'a>(
     options: &RenderOptions,
     plan: &Plan,
     memo: Option<&'a WallMemo>,
+    mirror_arcs: Option<&'a MirrorArcs>,
 ) -> Trace<'a> {
+    let bounces = if plan.indirect { options.bounces } else { 0 };
+    let force = options.force_all_effects;
     Trace {
         scene,
-        bounces: if plan.indirect { options.bounces } else { 0 },
+        bounces,
         integrator: options.integrator,
         floor_direct: !plan.floor_memo,
         memo,
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
-        force: options.force_all_effects,
-        one_bounce_memo: None,
-        mirror_arcs: None,
+        force,
+        one_bounce_memo: memo.filter(|_| bounces == 1 && !force),
+        mirror_arcs,
     }
-    .with_shortcut()
 }
 
 /// Stream sample indices from here up key the floor memo's strata, apart
@@ -742,7 +741,7 @@ pub fn pixel_sample(
         floor_memo: false,
         coherence: None,
         culling: false,
-        trace: trace_for(scene, &options, &plan, None),
+        trace: trace_for(scene, &options, &plan, None, None),
         render_pixel,
     };
     sample_with(

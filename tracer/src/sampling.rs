@@ -311,14 +311,6 @@ fn turn(theta: f64) -> DVec2 {
     circle_point(theta * (1.0 / std::f64::consts::TAU))
 }
 
-/// [`turn`], as two numbers: the same operations.
-#[inline(always)]
-fn turn_parts(theta: f64) -> (f64, f64) {
-    let x = theta * (1.0 / std::f64::consts::TAU) * ARCS as f64;
-    let arc = x as i64;
-    arc_turn(ARC_CENTRES[arc as usize & (ARCS - 1)], x - arc as f64)
-}
-
 /// `atan2(y, x)` for `y >= 0` (an angle in `[0, pi]`), to within a
 /// relative 1e-15, with no library call: the ratio of the smaller to the
 /// larger of `|x|` and `y` is `t` in `[0, 1]`; `atan t` is the table's value at the
@@ -468,7 +460,7 @@ pub fn angle_sample_lanes<const N: usize>(
         let (vbx, vby) = (b.x - px[k], b.y - py[k]);
         let c = vax * vby - vay * vbx;
         let subtended = atan2_upper(c.abs(), vax * vbx + vay * vby);
-        let (rx, ry) = turn_parts(subtended * us[k]);
+        let DVec2 { x: rx, y: ry } = turn(subtended * us[k]);
         // `angle_sample`: `da` normalised as glam does it.
         let recip = 1.0 / (vax * vax + vay * vay).sqrt();
         let (dax, day) = (vax * recip, vay * recip);
