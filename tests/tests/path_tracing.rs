@@ -138,6 +138,82 @@ fn closed_form_4_flatland_furnace() {
     }
 }
 
+/// Closed form 4 in rooms whose walls are not axis-aligned: a square and
+/// an L turned by 17 degrees and a five-pointed star (non-convex). A
+/// receiver on a wall lies off the wall's line by rounding there, and
+/// must still never collect that wall's own light; for both path
+/// integrators, memo on and off.
+#[test]
+fn closed_form_4_furnace_in_rotated_and_star_rooms() {
+    let turn = |points: &[(f64, f64)], degrees: f64| -> Vec<DVec2> {
+        let (s, c) = degrees.to_radians().sin_cos();
+        points
+            .iter()
+            .map(|&(x, y)| {
+                let (x, y) = (x - 40.0, y - 40.0);
+                DVec2::new(40.0 + c * x - s * y, 40.0 + s * x + c * y)
+            })
+            .collect()
+    };
+    let square = turn(&[(12.0, 12.0), (68.0, 12.0), (68.0, 68.0), (12.0, 68.0)], 17.0);
+    let l_shape = turn(
+        &[
+            (10.0, 10.0),
+            (70.0, 10.0),
+            (70.0, 36.3),
+            (36.7, 36.3),
+            (36.7, 70.0),
+            (10.0, 70.0),
+        ],
+        17.0,
+    );
+    let star: Vec<DVec2> = (0..10)
+        .map(|k| {
+            let r = if k % 2 == 0 { 38.0 } else { 17.0 };
+            let a = TAU * k as f64 / 10.0 + 0.1;
+            DVec2::new(40.0 + r * a.cos(), 40.0 + r * a.sin())
+        })
+        .collect();
+    let (l_e, rho) = (0.3, 0.6);
+    for (name, room) in [("square", &square), ("L-shaped", &l_shape), ("star", &star)] {
+        let extra = format!(
+            ", material: Diffuse(albedo: ({rho}, {rho}, {rho})), emit: (intensity: {l_e})"
+        );
+        let text = format!(
+            "Scene(canvas: (80, 80), floor: Color((1, 1, 1)), walls: [{}])",
+            polygon_walls(room, &extra)
+        );
+        let loaded = scene(&text);
+        for (integrator, bounces, memo) in [
+            (Integrator::Path, 1, false),
+            (Integrator::Path, 3, false),
+            (Integrator::Path, 1, true),
+            (Integrator::Path, 3, true),
+            (Integrator::Original, 1, false),
+            (Integrator::Original, 2, true),
+        ] {
+            let options = RenderOptions {
+                samples: 8,
+                bounces,
+                seed: 12,
+                integrator,
+                memo: memo_options(memo),
+                ..RenderOptions::default()
+            };
+            let image = render(&loaded.scene, &options).image;
+            let expected = TAU * l_e * geometric_sum(rho, bounces + 1);
+            let (mean, se, n) = mean_se(&image, |p| well_inside(room, p, 1.0));
+            assert!(n > 400, "{name}: {n} pixels inside");
+            let tolerance = 4.0 * se + 1e-5 * expected;
+            assert!(
+                (mean - expected).abs() <= tolerance,
+                "{name}, {integrator:?}, D = {bounces}, memo {memo}: mean {mean}, expected {expected}, 4 SE = {}",
+                4.0 * se
+            );
+        }
+    }
+}
+
 /// Closed form 3 with indirect light: a light outside a closed polygon
 /// leaves every pixel inside exactly zero, for every number of bounces.
 #[test]

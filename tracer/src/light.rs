@@ -1,9 +1,9 @@
 //! Direct light: shadow rays from a receiver point to every light.
 
-use flatray_geometry::{DVec2, Ray, Skip};
+use flatray_geometry::{DVec2, Ray, Segment, Skip};
 
 use crate::sampling::{Stream, angle_sample_lanes, sample_subtended_angle};
-use crate::scene::{EMITTING_SIDE, LightShape, Material, Scene};
+use crate::scene::{EMITTING_SIDE, LightShape, Material, Scene, lies_on_line};
 use crate::{Rgb, Stats};
 
 /// Who receives the light: the floor (no cosine, every direction) or one
@@ -313,9 +313,22 @@ pub(crate) fn light_contribution(
             }
         }
         LightShape::Line {
-            segment, one_sided, ..
+            segment,
+            one_sided,
+            wall,
         } => {
             if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
+                return Rgb::ZERO;
+            }
+            if let Some(receiving) = receiver.wall
+                && (wall == Some(receiving)
+                    || collinear(&segment, &scene.walls[receiving as usize].segment))
+            {
+                // A wall never receives its own light, nor a line light
+                // along its own line: all of it arrives at grazing
+                // incidence, cosine zero. Computed, the receiver point
+                // is rounded off the line and the light would subtend
+                // about pi at a cosine that is not zero.
                 return Rgb::ZERO;
             }
             let Some(s) = sample_subtended_angle(x, &segment, u) else {
@@ -350,6 +363,11 @@ pub(crate) fn light_contribution(
         }
     };
     value * light.color
+}
+
+/// Whether both ends of `light` lie on the line through `wall`.
+fn collinear(light: &Segment, wall: &Segment) -> bool {
+    lies_on_line(light.a, wall) && lies_on_line(light.b, wall)
 }
 
 /// What fraction of light gets along `ray` for `0 < t < t_max`: zero when

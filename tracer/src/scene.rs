@@ -544,17 +544,29 @@ impl Scene {
 /// that distance can resolve, and it lies between the ends.
 pub fn lies_on(p: DVec2, segment: &Segment) -> bool {
     let e = segment.edge();
+    let tolerance = line_tolerance(p, segment);
+    let along = (p - segment.a).dot(e);
+    segment.side_value(p).abs() <= tolerance
+        && along >= -tolerance
+        && along <= e.length_squared() + tolerance
+}
+
+/// Whether `p` lies on the infinite line through `segment`, to within the
+/// rounding of the numbers involved (as [`lies_on`], without the ends).
+pub fn lies_on_line(p: DVec2, segment: &Segment) -> bool {
+    segment.side_value(p).abs() <= line_tolerance(p, segment)
+}
+
+/// What computing `segment.side_value(p)` can resolve.
+fn line_tolerance(p: DVec2, segment: &Segment) -> f64 {
+    let e = segment.edge();
     let magnitude = segment
         .a
         .abs()
         .max(segment.b.abs())
         .max(p.abs())
         .max_element();
-    let tolerance = 16.0 * f64::EPSILON * e.length() * magnitude.max(e.length());
-    let along = (p - segment.a).dot(e);
-    segment.side_value(p).abs() <= tolerance
-        && along >= -tolerance
-        && along <= e.length_squared() + tolerance
+    16.0 * f64::EPSILON * e.length() * magnitude.max(e.length())
 }
 
 /// The side of a one-sided line light that emits.
