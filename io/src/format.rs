@@ -432,7 +432,8 @@ pub struct RenderSpec {
     /// The memo's wall bin length, in pixels.
     #[serde(default = "one_positive")]
     pub cache_bin: Positive,
-    /// Stratified receiver points per pixel for the memoised floor light.
+    /// The fewest stratified receiver points per pixel for the memoised
+    /// floor light (a pixel takes at least as many as it has samples).
     #[serde(default = "default_floor_samples")]
     pub cache_floor_samples: Samples,
 }
@@ -441,7 +442,7 @@ fn yes() -> bool {
     true
 }
 fn default_floor_samples() -> Samples {
-    Samples(64)
+    Samples(1)
 }
 
 impl Default for RenderSpec {

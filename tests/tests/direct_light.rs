@@ -206,3 +206,83 @@ fn closed_form_3_no_direct_light_leaks_into_a_closed_room() {
         assert!(outside_lit > 1000, "the lights must light the outside");
     }
 }
+
+/// The part of the unit pixel at `(x, y)` on the side of the line through
+/// `a` and `b` where `cross(b - a, p - a) > 0`: the square clipped by the
+/// half-plane (Sutherland-Hodgman), its area by the shoelace formula.
+fn area_left_of(x: u32, y: u32, a: DVec2, b: DVec2) -> f64 {
+    let (x, y) = (x as f64, y as f64);
+    let square = [
+        DVec2::new(x, y),
+        DVec2::new(x + 1.0, y),
+        DVec2::new(x + 1.0, y + 1.0),
+        DVec2::new(x, y + 1.0),
+    ];
+    let side = |p: DVec2| (b - a).perp_dot(p - a);
+    let mut clipped = Vec::new();
+    for k in 0..4 {
+        let (p, q) = (square[k], square[(k + 1) % 4]);
+        let (sp, sq) = (side(p), side(q));
+        if sp > 0.0 {
+            clipped.push(p);
+        }
+        if (sp > 0.0) != (sq > 0.0) {
+            clipped.push(p + (q - p) * (sp / (sp - sq)));
+        }
+    }
+    let n = clipped.len();
+    (0..n)
+        .map(|k| clipped[k].perp_dot(clipped[(k + 1) % n]))
+        .sum::<f64>()
+        .abs()
+        * 0.5
+}
+
+/// The floor memo's direct light converges at shadow edges: its strata
+/// grow with the samples, so the relative RMS error over the pixels a
+/// shadow edge crosses keeps falling as the samples grow (a fixed number
+/// of strata left it flat). A point light of constant falloff behind a
+/// mirror: the image is exactly the lit fraction of each pixel (a path
+/// off the mirror finds no light), known in closed form.
+#[test]
+fn the_floor_memo_converges_at_shadow_edges() {
+    let (light, end) = (DVec2::new(10.3, 30.2), DVec2::new(30.0, 40.9));
+    let text = format!(
+        "Scene(canvas: (64, 64), floor: Color((1, 1, 1)), falloff: Constant,
+           walls: [Wall(a: (30, -1000), b: ({:?}, {:?}), material: Mirror())],
+           lights: [Point(at: ({:?}, {:?}))])",
+        end.x, end.y, light.x, light.y
+    );
+    let loaded = scene(&text);
+    // Beyond the wall, the lit part is below the line from the light
+    // through the wall's end (y grows down).
+    let lit = |x: u32, y: u32| area_left_of(x, y, light, end);
+    let edge: Vec<(u32, u32, f64)> = (0..64)
+        .flat_map(|y| (31..64).map(move |x| (x, y)))
+        .map(|(x, y)| (x, y, lit(x, y)))
+        .filter(|&(_, _, f)| f > 0.02 && f < 0.98)
+        .collect();
+    assert!(edge.len() > 30, "{} edge pixels", edge.len());
+    let error = |samples: u32| {
+        let options = RenderOptions {
+            samples,
+            bounces: 1,
+            seed: 5,
+            ..RenderOptions::default()
+        };
+        let image = render(&loaded.scene, &options).image;
+        let (mut squares, mut total) = (0.0, 0.0);
+        for &(x, y, exact) in &edge {
+            squares += (image.get(x, y)[0] as f64 - exact).powi(2);
+            total += exact;
+        }
+        (squares / edge.len() as f64).sqrt() / (total / edge.len() as f64)
+    };
+    let errors: Vec<f64> = [64, 256, 1024].into_iter().map(error).collect();
+    // Jittered strata over a straight edge: RMS error as N^(-3/4), so
+    // 16 times the samples should divide it by about 8; at least 3.
+    assert!(
+        errors[1] < errors[0] && errors[2] * 3.0 < errors[0],
+        "relative RMS error at 64, 256, 1024 spp: {errors:?}"
+    );
+}

@@ -112,7 +112,10 @@ fn an_emitting_wall_does_not_light_itself() {
     let along = "Scene(canvas: (100, 100), floor: Color((1, 1, 1)),
         walls: [Wall(a: (20, 50), b: (50, 50.0005), material: Diffuse(albedo: (0.8, 0.8, 0.8)))],
         lights: [Line(a: (50, 50.0005), b: (80, 50.001), intensity: 0.5)])";
-    for (name, text) in [("emitting wall", emitting), ("wall along a line light", along)] {
+    for (name, text) in [
+        ("emitting wall", emitting),
+        ("wall along a line light", along),
+    ] {
         let loaded = scene(text);
         for integrator in [Integrator::Path, Integrator::Original] {
             for memo in [false, true] {

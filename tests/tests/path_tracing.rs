@@ -155,7 +155,10 @@ fn closed_form_4_furnace_in_rotated_and_star_rooms() {
             })
             .collect()
     };
-    let square = turn(&[(12.0, 12.0), (68.0, 12.0), (68.0, 68.0), (12.0, 68.0)], 17.0);
+    let square = turn(
+        &[(12.0, 12.0), (68.0, 12.0), (68.0, 68.0), (12.0, 68.0)],
+        17.0,
+    );
     let l_shape = turn(
         &[
             (10.0, 10.0),
@@ -176,9 +179,8 @@ fn closed_form_4_furnace_in_rotated_and_star_rooms() {
         .collect();
     let (l_e, rho) = (0.3, 0.6);
     for (name, room) in [("square", &square), ("L-shaped", &l_shape), ("star", &star)] {
-        let extra = format!(
-            ", material: Diffuse(albedo: ({rho}, {rho}, {rho})), emit: (intensity: {l_e})"
-        );
+        let extra =
+            format!(", material: Diffuse(albedo: ({rho}, {rho}, {rho})), emit: (intensity: {l_e})");
         let text = format!(
             "Scene(canvas: (80, 80), floor: Color((1, 1, 1)), walls: [{}])",
             polygon_walls(room, &extra)

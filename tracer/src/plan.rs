@@ -265,9 +265,10 @@ impl Plan {
             } else if !indirect {
                 "no indirect path would reuse it".into()
             } else {
+                let grid = crate::memo::floor_grid(&options.memo, options.samples);
                 format!(
-                    "up to {} stratified points per pixel",
-                    options.memo.floor_samples
+                    "{} stratified points per pixel (at least as many as the samples)",
+                    grid * grid
                 )
             },
         );
