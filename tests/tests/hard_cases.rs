@@ -143,6 +143,79 @@ fn an_emitting_wall_does_not_light_itself() {
     }
 }
 
+/// A light outside a closed room, on the extension of one of its walls'
+/// lines (a point light, or sunlight parallel to the wall), in a square
+/// turned by 17 degrees: every pixel inside stays exactly zero with
+/// bounces. A shadow ray from a point of that wall runs along its line
+/// through the corner, where rounding decided whether it crossed the next
+/// wall; such light reaches a wall only at grazing incidence, cosine
+/// zero, so the wall receives none of it.
+#[test]
+fn no_leak_from_a_light_on_a_walls_line() {
+    let (s, c) = 17f64.to_radians().sin_cos();
+    let corners: Vec<DVec2> = [(-30.0, -30.0), (30.0, -30.0), (30.0, 30.0), (-30.0, 30.0)]
+        .iter()
+        .map(|&(x, y)| DVec2::new(50.0 + c * x - s * y, 50.0 + s * x + c * y))
+        .collect();
+    let points: Vec<(f64, f64)> = corners.iter().map(|p| (p.x, p.y)).collect();
+    let walls = walls_text(&points, true, "");
+    let inside = |p: DVec2| {
+        let q = p - DVec2::new(50.0, 50.0);
+        let (x, y) = (c * q.x + s * q.y, -s * q.x + c * q.y);
+        x.abs() < 29.0 && y.abs() < 29.0
+    };
+    let along = corners[1] - corners[0];
+    let lights = [
+        // Beyond each end of the first wall, on its line.
+        format!(
+            "Point(at: ({:?}, {:?}), intensity: 50.0)",
+            (corners[1] + 0.3 * along).x,
+            (corners[1] + 0.3 * along).y
+        ),
+        format!(
+            "Point(at: ({:?}, {:?}), intensity: 50.0)",
+            (corners[0] - 0.2 * along).x,
+            (corners[0] - 0.2 * along).y
+        ),
+        format!(
+            "Directional(direction: ({:?}, {:?}), intensity: 3.0)",
+            along.x, along.y
+        ),
+    ];
+    for light in &lights {
+        let text = format!(
+            "Scene(canvas: (100, 100), floor: Color((1, 1, 1)), walls: [{walls}], lights: [{light}])"
+        );
+        let loaded = scene(&text);
+        for integrator in [Integrator::Path, Integrator::Original] {
+            for (bounces, memo) in [(1, false), (3, false), (1, true), (3, true)] {
+                let mut o = options(16, bounces);
+                o.integrator = integrator;
+                o.memo.enabled = memo;
+                let image = render(&loaded.scene, &o).image;
+                let mut leaks = 0;
+                for y in 0..100 {
+                    for x in 0..100 {
+                        if inside(DVec2::new(x as f64 + 0.5, y as f64 + 0.5))
+                            && image.get(x, y) != [0.0; 3]
+                        {
+                            leaks += 1;
+                        }
+                    }
+                }
+                assert_eq!(
+                    leaks, 0,
+                    "{light}, {integrator:?}, D = {bounces}, memo {memo}: {leaks} pixels inside lit"
+                );
+                assert!(
+                    image.pixels.iter().any(|p| p[0] > 0.0),
+                    "{light}: outside lit"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn ray_parallel_to_a_wall_misses_it() {
     let wall = Segment::new(DVec2::new(0.0, 5.0), DVec2::new(10.0, 5.0));

@@ -285,6 +285,16 @@ pub(crate) fn light_contribution(
     let r0 = scene.small_radius;
     let value = match light.shape {
         LightShape::Point { at } | LightShape::Spot { at, .. } => {
+            if receiver
+                .wall
+                .is_some_and(|w| lies_on_line(at, &scene.walls[w as usize].segment))
+            {
+                // A light on the receiving wall's line reaches it only at
+                // grazing incidence, cosine zero. Computed, its shadow ray
+                // runs along the wall through the corner, where rounding
+                // decides whether it crosses the next wall.
+                return Rgb::ZERO;
+            }
             let to = at - x;
             let r = to.length();
             if r == 0.0 {
@@ -350,7 +360,12 @@ pub(crate) fn light_contribution(
         LightShape::Directional { direction } => {
             let to_light = -direction;
             let weight = receiver.cosine(to_light);
-            if weight == 0.0 {
+            if weight == 0.0
+                || receiver
+                    .wall
+                    .is_some_and(|w| parallel(direction, &scene.walls[w as usize].segment))
+            {
+                // Sunlight along the receiving wall: grazing, as above.
                 return Rgb::ZERO;
             }
             let vis = transmittance(
@@ -363,6 +378,13 @@ pub(crate) fn light_contribution(
         }
     };
     value * light.color
+}
+
+/// Whether the unit `direction` runs along `wall`, to within the rounding
+/// of computing their cross product.
+fn parallel(direction: DVec2, wall: &Segment) -> bool {
+    let e = wall.edge();
+    e.perp_dot(direction).abs() <= 16.0 * f64::EPSILON * e.length()
 }
 
 /// Whether both ends of `light` lie on the line through `wall`.
