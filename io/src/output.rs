@@ -7,7 +7,6 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use flatray_tracer::Image;
-use image::codecs::openexr::OpenExrEncoder;
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 
@@ -109,23 +108,24 @@ pub fn png_bytes(image: &Image, tonemap: ToneMap) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
-/// Writes the linear values untouched as 32-bit float EXR.
+/// Writes the linear values untouched as 32-bit float EXR. Its blocks are
+/// compressed and written one after another, in order, so the same image
+/// always gives the same bytes (compressed in parallel, blocks went out in
+/// the order they finished, and the offset table with them).
 pub fn write_exr(image: &Image, path: &Path) -> Result<(), WriteError> {
-    let floats: Vec<f32> = image.pixels.iter().flatten().copied().collect();
-    let bytes: &[u8] = bytes_of(&floats);
+    use exr::prelude::{SpecificChannels, Vec2, WritableImage};
+    let width = image.width as usize;
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let [r, g, b] = image.pixels[p.y() * width + p.x()];
+        (r, g, b)
+    });
     write_atomically(path, |w| {
-        OpenExrEncoder::new(w)
-            .write_image(bytes, image.width, image.height, ExtendedColorType::Rgb32F)
+        exr::prelude::Image::from_channels((width, image.height as usize), channels)
+            .write()
+            .non_parallel()
+            .to_buffered(w)
             .map_err(|e| e.to_string())
     })
-}
-
-fn bytes_of(floats: &[f32]) -> &[u8] {
-    // SAFETY: f32 has no padding and every bit pattern is a valid u8; the
-    // slice's length in bytes is exactly 4 per float.
-    unsafe {
-        std::slice::from_raw_parts(floats.as_ptr().cast::<u8>(), std::mem::size_of_val(floats))
-    }
 }
 
 /// Reads a linear RGB EXR (as written by [`write_exr`]).
