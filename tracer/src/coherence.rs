@@ -36,6 +36,10 @@ use crate::{Rgb, Stats};
 /// Above this many (wall, light) pairs every pixel traces its strata.
 pub const MAX_PAIRS: usize = 4096;
 
+/// Above this many (pixel, light) cells (a byte each) the masks are not
+/// built: every pixel traces its strata.
+pub const MAX_CELLS: u64 = 1 << 28;
+
 /// What the strata of one pixel need for one light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Coherence {
@@ -60,10 +64,13 @@ impl FloorCoherence {
     /// scene is too large for them to pay (see [`MAX_PAIRS`]).
     pub fn build(scene: &Scene, size: (u32, u32)) -> Option<FloorCoherence> {
         let lights = scene.lights.len();
-        if lights == 0 || scene.walls.len() * lights > MAX_PAIRS {
+        let (width, height) = (size.0 as usize, size.1 as usize);
+        if lights == 0
+            || scene.walls.len() * lights > MAX_PAIRS
+            || (width * height) as u64 * lights as u64 > MAX_CELLS
+        {
             return None;
         }
-        let (width, height) = (size.0 as usize, size.1 as usize);
         let step = DVec2::new(
             scene.canvas.width as f64 / size.0 as f64,
             scene.canvas.height as f64 / size.1 as f64,

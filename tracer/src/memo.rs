@@ -43,6 +43,58 @@ impl Default for MemoOptions {
     }
 }
 
+/// Bytes the wall memo may take: over it, the plan switches it off.
+pub const WALL_MEMO_BUDGET: u64 = 256 << 20;
+
+/// At most the bytes the wall memo of `scene` at `scale` would take,
+/// counted without building it: each diffuse wall's bins (its length over
+/// the bin length, plus one per span that a junction starts), per side,
+/// per light and their sum. `None` as soon as the count passes `budget`,
+/// so walls that cross very often cost no more than the budget to count.
+pub(crate) fn wall_memo_bytes(
+    scene: &Scene,
+    options: &MemoOptions,
+    scale: f64,
+    budget: u64,
+) -> Option<u64> {
+    let bin_length = options.bin_length / scale;
+    let per_bin = 2 * (scene.lights.len() as u64 + 1) * std::mem::size_of::<Value>() as u64;
+    let mut bytes = 0u64;
+    for (index, w) in scene.walls.iter().enumerate() {
+        if !matches!(w.material, Material::Diffuse { .. }) {
+            bytes += per_bin;
+            continue;
+        }
+        let bins = (w.segment.length() / bin_length).ceil();
+        if !(bins.is_finite() && bins < budget as f64) {
+            return None;
+        }
+        bytes = bytes.checked_add((bins as u64 + 1).checked_mul(per_bin)?)?;
+        if bytes > budget {
+            return None;
+        }
+        let along = Ray::new(w.segment.a, w.segment.edge());
+        let mut over = false;
+        scene
+            .segments
+            .for_each_crossing(&along, 1.0, Skip::one(index as u32), |_, hit| {
+                if hit.t > 0.0 {
+                    // A junction starts a span: at most one more bin.
+                    bytes += per_bin + SPAN_BYTES;
+                    over = bytes > budget;
+                }
+                !over
+            });
+        if over {
+            return None;
+        }
+    }
+    Some(bytes)
+}
+
+/// What a span of the memo takes besides its bins (an upper bound).
+const SPAN_BYTES: u64 = 64;
+
 /// Fills the wall memo for `scene` rendered at `scale` pixels per unit.
 /// Only diffuse walls get real bins; the others hold one unused zero bin.
 pub(crate) fn build_wall_memo(

@@ -107,19 +107,33 @@ impl Plan {
         let indirect = indirect_possible && (force || reflectors > 0);
         let specular = mirrors + glass_edges;
         let mirror_emission = indirect && (force || (specular > 0 && lines > 0));
-        let wall_memo = !tracing_light
+        let wall_memo_wanted = !tracing_light
             && indirect
             && options.memo.enabled
             && (force || (diffuse > 0 && reflectors > 0));
+        // Counted before anything is allocated; over its budget the memo
+        // is off (the same image, estimated by shadow rays).
+        let wall_memo_fits = !wall_memo_wanted
+            || crate::memo::wall_memo_bytes(
+                scene,
+                &options.memo,
+                options.scale,
+                crate::memo::WALL_MEMO_BUDGET,
+            )
+            .is_some();
+        let wall_memo = wall_memo_wanted && wall_memo_fits;
         // Forcing never changes how the floor's direct light is estimated:
         // that would change the image.
         let floor_memo =
             !tracing_light && indirect_possible && reflectors > 0 && options.memo.enabled;
         let pairs = scene.walls.len() * scene.lights.len();
+        let (width, height) = crate::render::image_size(scene, options.scale);
+        let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
         let floor_coherence = floor_memo
             && shadows
             && options.memo.floor_coherence
-            && pairs <= crate::coherence::MAX_PAIRS;
+            && pairs <= crate::coherence::MAX_PAIRS
+            && mask_cells <= crate::coherence::MAX_CELLS;
         let brute_force = scene.segments().strategy() == Strategy::BruteForce;
         let floor_ray_culling = !tracing_light
             && indirect
@@ -247,6 +261,11 @@ impl Plan {
                 "no indirect light is traced, so no path reads it".into()
             } else if diffuse == 0 && !force {
                 "no diffuse wall to cache".into()
+            } else if !wall_memo_fits {
+                format!(
+                    "its bins would take more than its budget of {} MiB (walls that cross often, or a short cache_bin): shadow rays instead",
+                    crate::memo::WALL_MEMO_BUDGET >> 20
+                )
             } else {
                 format!(
                     "{} binned every {} pixel",
@@ -285,6 +304,11 @@ impl Plan {
                 format!(
                     "{pairs} wall-light pairs, over {}: drawing the shadow edges would cost more than it saves",
                     crate::coherence::MAX_PAIRS
+                )
+            } else if mask_cells > crate::coherence::MAX_CELLS {
+                format!(
+                    "{mask_cells} pixel-light cells, over its budget of {}",
+                    crate::coherence::MAX_CELLS
                 )
             } else {
                 "one shadow ray per light where no shadow edge crosses the pixel".into()

@@ -194,25 +194,37 @@ pub(crate) struct AlbedoAlong {
 /// At most this many cells per wall.
 const MAX_ALBEDO_CELLS: usize = 4096;
 
+/// At most this many cells over all walls (24 bytes each: 96 MiB).
+pub const ALBEDO_CELLS_BUDGET: usize = 1 << 22;
+
 /// Cells per unit of a wall's length.
 const CELLS_PER_UNIT: f64 = 4.0;
 
 impl AlbedoAlong {
     fn new(canvas: &Canvas, floor: &Floor, walls: &[Wall]) -> AlbedoAlong {
+        let taking = walls
+            .iter()
+            .filter(|w| matches!(w.material, Material::Diffuse { albedo: None }))
+            .count();
+        // The budget shared out: many long walls get coarser cells (a
+        // cell that crosses a border reads the floor: the same values).
+        let most = (ALBEDO_CELLS_BUDGET / taking.max(1)).clamp(1, MAX_ALBEDO_CELLS);
         let cells = walls
             .iter()
             .map(|wall| match wall.material {
-                Material::Diffuse { albedo: None } => Self::cells(canvas, floor, &wall.segment),
+                Material::Diffuse { albedo: None } => {
+                    Self::cells(canvas, floor, &wall.segment, most)
+                }
                 _ => Vec::new(),
             })
             .collect();
         AlbedoAlong { cells }
     }
 
-    fn cells(canvas: &Canvas, floor: &Floor, segment: &Segment) -> Vec<Rgb> {
+    fn cells(canvas: &Canvas, floor: &Floor, segment: &Segment, most: usize) -> Vec<Rgb> {
         let length = segment.length();
         let n = if length.is_finite() {
-            ((length * CELLS_PER_UNIT).ceil() as usize).clamp(1, MAX_ALBEDO_CELLS)
+            ((length * CELLS_PER_UNIT).ceil().min(most as f64) as usize).max(1)
         } else {
             1
         };
@@ -531,6 +543,12 @@ impl Scene {
     /// The segment set of the walls, for queries.
     pub fn segments(&self) -> &SegmentSet {
         &self.segments
+    }
+
+    /// How many cells the table of the floor's albedo along the walls
+    /// holds, over all walls (at most `ALBEDO_CELLS_BUDGET`).
+    pub fn albedo_cells(&self) -> usize {
+        self.albedo_along.cells.iter().map(Vec::len).sum()
     }
 
     /// The line light that wall `index` also is, if any.
