@@ -65,14 +65,86 @@ impl TryFrom<f64> for Positive {
     }
 }
 
-/// A point or vector `(x, y)` of finite numbers.
+/// Largest coordinate magnitude, in world units: far beyond any floor
+/// plan, and small enough that products of coordinates stay finite.
+pub const MAX_COORDINATE: f64 = 1e15;
+/// Largest light intensity and exposure: their product with the largest
+/// falloff (`1 / small_radius^2`) stays finite in a 32-bit image.
+pub const MAX_INTENSITY: f64 = 1e9;
+/// Smallest and largest `small_radius`.
+pub const SMALL_RADIUS_RANGE: (f64, f64) = (1e-6, 1e6);
+
+/// A point `(x, y)` of finite numbers within [`MAX_COORDINATE`].
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(from = "(Finite, Finite)")]
+#[serde(try_from = "(Finite, Finite)")]
 pub struct Point(pub f64, pub f64);
 
-impl From<(Finite, Finite)> for Point {
-    fn from((x, y): (Finite, Finite)) -> Point {
-        Point(x.0, y.0)
+impl TryFrom<(Finite, Finite)> for Point {
+    type Error = String;
+    fn try_from((x, y): (Finite, Finite)) -> Result<Point, String> {
+        if x.0.abs() <= MAX_COORDINATE && y.0.abs() <= MAX_COORDINATE {
+            Ok(Point(x.0, y.0))
+        } else {
+            Err(format!(
+                "expected coordinates within ±{MAX_COORDINATE:e}, found ({}, {})",
+                x.0, y.0
+            ))
+        }
+    }
+}
+
+/// A light's intensity: a number from 0 to [`MAX_INTENSITY`].
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Intensity(pub f64);
+
+impl TryFrom<f64> for Intensity {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Intensity, String> {
+        if (0.0..=MAX_INTENSITY).contains(&v) {
+            Ok(Intensity(v))
+        } else {
+            Err(format!(
+                "expected an intensity from 0 to {MAX_INTENSITY:e}, found {v}"
+            ))
+        }
+    }
+}
+
+/// An exposure: a number > 0 and at most [`MAX_INTENSITY`].
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Exposure(pub f64);
+
+impl TryFrom<f64> for Exposure {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Exposure, String> {
+        if v > 0.0 && v <= MAX_INTENSITY {
+            Ok(Exposure(v))
+        } else {
+            Err(format!(
+                "expected an exposure > 0 and at most {MAX_INTENSITY:e}, found {v}"
+            ))
+        }
+    }
+}
+
+/// The small radius of the falloff kernels, within [`SMALL_RADIUS_RANGE`].
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct SmallRadius(pub f64);
+
+impl TryFrom<f64> for SmallRadius {
+    type Error = String;
+    fn try_from(v: f64) -> Result<SmallRadius, String> {
+        let (low, high) = SMALL_RADIUS_RANGE;
+        if (low..=high).contains(&v) {
+            Ok(SmallRadius(v))
+        } else {
+            Err(format!(
+                "expected a small radius from {low:e} to {high:e}, found {v}"
+            ))
+        }
     }
 }
 
@@ -119,8 +191,8 @@ impl TryFrom<(f64, f64, f64)> for Color {
 fn white() -> Color {
     Color::WHITE
 }
-fn one() -> NonNegative {
-    NonNegative(1.0)
+fn one() -> Intensity {
+    Intensity(1.0)
 }
 
 /// The canvas size in pixels, bounded so that a typo cannot allocate
@@ -161,7 +233,7 @@ pub struct SceneFile {
     pub falloff: FalloffSpec,
     /// Every kernel clamps the distance below at this radius.
     #[serde(default = "half")]
-    pub small_radius: Positive,
+    pub small_radius: SmallRadius,
     #[serde(default)]
     pub walls: Vec<WallSpec>,
     #[serde(default)]
@@ -212,8 +284,8 @@ impl TryFrom<f64> for Ior {
     }
 }
 
-fn half() -> Positive {
-    Positive(0.5)
+fn half() -> SmallRadius {
+    SmallRadius(0.5)
 }
 
 #[derive(Debug, Deserialize)]
@@ -330,7 +402,7 @@ pub struct EmitSpec {
     pub color: Color,
     /// Per unit length.
     #[serde(default = "one")]
-    pub intensity: NonNegative,
+    pub intensity: Intensity,
     #[serde(default)]
     pub one_sided: bool,
     #[serde(default)]
@@ -366,7 +438,7 @@ pub enum LightSpec {
         #[serde(default = "white")]
         color: Color,
         #[serde(default = "one")]
-        intensity: NonNegative,
+        intensity: Intensity,
         #[serde(default)]
         falloff: Option<FalloffSpec>,
     },
@@ -381,7 +453,7 @@ pub enum LightSpec {
         #[serde(default = "white")]
         color: Color,
         #[serde(default = "one")]
-        intensity: NonNegative,
+        intensity: Intensity,
         #[serde(default)]
         falloff: Option<FalloffSpec>,
     },
@@ -392,7 +464,7 @@ pub enum LightSpec {
         color: Color,
         /// Per unit length.
         #[serde(default = "one")]
-        intensity: NonNegative,
+        intensity: Intensity,
         #[serde(default)]
         one_sided: bool,
         /// A solid line light also blocks light, as a black wall.
@@ -407,7 +479,7 @@ pub enum LightSpec {
         color: Color,
         /// Irradiance across the beam.
         #[serde(default = "one")]
-        intensity: NonNegative,
+        intensity: Intensity,
     },
 }
 
@@ -420,8 +492,8 @@ pub struct RenderSpec {
     pub bounces: Bounces,
     #[serde(default)]
     pub seed: u64,
-    #[serde(default = "one_positive")]
-    pub exposure: Positive,
+    #[serde(default = "one_exposure")]
+    pub exposure: Exposure,
     #[serde(default)]
     pub integrator: IntegratorSpec,
     #[serde(default)]
@@ -451,7 +523,7 @@ impl Default for RenderSpec {
             samples: default_samples(),
             bounces: default_bounces(),
             seed: 0,
-            exposure: one_positive(),
+            exposure: one_exposure(),
             integrator: IntegratorSpec::default(),
             tonemap: ToneMap::default(),
             cache: yes(),
@@ -499,6 +571,10 @@ impl TryFrom<u32> for Bounces {
         }
     }
 }
+fn one_exposure() -> Exposure {
+    Exposure(1.0)
+}
+
 fn one_positive() -> Positive {
     Positive(1.0)
 }

@@ -12,6 +12,7 @@
 mod error;
 pub mod format;
 mod load;
+mod locate;
 mod output;
 pub mod report;
 
@@ -19,6 +20,6 @@ pub use error::{SceneError, WriteError};
 pub use format::ToneMap;
 pub use load::{Loaded, load, parse};
 pub use output::{
-    Format, linear_to_srgb, png_bytes, read_exr, srgb_to_linear, to_srgb8, tone_map, write_exr,
-    write_image, write_png,
+    Format, linear_to_srgb, png_bytes, read_exr, remove_pending_files, srgb_to_linear, to_srgb8,
+    tone_map, write_exr, write_image, write_png, write_text,
 };

@@ -14,6 +14,7 @@ use crate::format::{
     Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LightSpec, MAX_CANVAS_PIXELS,
     MAX_CANVAS_SIDE, MaterialSpec, SceneFile, ToneMap,
 };
+use crate::locate;
 
 /// A loaded scene with the render settings its file asks for.
 #[derive(Clone, Debug)]
@@ -21,22 +22,41 @@ pub struct Loaded {
     pub scene: Scene,
     pub options: RenderOptions,
     pub tonemap: ToneMap,
+    /// The files the scene was read from: the scene file (when loaded
+    /// from one) and its floor image (when it has one). A render must
+    /// never write over them.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// Reads and validates the scene file at `path`. Relative paths inside it
 /// resolve against its folder.
 pub fn load(path: &Path) -> Result<Loaded, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+    let read_error = |source| SceneError::Read {
         path: path.to_path_buf(),
         source,
+    };
+    let bytes = std::fs::read(path).map_err(read_error)?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        read_error(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "expected UTF-8 text, but byte {} is not UTF-8 (is it UTF-16, or not a scene?)",
+                valid + 1
+            ),
+        ))
     })?;
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    parse(&text, path, &base)
+    let mut loaded = parse(&text, path, &base)?;
+    loaded.inputs.insert(0, path.to_path_buf());
+    Ok(loaded)
 }
 
 /// Parses and validates scene `text`; `path` names it in messages and
 /// `base` is the folder that relative paths resolve against.
 pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError> {
+    // A UTF-8 byte-order mark is no part of the scene.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
     let file: SceneFile = options.from_str(text).map_err(|e| SceneError::Invalid {
         path: path.to_path_buf(),
@@ -44,8 +64,9 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         column: e.span.start.col,
         message: e.code.to_string(),
     })?;
-    let at = |needle: &str, message: String| {
-        let (line, column) = locate(text, needle);
+    // A validation error at byte `offset` of the text.
+    let error_at = |offset: usize, message: String| {
+        let (line, column) = locate::position(text, offset);
         SceneError::Invalid {
             path: path.to_path_buf(),
             line,
@@ -53,7 +74,12 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             message,
         }
     };
+    let floor_at = locate::field_value(text, "floor").unwrap_or(0);
+    let light_items = locate::list_items(text, "lights");
+    let light_at = |k: usize| light_items.get(k).copied().unwrap_or(0);
+    let glass_items = locate::list_items(text, "glass");
 
+    let mut inputs = Vec::new();
     let floor = match &file.floor {
         FloorSpec::Color(c) => Floor::Color(rgb(*c)),
         FloorSpec::Tiles {
@@ -71,7 +97,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         },
         FloorSpec::Image(relative) => {
             let image_path = base.join(relative);
-            load_floor_image(&image_path).map_err(|reason| at(&format!("{relative:?}"), reason))?
+            inputs.push(image_path.clone());
+            load_floor_image(&image_path).map_err(|reason| error_at(floor_at, reason))?
         }
     };
 
@@ -82,16 +109,16 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 || *height > MAX_CANVAS_SIDE
                 || *width as u64 * *height as u64 > MAX_CANVAS_PIXELS
             {
-                return Err(at(
-                    "floor",
+                return Err(error_at(
+                    floor_at,
                     format!("the floor image is {width} x {height}, too large for a canvas"),
                 ));
             }
             (*width, *height)
         }
         (None, _) => {
-            return Err(at(
-                "floor",
+            return Err(error_at(
+                floor_at,
                 "expected a `canvas: (width, height)`: only an image floor gives its own size"
                     .to_string(),
             ));
@@ -140,7 +167,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         }
         walls.push(Wall { segment, material });
     }
-    for light in &file.lights {
+    for (k, light) in file.lights.iter().enumerate() {
         lights.push(match *light {
             LightSpec::Point {
                 at,
@@ -165,10 +192,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 falloff: f,
             } => {
                 if cone.0 > 180.0 || softness.0 > cone.0 {
-                    return Err(at_light(
-                        text,
-                        path,
-                        "Spot",
+                    return Err(error_at(
+                        light_at(k),
                         format!(
                             "expected 0 < cone <= 180 and softness <= cone (degrees), found cone {} and softness {}",
                             cone.0, softness.0
@@ -197,10 +222,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 falloff: f,
             } => {
                 if a == b {
-                    return Err(at_light(
-                        text,
-                        path,
-                        "Line",
+                    return Err(error_at(
+                        light_at(k),
                         format!(
                             "a line light needs two different endpoints, found ({}, {}) twice; use a Point light",
                             a.0, a.1
@@ -249,20 +272,18 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
     let mut polygons: Vec<Vec<DVec2>> = Vec::with_capacity(file.glass.len());
     for (k, spec) in file.glass.iter().enumerate() {
         let points: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
-        let located = |message: String| {
-            let (line, column) = locate_nth(text, "Glass(", k);
-            SceneError::Invalid {
-                path: path.to_path_buf(),
-                line,
-                column,
-                message,
-            }
-        };
+        let located = |message: String| error_at(glass_items.get(k).copied().unwrap_or(0), message);
         validate_polygon(&points).map_err(located)?;
         for (j, other) in polygons.iter().enumerate() {
             if polygons_cross(&points, other) {
                 return Err(located(format!(
                     "glass {k} crosses glass {j}: glass bodies must not overlap"
+                )));
+            }
+            // Edges apart, one may still hold the other whole.
+            if inside_polygon(points[0], other) || inside_polygon(other[0], &points) {
+                return Err(located(format!(
+                    "glass {k} and glass {j} lie one inside the other: glass bodies must not overlap"
                 )));
             }
         }
@@ -332,6 +353,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         scene,
         options,
         tonemap: file.render.tonemap,
+        inputs,
     })
 }
 
@@ -410,6 +432,18 @@ fn segments_meet(a: &Segment, b: &Segment) -> bool {
     straddles(a, b) && straddles(b, a)
 }
 
+/// Whether `p` lies inside the polygon `v` (even-odd rule).
+fn inside_polygon(p: DVec2, v: &[DVec2]) -> bool {
+    let mut inside = false;
+    for i in 0..v.len() {
+        let (a, b) = (v[i], v[(i + 1) % v.len()]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
 /// Whether any edge of one polygon meets an edge of the other.
 fn polygons_cross(p: &[DVec2], q: &[DVec2]) -> bool {
     let edges = |v: &[DVec2]| -> Vec<Segment> {
@@ -419,38 +453,6 @@ fn polygons_cross(p: &[DVec2], q: &[DVec2]) -> bool {
     };
     let (ep, eq) = (edges(p), edges(q));
     ep.iter().any(|a| eq.iter().any(|b| segments_meet(a, b)))
-}
-
-/// The 1-based line and column of the `n`-th (from 0) `needle` in `text`,
-/// or (1, 1).
-fn locate_nth(text: &str, needle: &str, n: usize) -> (usize, usize) {
-    match text.match_indices(needle).nth(n) {
-        None => (1, 1),
-        Some((offset, _)) => position(text, offset),
-    }
-}
-
-fn position(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset];
-    let line = before.matches('\n').count() + 1;
-    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    (line, column)
-}
-
-/// The error for a light of kind `kind` (its first occurrence in the text).
-fn at_light(text: &str, path: &Path, kind: &str, message: String) -> SceneError {
-    let (line, column) = locate(text, &format!("{kind}("));
-    SceneError::Invalid {
-        path: path.to_path_buf(),
-        line,
-        column,
-        message,
-    }
-}
-
-/// The 1-based line and column of the first `needle` in `text`, or (1, 1).
-fn locate(text: &str, needle: &str) -> (usize, usize) {
-    locate_nth(text, needle, 0)
 }
 
 fn rgb(c: Color) -> Rgb {
@@ -467,9 +469,34 @@ fn falloff(f: FalloffSpec) -> Falloff {
 }
 
 /// Loads an image as linear albedo (its 8-bit values decoded from sRGB).
+/// At most this many texels in a floor image (each held as linear RGB in
+/// 24 bytes: 384 MiB), checked from its header before it is decoded.
+pub const MAX_FLOOR_TEXELS: u64 = 1 << 24;
+
 fn load_floor_image(path: &PathBuf) -> Result<Floor, String> {
-    let decoded = image::open(path)
-        .map_err(|e| format!("cannot load the floor image {}: {e}", path.display()))?;
+    let cannot =
+        |e: &dyn std::fmt::Display| format!("cannot load the floor image {}: {e}", path.display());
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| cannot(&e))?
+        .with_guessed_format()
+        .map_err(|e| cannot(&e))?;
+    let (width, height) = reader.into_dimensions().map_err(|e| cannot(&e))?;
+    if width as u64 * height as u64 > MAX_FLOOR_TEXELS {
+        return Err(format!(
+            "the floor image {} is {width} x {height} pixels, more than the {MAX_FLOOR_TEXELS} flatray reads: scale it down (one texel per pixel of the canvas is plenty)",
+            path.display()
+        ));
+    }
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| cannot(&e))?
+        .with_guessed_format()
+        .map_err(|e| cannot(&e))?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(width);
+    limits.max_image_height = Some(height);
+    limits.max_alloc = Some(MAX_FLOOR_TEXELS * 16);
+    reader.limits(limits);
+    let decoded = reader.decode().map_err(|e| cannot(&e))?;
     let rgb8 = decoded.to_rgb8();
     let (width, height) = rgb8.dimensions();
     if width == 0 || height == 0 {

@@ -5,6 +5,8 @@
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use flatray_tracer::Image;
 use image::codecs::png::PngEncoder;
@@ -128,6 +130,13 @@ pub fn write_exr(image: &Image, path: &Path) -> Result<(), WriteError> {
     })
 }
 
+/// Writes `text` to `path` atomically.
+pub fn write_text(path: &Path, text: &str) -> Result<(), WriteError> {
+    write_atomically(path, |w| {
+        std::io::Write::write_all(w, text.as_bytes()).map_err(|e| e.to_string())
+    })
+}
+
 /// Reads a linear RGB EXR (as written by [`write_exr`]).
 pub fn read_exr(path: &Path) -> Result<Image, String> {
     let decoded = image::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -143,7 +152,10 @@ pub fn read_exr(path: &Path) -> Result<Image, String> {
 
 /// Runs `write` into a temporary file beside `path`, then renames it over
 /// `path`. On any failure the temporary file is removed and `path` is
-/// untouched.
+/// untouched. An existing file's permissions are kept. While the file is
+/// being written its temporary name is listed for
+/// [`remove_pending_files`] (an interrupted render removes it), and
+/// temporary files that killed runs left in the folder are removed first.
 pub(crate) fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<(), String>,
@@ -152,25 +164,90 @@ pub(crate) fn write_atomically(
         path: path.to_path_buf(),
         message,
     };
-    let temp = temp_path(path);
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    remove_stale_files(&folder);
+    let temp = temp_path(&folder);
+    let permissions = std::fs::metadata(path).ok().map(|m| m.permissions());
+    pending(|list| list.push(temp.clone()));
     let result = (|| {
         let file = File::create(&temp).map_err(|e| e.to_string())?;
         let mut writer = BufWriter::new(file);
         write(&mut writer)?;
         let file = writer.into_inner().map_err(|e| e.to_string())?;
         file.sync_all().map_err(|e| e.to_string())?;
+        if let Some(permissions) = permissions {
+            file.set_permissions(permissions)
+                .map_err(|e| e.to_string())?;
+        }
         std::fs::rename(&temp, path).map_err(|e| e.to_string())
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&temp);
     }
+    pending(|list| list.retain(|p| *p != temp));
     result.map_err(fail)
 }
 
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+/// The prefix of every temporary file flatray writes.
+const TEMP_PREFIX: &str = ".flatray-";
+
+/// A short temporary name in `folder`, whatever the target's name (a
+/// target's name may already be as long as a name can be):
+/// `.flatray-PID-N.tmp`.
+fn temp_path(folder: &Path) -> PathBuf {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    folder.join(format!("{TEMP_PREFIX}{}-{n}.tmp", std::process::id()))
+}
+
+/// Temporary files being written now.
+fn pending<T>(f: impl FnOnce(&mut Vec<PathBuf>) -> T) -> T {
+    static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    let mut list = PENDING
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    f(&mut list)
+}
+
+/// Removes the temporary files being written now: for an interrupted
+/// process, before it exits.
+pub fn remove_pending_files() {
+    pending(|list| {
+        for path in list.drain(..) {
+            let _ = std::fs::remove_file(path);
+        }
+    });
+}
+
+/// Removes the temporary files in `folder` that flatray processes which
+/// no longer run left behind (killed while writing). Where the system
+/// cannot tell which processes run (no `/proc`), it leaves them.
+fn remove_stale_files(folder: &Path) {
+    let proc = Path::new("/proc/self");
+    if !proc.exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else {
+            continue;
+        };
+        let pid = name
+            .strip_prefix(TEMP_PREFIX)
+            .and_then(|rest| rest.strip_suffix(".tmp"))
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|pid| pid.parse::<u32>().ok());
+        if let Some(pid) = pid
+            && pid != std::process::id()
+            && !Path::new(&format!("/proc/{pid}")).exists()
+        {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }

@@ -1,0 +1,277 @@
+//! Where things stand in a scene file's text: the start of each item of a
+//! top-level list (`walls`, `lights`, `glass`) and of a top-level field's
+//! value, for validation errors that the RON parser cannot place itself
+//! (those that need more than one value, such as a spot's cone against its
+//! softness).
+//!
+//! A small scanner of RON's lexical structure: it skips strings, raw
+//! strings, characters and comments (nested block comments too), and
+//! counts brackets, so that text inside a comment or a string is never
+//! taken for an item.
+
+/// The byte offset where each item of the top-level list `field` starts,
+/// in order. Empty when the field is absent or not a list.
+pub(crate) fn list_items(text: &str, field: &str) -> Vec<usize> {
+    let Some(start) = field_value(text, field) else {
+        return Vec::new();
+    };
+    let bytes = text.as_bytes();
+    if bytes.get(start) != Some(&b'[') {
+        return Vec::new();
+    }
+    let mut items = Vec::new();
+    let mut depth = 0usize;
+    let mut expecting = true;
+    for token in Tokens::new(text, start) {
+        match token.kind {
+            Kind::Open => {
+                depth += 1;
+                if depth == 1 {
+                    expecting = true;
+                    continue;
+                }
+            }
+            Kind::Close => {
+                if depth == 1 {
+                    break;
+                }
+                depth = depth.saturating_sub(1);
+                continue;
+            }
+            Kind::Comma if depth == 1 => {
+                expecting = true;
+                continue;
+            }
+            _ => {}
+        }
+        if depth >= 1 && expecting {
+            items.push(token.at);
+            expecting = false;
+        }
+    }
+    items
+}
+
+/// The byte offset where the value of the top-level field `field` starts
+/// (after its colon), if the field is there.
+pub(crate) fn field_value(text: &str, field: &str) -> Option<usize> {
+    let mut depth = 0usize;
+    let mut tokens = Tokens::new(text, 0);
+    while let Some(token) = tokens.next() {
+        match token.kind {
+            Kind::Open => depth += 1,
+            Kind::Close => depth = depth.saturating_sub(1),
+            Kind::Word if depth == 1 && &text[token.at..token.end] == field => {
+                let colon = tokens.next()?;
+                if colon.kind == Kind::Colon {
+                    return tokens.next().map(|value| value.at);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The 1-based line and column (in characters) of byte `offset`.
+pub(crate) fn position(text: &str, offset: usize) -> (usize, usize) {
+    let offset = floor_char_boundary(text, offset.min(text.len()));
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+fn floor_char_boundary(text: &str, mut offset: usize) -> usize {
+    while offset > 0 && !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    offset
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// `(`, `[` or `{`.
+    Open,
+    /// `)`, `]` or `}`.
+    Close,
+    Comma,
+    Colon,
+    /// An identifier or a number.
+    Word,
+    /// A string, raw string or character literal.
+    Literal,
+    /// Anything else (a sign, a stray symbol).
+    Other,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Token {
+    kind: Kind,
+    at: usize,
+    end: usize,
+}
+
+/// RON tokens from a byte offset on, comments and white space skipped.
+struct Tokens<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn new(text: &'a str, at: usize) -> Tokens<'a> {
+        Tokens {
+            bytes: text.as_bytes(),
+            at,
+        }
+    }
+
+    fn peek(&self, k: usize) -> Option<u8> {
+        self.bytes.get(self.at + k).copied()
+    }
+
+    /// Skips white space and comments.
+    fn skip_blank(&mut self) {
+        loop {
+            match (self.peek(0), self.peek(1)) {
+                (Some(c), _) if c.is_ascii_whitespace() => self.at += 1,
+                (Some(b'/'), Some(b'/')) => {
+                    while let Some(c) = self.peek(0) {
+                        self.at += 1;
+                        if c == b'\n' {
+                            break;
+                        }
+                    }
+                }
+                (Some(b'/'), Some(b'*')) => {
+                    self.at += 2;
+                    let mut depth = 1;
+                    while depth > 0 && self.at < self.bytes.len() {
+                        match (self.peek(0), self.peek(1)) {
+                            (Some(b'/'), Some(b'*')) => {
+                                depth += 1;
+                                self.at += 2;
+                            }
+                            (Some(b'*'), Some(b'/')) => {
+                                depth -= 1;
+                                self.at += 2;
+                            }
+                            _ => self.at += 1,
+                        }
+                    }
+                }
+                _ => return,
+            }
+        }
+    }
+
+    /// Skips a quoted literal that opens at the current byte with `quote`.
+    fn skip_quoted(&mut self, quote: u8) {
+        self.at += 1;
+        while let Some(c) = self.peek(0) {
+            self.at += 1;
+            if c == b'\\' {
+                self.at += 1;
+            } else if c == quote {
+                return;
+            }
+        }
+    }
+
+    /// Skips a raw string `r#"..."#` whose `r` is the current byte, if it
+    /// is one; returns whether it was.
+    fn skip_raw(&mut self) -> bool {
+        let mut hashes = 0;
+        while self.peek(1 + hashes) == Some(b'#') {
+            hashes += 1;
+        }
+        if self.peek(1 + hashes) != Some(b'"') {
+            return false;
+        }
+        self.at += 2 + hashes;
+        while self.at < self.bytes.len() {
+            if self.peek(0) == Some(b'"') && (1..=hashes).all(|k| self.peek(k) == Some(b'#')) {
+                self.at += 1 + hashes;
+                return true;
+            }
+            self.at += 1;
+        }
+        true
+    }
+}
+
+impl Iterator for Tokens<'_> {
+    type Item = Token;
+
+    fn next(&mut self) -> Option<Token> {
+        self.skip_blank();
+        let at = self.at;
+        let c = self.peek(0)?;
+        let kind = match c {
+            b'(' | b'[' | b'{' => {
+                self.at += 1;
+                Kind::Open
+            }
+            b')' | b']' | b'}' => {
+                self.at += 1;
+                Kind::Close
+            }
+            b',' => {
+                self.at += 1;
+                Kind::Comma
+            }
+            b':' => {
+                self.at += 1;
+                Kind::Colon
+            }
+            b'"' => {
+                self.skip_quoted(b'"');
+                Kind::Literal
+            }
+            b'\'' => {
+                self.skip_quoted(b'\'');
+                Kind::Literal
+            }
+            b'r' if self.skip_raw() => Kind::Literal,
+            c if c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || c >= 0x80 => {
+                while let Some(c) = self.peek(0) {
+                    if c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || c >= 0x80 {
+                        self.at += 1;
+                    } else {
+                        break;
+                    }
+                }
+                Kind::Word
+            }
+            _ => {
+                self.at += 1;
+                Kind::Other
+            }
+        };
+        Some(Token {
+            kind,
+            at,
+            end: self.at,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn items_are_found_past_comments_strings_and_nesting() {
+        let text = "Scene(\n  // lights: [Line(a: (0, 0))]\n  floor: Image(\"lights: [x]\"),\n  lights: [\n    /* Spot( */ Point(at: (1, 2)),\n    Spot(at: (3, 4), direction: (1, 0)),\n\n    Line(a: (0, 0), b: (1, 1)),\n  ],\n)";
+        let items = list_items(text, "lights");
+        let at: Vec<(usize, usize)> = items.iter().map(|&o| position(text, o)).collect();
+        assert_eq!(at, vec![(5, 17), (6, 5), (8, 5)]);
+        assert_eq!(
+            position(text, field_value(text, "floor").unwrap_or(0)),
+            (3, 10)
+        );
+        assert!(list_items(text, "walls").is_empty());
+        // A trailing comma adds no item.
+        assert_eq!(list_items("(walls: [A, B,])", "walls").len(), 2);
+    }
+}
