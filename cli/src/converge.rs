@@ -8,9 +8,9 @@ use std::time::Instant;
 
 use flatray_io::report::{ReferenceInfo, StudyRow, slope, write_study};
 use flatray_tracer::metrics::compare;
-use flatray_tracer::{Image, Integrator, MemoOptions, RenderOptions, Scene, image_size};
+use flatray_tracer::{Image, Integrator, MemoOptions, RenderOptions, Scene};
 
-use crate::{Failure, load, progress_bar};
+use crate::{Failure, checked_size, load, progress_bar};
 
 /// The ways of rendering a study can compare.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -89,7 +89,11 @@ pub(crate) struct ConvergeArgs {
     quiet: bool,
 }
 
-pub(crate) fn converge(args: ConvergeArgs, out: &mut dyn Write) -> Result<(), Failure> {
+pub(crate) fn converge(
+    args: ConvergeArgs,
+    out: &mut dyn Write,
+    _err: &mut dyn Write,
+) -> Result<(), Failure> {
     if !(args.scale.is_finite() && args.scale > 0.0) {
         return Err(Failure::usage(format!(
             "--scale: expected a finite number > 0, found {}",
@@ -108,7 +112,7 @@ pub(crate) fn converge(args: ConvergeArgs, out: &mut dyn Write) -> Result<(), Fa
         bounces: args.bounces.unwrap_or(loaded.options.bounces),
         ..loaded.options
     };
-    let (width, height) = image_size(&loaded.scene, base.scale);
+    let (width, height) = checked_size(&loaded, base.scale)?;
     let pixels = width as u64 * height as u64;
     let stem = args
         .scene
@@ -127,7 +131,11 @@ pub(crate) fn converge(args: ConvergeArgs, out: &mut dyn Write) -> Result<(), Fa
         .collect();
     let ladder_work: u64 =
         ladder.iter().map(|&n| n as u64).sum::<u64>() * pixels * args.configs.len() as u64;
-    let cached = dir.join(format!("reference-{}spp.exr", args.reference_spp));
+    let key = reference_key(&loaded, &base, args.reference_spp)?;
+    let cached = dir.join(format!(
+        "reference-{}spp-{key:016x}.exr",
+        args.reference_spp
+    ));
     let needs_reference = args.reference.is_none() && !reference_matches(&cached, width, height);
     let reference_work = if needs_reference {
         args.reference_spp as u64 * pixels
@@ -239,10 +247,49 @@ pub(crate) fn converge(args: ConvergeArgs, out: &mut dyn Write) -> Result<(), Fa
     Ok(())
 }
 
-/// Whether `path` holds an EXR of the given size.
+/// What a reference depends on, hashed (64-bit FNV-1a): the bytes of the
+/// scene's files, the render settings, and the reference's samples. Its
+/// file name carries the key, so another scene's or another setting's
+/// reference is never taken for this one.
+fn reference_key(
+    loaded: &flatray_io::Loaded,
+    base: &RenderOptions,
+    spp: u32,
+) -> Result<u64, Failure> {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            hash ^= b as u64;
+            hash = hash.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for input in &loaded.inputs {
+        let bytes = std::fs::read(input)
+            .map_err(|e| Failure::other(format!("{}: {e}", input.display())))?;
+        eat(&(bytes.len() as u64).to_le_bytes());
+        eat(&bytes);
+    }
+    eat(format!("{base:?} {spp}").as_bytes());
+    Ok(hash)
+}
+
+/// Whether `path` holds an EXR of the given size, and its noise estimate
+/// beside it (written first, so an EXR without one is a reference whose
+/// writing was cut short).
 fn reference_matches(path: &Path, width: u32, height: u32) -> bool {
     path.exists()
+        && read_noise(&path.with_extension("noise.txt")).is_some()
         && flatray_io::read_exr(path).is_ok_and(|i| (i.width, i.height) == (width, height))
+}
+
+/// The relative noise stored beside a reference.
+fn read_noise(path: &Path) -> Option<f64> {
+    std::fs::read_to_string(path)
+        .ok()?
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v >= 0.0)
 }
 
 /// The reference: two independent half renders, averaged. Half their
@@ -263,10 +310,9 @@ fn reference(
     );
     if !render {
         let image = flatray_io::read_exr(cached).map_err(Failure::other)?;
-        let relative_noise = std::fs::read_to_string(&noise_path)
-            .ok()
-            .and_then(|t| t.trim().parse::<f64>().ok())
-            .unwrap_or(0.0);
+        let relative_noise = read_noise(&noise_path).ok_or_else(|| {
+            Failure::other(format!("{}: no noise estimate", noise_path.display()))
+        })?;
         return Ok((
             image,
             ReferenceInfo {
@@ -308,9 +354,10 @@ fn reference(
         Some(difference) if rms_mean > 0.0 => difference.rmse * 0.5 / rms_mean,
         _ => 0.0,
     };
+    // The noise first, the image last, each atomically: an image on disk
+    // always has its noise beside it.
+    flatray_io::write_text(&noise_path, &format!("{relative_noise}\n")).map_err(Failure::other)?;
     flatray_io::write_exr(&mean, cached).map_err(Failure::other)?;
-    std::fs::write(&noise_path, format!("{relative_noise}\n"))
-        .map_err(|e| Failure::other(format!("{}: {e}", noise_path.display())))?;
     Ok((
         mean,
         ReferenceInfo {

@@ -153,23 +153,72 @@ where
             return code;
         }
     };
+    let mut out = Checked::new(out);
     let result = match cli.command {
-        Command::Render(args) => render(args, out),
-        Command::Check { scene } => check(&scene, out),
+        Command::Render(args) => render(args, &mut out, err),
+        Command::Check { scene } => check(&scene, &mut out),
         Command::Plan {
             scene,
             bounces,
             cache,
             integrator,
-        } => plan(&scene, bounces, cache, integrator, out),
-        Command::Converge(args) => converge::converge(args, out),
+        } => plan(&scene, bounces, cache, integrator, &mut out),
+        Command::Converge(args) => converge::converge(args, &mut out, err),
     };
+    let result = result.and_then(|()| out.finish());
     match result {
         Ok(()) => EXIT_OK,
         Err(failure) => {
             let _ = writeln!(err, "error: {}", failure.message);
             failure.code
         }
+    }
+}
+
+/// Standard output that remembers its first failure, so that a summary
+/// written to a full disk or a closed pipe fails the command (exit 1)
+/// instead of vanishing.
+struct Checked<'a> {
+    inner: &'a mut dyn Write,
+    failed: Option<std::io::Error>,
+}
+
+impl<'a> Checked<'a> {
+    fn new(inner: &'a mut dyn Write) -> Checked<'a> {
+        Checked {
+            inner,
+            failed: None,
+        }
+    }
+
+    /// Flushes; the first failure of any write, if there was one.
+    fn finish(mut self) -> Result<(), Failure> {
+        if let Err(e) = self.inner.flush() {
+            self.failed.get_or_insert(e);
+        }
+        match self.failed {
+            None => Ok(()),
+            Some(e) => Err(Failure::other(format!(
+                "cannot write to standard output: {e}"
+            ))),
+        }
+    }
+}
+
+impl Write for Checked<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.inner.write(buf) {
+            Ok(n) => Ok(n),
+            Err(e) => {
+                let kind = e.kind();
+                self.failed.get_or_insert(e);
+                Err(kind.into())
+            }
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
     }
 }
 
@@ -197,11 +246,10 @@ impl Failure {
     }
 }
 
+/// Loads a scene: any failure, to read it or to understand it, is a bad
+/// scene (exit 2).
 pub(crate) fn load(path: &Path) -> Result<Loaded, Failure> {
-    flatray_io::load(path).map_err(|e| match e {
-        flatray_io::SceneError::Read { .. } if path.exists() => Failure::other(e),
-        _ => Failure::usage(e),
-    })
+    flatray_io::load(path).map_err(Failure::usage)
 }
 
 fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
@@ -244,7 +292,7 @@ fn plan(
     Ok(())
 }
 
-fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
+fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {
     let started = Instant::now();
     let output = match &args.output {
         Some(path) => path.clone(),
@@ -258,14 +306,16 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
         )));
     }
     if let Some(exposure) = args.exposure
-        && !(exposure.is_finite() && exposure > 0.0)
+        && !(exposure > 0.0 && exposure <= flatray_io::format::MAX_INTENSITY)
     {
         return Err(Failure::usage(format!(
-            "--exposure: expected a finite number > 0, found {exposure}"
+            "--exposure: expected a number > 0 and at most {:e}, found {exposure}",
+            flatray_io::format::MAX_INTENSITY
         )));
     }
 
     let loaded = load(&args.scene)?;
+    check_output(&output, &loaded.inputs)?;
     let options = RenderOptions {
         samples: args.spp.unwrap_or(loaded.options.samples),
         bounces: args.bounces.unwrap_or(loaded.options.bounces),
@@ -286,17 +336,8 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
         force_all_effects: args.force_all_effects,
         cull_floor_rays: true,
     };
-    let (width, height) = image_size(&loaded.scene, options.scale);
+    let (width, height) = checked_size(&loaded, options.scale)?;
     let pixels = width as u64 * height as u64;
-    if width > flatray_io::format::MAX_CANVAS_SIDE
-        || height > flatray_io::format::MAX_CANVAS_SIDE
-        || pixels > flatray_io::format::MAX_CANVAS_PIXELS
-    {
-        return Err(Failure::usage(format!(
-            "--scale {}: the image would be {width} x {height} pixels, more than flatray renders",
-            args.scale
-        )));
-    }
     let loaded_at = Instant::now();
 
     let total = pixels * options.samples as u64;
@@ -328,7 +369,7 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
     );
     if rendered.stats.nonfinite_samples > 0 {
         let _ = writeln!(
-            out,
+            err,
             "warning: {} samples were not finite and were left out",
             rendered.stats.nonfinite_samples
         );
@@ -358,6 +399,100 @@ fn render(args: RenderArgs, out: &mut dyn Write) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// The image size at `scale`, or a usage error when it is more than
+/// flatray renders.
+pub(crate) fn checked_size(loaded: &Loaded, scale: f64) -> Result<(u32, u32), Failure> {
+    let (width, height) = image_size(&loaded.scene, scale);
+    if width > flatray_io::format::MAX_CANVAS_SIDE
+        || height > flatray_io::format::MAX_CANVAS_SIDE
+        || width as u64 * height as u64 > flatray_io::format::MAX_CANVAS_PIXELS
+    {
+        return Err(Failure::usage(format!(
+            "--scale {scale}: the image would be {width} x {height} pixels, more than flatray renders (at most {} a side and {} in all)",
+            flatray_io::format::MAX_CANVAS_SIDE,
+            flatray_io::format::MAX_CANVAS_PIXELS
+        )));
+    }
+    Ok((width, height))
+}
+
+/// Refuses, before any work, an output that cannot be written or must not
+/// be: in a folder that does not exist, a folder itself, a read-only file,
+/// or one of the render's own inputs (the scene, its floor image).
+fn check_output(output: &Path, inputs: &[PathBuf]) -> Result<(), Failure> {
+    let folder = match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(Failure::usage(format!(
+            "{}: cannot write the image: the folder {} does not exist",
+            output.display(),
+            folder.display()
+        )));
+    }
+    if let Ok(metadata) = std::fs::metadata(output) {
+        if metadata.is_dir() {
+            return Err(Failure::usage(format!(
+                "{}: cannot write the image: it is a folder",
+                output.display()
+            )));
+        }
+        if metadata.permissions().readonly() {
+            return Err(Failure::usage(format!(
+                "{}: the file is read-only; flatray will not replace it",
+                output.display()
+            )));
+        }
+    }
+    for input in inputs {
+        if same_file(output, input) {
+            return Err(Failure::usage(format!(
+                "{}: the output is an input of this render ({}); choose another name with -o",
+                output.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name the same file: the same path once links and
+/// `..` are resolved, or (on Unix) the same file on disk.
+fn same_file(a: &Path, b: &Path) -> bool {
+    let resolved = |p: &Path| -> Option<PathBuf> {
+        if let Ok(p) = std::fs::canonicalize(p) {
+            return Some(p);
+        }
+        let folder = match p.parent() {
+            Some(f) if !f.as_os_str().is_empty() => f,
+            _ => Path::new("."),
+        };
+        Some(std::fs::canonicalize(folder).ok()?.join(p.file_name()?))
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b))
+            && (x.dev(), x.ino()) == (y.dev(), y.ino())
+        {
+            return true;
+        }
+    }
+    matches!((resolved(a), resolved(b)), (Some(x), Some(y)) if x == y)
+}
+
+/// On the first SIGINT or SIGTERM (Ctrl-C): removes the temporary file of
+/// an image being written and exits with 130. Installed once per process;
+/// a second call does nothing.
+pub fn exit_cleanly_on_interrupt() {
+    let _ = ctrlc::set_handler(|| {
+        flatray_io::remove_pending_files();
+        let _ = writeln!(std::io::stderr(), "\ninterrupted");
+        std::process::exit(130);
+    });
 }
 
 /// A progress bar with an ETA on stderr, hidden with `--quiet` or when

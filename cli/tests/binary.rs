@@ -85,8 +85,8 @@ fn a_failed_write_keeps_the_older_image() {
         "Scene(canvas: (8, 8), floor: Color((1, 1, 1)), lights: [Point(at: (4, 4))])",
     )
     .unwrap();
-    // The target is a directory: the rename fails, and the directory and
-    // its content are untouched.
+    // The target is a directory: refused before rendering, and the
+    // directory and its content are untouched.
     let target = dir.join("out.png");
     std::fs::create_dir(&target).unwrap();
     std::fs::write(target.join("keep"), "old").unwrap();
@@ -95,7 +95,7 @@ fn a_failed_write_keeps_the_older_image() {
         .arg(&target)
         .output()
         .unwrap();
-    assert_eq!(output.status.code(), Some(1), "{output:?}");
+    assert_eq!(output.status.code(), Some(2), "{output:?}");
     assert_eq!(std::fs::read_to_string(target.join("keep")).unwrap(), "old");
     let leftovers = std::fs::read_dir(&dir).unwrap().filter(|e| {
         e.as_ref()
@@ -105,5 +105,201 @@ fn a_failed_write_keeps_the_older_image() {
             .ends_with(".tmp")
     });
     assert_eq!(leftovers.count(), 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+const SMALL: &str = "Scene(canvas: (8, 8), floor: Color((1, 1, 1)), lights: [Point(at: (4, 4))])";
+
+/// With no `-o`, the image goes to the scene's name with `.png` in the
+/// working folder: for a scene named `scene.png` there, that is the scene
+/// itself, which is refused and kept.
+#[test]
+fn the_default_output_never_replaces_the_scene() {
+    let dir = scratch("default-out");
+    std::fs::write(dir.join("scene.png"), SMALL).unwrap();
+    let output = flatray()
+        .current_dir(&dir)
+        .args(["render", "scene.png", "-q"])
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2), "{output:?}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("scene.png")).unwrap(),
+        SMALL
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Standard output that cannot be written (a full disk) fails the
+/// command, with a message on standard error.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_standard_output_fails_the_command() {
+    let dir = scratch("full");
+    let scene = dir.join("s.ron");
+    std::fs::write(&scene, SMALL).unwrap();
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let output = flatray()
+        .args(["check", scene.to_str().unwrap()])
+        .stdout(full)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1), "{output:?}");
+    assert!(
+        String::from_utf8_lossy(&output.stderr).contains("standard output"),
+        "{output:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// SIGINT or SIGTERM during a render: exit 130, no image, no temporary
+/// file. A temporary file that a killed run left (its process gone) is
+/// removed by the next write in that folder.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_interrupted_render_exits_130_and_leaves_nothing() {
+    let dir = scratch("interrupt");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    for signal in ["-INT", "-TERM"] {
+        let out = dir.join("room.png");
+        let mut child = flatray()
+            .args([
+                "render",
+                room.to_str().unwrap(),
+                "-q",
+                "--spp",
+                "100000",
+                "-o",
+            ])
+            .arg(&out)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(700));
+        let killed = Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(130), "{signal}: {status:?}");
+        assert!(!out.exists());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "{signal}");
+    }
+    // A killed run's leftover: a process number that is not running.
+    let stale = dir.join(".flatray-4194304-0.tmp");
+    std::fs::write(&stale, "half an image").unwrap();
+    let scene = dir.join("s.ron");
+    std::fs::write(&scene, SMALL).unwrap();
+    let output = flatray()
+        .args(["render", scene.to_str().unwrap(), "-q", "-o"])
+        .arg(dir.join("s.png"))
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+    assert!(!stale.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Inputs that once ran out of memory, under a 2 GiB address-space limit:
+/// each ends cleanly (exit 0, or 2 with a message), never with an
+/// allocation failure or a signal.
+#[cfg(target_os = "linux")]
+#[test]
+fn inputs_that_would_exhaust_memory_end_cleanly_under_a_limit() {
+    let dir = scratch("ulimit");
+    let write = |name: &str, text: String| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let tiny_bins = write(
+        "bins.ron",
+        "Scene(canvas: (100, 10), floor: Color((0.5, 0.5, 0.5)), walls: [Wall(a: (10, 5), b: (90, 5))],
+           lights: [Point(at: (50, 2))], render: (cache_bin: 1e-9))"
+            .to_string(),
+    );
+    let long_walls = write(
+        "long.ron",
+        format!(
+            "Scene(canvas: (50, 50), floor: Tiles(size: 3), walls: [{}], lights: [Point(at: (25, 25))])",
+            (0..20000)
+                .map(|k| format!(
+                    "Wall(a: ({}, -1000), b: ({}, 1000))",
+                    k as f64 * 0.002,
+                    k as f64 * 0.002 + 1.0
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    let crossing = write(
+        "crossing.ron",
+        format!(
+            "Scene(canvas: (50, 50), floor: Color((0.5, 0.5, 0.5)), walls: [{}], lights: [Point(at: (25, 25))])",
+            (0..5000)
+                .map(|k| {
+                    let x = k as f64 * 0.0097;
+                    if k % 2 == 0 {
+                        format!("Wall(a: ({x}, 0.5), b: ({}, 49.5))", 49.0 - x)
+                    } else {
+                        format!("Wall(a: (0.5, {x}), b: (49.5, {}))", 49.0 - x)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    let many_lights = write(
+        "lights.ron",
+        format!(
+            "Scene(canvas: (1500, 1500), floor: Color((0.5, 0.5, 0.5)), walls: [Wall(a: (1, 1), b: (2, 600))], lights: [{}])",
+            (0..4000)
+                .map(|k| format!("Point(at: ({}, {}))", 10 + k % 1400, 10 + (k / 1400) * 500))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    let out = dir.join("out.png");
+    let out = out.to_str().unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["render", &tiny_bins, "-q", "--spp", "1", "-o", out],
+        vec!["check", &long_walls],
+        vec!["render", &long_walls, "-q", "--spp", "1", "-o", out],
+        vec!["render", &crossing, "-q", "--spp", "1", "-o", out],
+        vec!["plan", &many_lights],
+        vec![
+            "render",
+            &many_lights,
+            "-q",
+            "--spp",
+            "1",
+            "--scale",
+            "0.05",
+            "-o",
+            out,
+        ],
+        vec!["converge", &tiny_bins, "-q", "--scale", "1e9", "--out", out],
+    ];
+    for args in cases {
+        let output = Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 2097152 && exec \"$0\" \"$@\"")
+            .arg(env!("CARGO_BIN_EXE_flatray"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let code = output.status.code();
+        assert!(
+            code == Some(0) || (code == Some(2) && stderr.starts_with("error: ")),
+            "{args:?}: {code:?} {stderr}"
+        );
+        assert!(!stderr.contains("memory allocation"), "{args:?}: {stderr}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -93,7 +93,15 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
     }
 
     // A second run reuses the saved reference instead of rendering it.
-    let reference = out.join("reference-2048spp.exr");
+    let reference = std::fs::read_dir(&out)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            name.starts_with("reference-2048spp-") && name.ends_with(".exr")
+        })
+        .unwrap();
     let before = std::fs::metadata(&reference).unwrap().modified().unwrap();
     let again = flatray(&[
         "converge",
