@@ -60,6 +60,36 @@ enum Command {
     },
     /// Measure error against seconds and samples for each way of rendering.
     Converge(converge::ConvergeArgs),
+    /// Turn a floor plan from another tool (an SVG drawing, a Tiled map in
+    /// TMX or JSON, a wall-mask image) into a commented scene file.
+    Import(ImportArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct ImportArgs {
+    /// The plan: .svg, .tmx, .json/.tmj or a mask image (.png).
+    plan: PathBuf,
+    /// The scene file to write. Default: the plan's name with .ron, in the
+    /// current folder.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Canvas pixels per unit of the plan (an SVG user unit of 1/96 inch,
+    /// a Tiled or mask pixel).
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Curves are flattened, and mask outlines simplified, to within this
+    /// distance in the plan's units (as for --scale).
+    #[arg(long, default_value_t = 1.0)]
+    tolerance: f64,
+    /// The Tiled object layer whose objects become walls.
+    #[arg(long, default_value = "walls")]
+    walls_layer: String,
+    /// The Tiled object layer whose objects become lights.
+    #[arg(long, default_value = "lights")]
+    lights_layer: String,
+    /// Use the SVG's first bitmap as the floor (written beside the scene).
+    #[arg(long)]
+    floor_image: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -164,6 +194,7 @@ where
             integrator,
         } => plan(&scene, bounces, cache, integrator, &mut out),
         Command::Converge(args) => converge::converge(args, &mut out, err),
+        Command::Import(args) => import(args, &mut out, err),
     };
     let result = result.and_then(|()| out.finish());
     match result {
@@ -398,6 +429,41 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             (written_at - rendered_at).as_secs_f64()
         );
     }
+    Ok(())
+}
+
+fn import(args: ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {
+    let options = flatray_io::import::ImportOptions {
+        scale: args.scale,
+        tolerance: args.tolerance,
+        walls_layer: args.walls_layer,
+        lights_layer: args.lights_layer,
+        floor_image: args.floor_image,
+    };
+    let output = match args.output {
+        Some(path) => path,
+        None => {
+            let stem = args
+                .plan
+                .file_stem()
+                .map_or("plan".to_string(), |s| s.to_string_lossy().into_owned());
+            PathBuf::from(format!("{stem}.ron"))
+        }
+    };
+    // A plan that cannot be read or understood is bad input (exit 2).
+    let imported = flatray_io::import::import(&args.plan, &options).map_err(Failure::usage)?;
+    check_output(&output, std::slice::from_ref(&args.plan))?;
+    if let Some((name, bytes)) = &imported.floor_file {
+        let folder = output.parent().unwrap_or(Path::new(""));
+        let floor = folder.join(name);
+        check_output(&floor, std::slice::from_ref(&args.plan))?;
+        flatray_io::write_bytes(&floor, bytes).map_err(Failure::other)?;
+    }
+    flatray_io::write_text(&output, &imported.to_ron()).map_err(Failure::other)?;
+    for warning in &imported.warnings {
+        let _ = writeln!(err, "warning: not imported: {warning}");
+    }
+    let _ = writeln!(out, "wrote {} ({imported})", output.display());
     Ok(())
 }
 

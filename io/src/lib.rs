@@ -3,7 +3,8 @@
 //!
 //! What it is for: turning a scene file into the plain in-memory
 //! `flatray_tracer::Scene` (with the render settings the file asks for),
-//! and a rendered `flatray_tracer::Image` into a file, atomically.
+//! a rendered `flatray_tracer::Image` into a file, atomically, and a floor
+//! plan from another tool (SVG, Tiled, a wall mask) into scene text.
 //!
 //! What it never does: render, sample, or decide physics. Every error it
 //! returns names the file, and for scene text the line and column, and
@@ -11,6 +12,7 @@
 
 mod error;
 pub mod format;
+pub mod import;
 mod load;
 mod locate;
 mod output;
@@ -21,5 +23,5 @@ pub use format::ToneMap;
 pub use load::{Loaded, load, parse};
 pub use output::{
     Format, linear_to_srgb, png_bytes, read_exr, remove_pending_files, srgb_to_linear, to_srgb8,
-    tone_map, write_exr, write_image, write_png, write_text,
+    tone_map, write_bytes, write_exr, write_image, write_png, write_text,
 };

@@ -130,6 +130,13 @@ pub fn write_exr(image: &Image, path: &Path) -> Result<(), WriteError> {
     })
 }
 
+/// Writes `bytes` to `path` atomically.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    write_atomically(path, |w| {
+        std::io::Write::write_all(w, bytes).map_err(|e| e.to_string())
+    })
+}
+
 /// Writes `text` to `path` atomically.
 pub fn write_text(path: &Path, text: &str) -> Result<(), WriteError> {
     write_atomically(path, |w| {

@@ -1,0 +1,245 @@
+//! Wall masks: an image whose dark pixels are walls. The outline of every
+//! dark region is traced along pixel edges into closed loops, simplified
+//! (Douglas-Peucker) and written as walls that share their endpoints
+//! exactly, so no light leaks through a traced wall. Pure yellow blobs
+//! (red and green above 200, blue below 80) are lamps at their centres.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use flatray_geometry::DVec2;
+
+use super::{
+    ImportError, ImportOptions, Imported, ImportedFloor, ImportedLight, ImportedWall,
+    LAMP_INTENSITY, WallKind, invalid, simplify_loop,
+};
+
+/// At most this many pixels in a mask.
+const MAX_MASK_PIXELS: u64 = 1 << 26;
+
+/// Reads a wall mask.
+pub(super) fn read(
+    path: &Path,
+    bytes: &[u8],
+    options: &ImportOptions,
+) -> Result<Imported, ImportError> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| invalid(path, None, format!("not an image: {e}")))?;
+    let (width, height) = reader
+        .into_dimensions()
+        .map_err(|e| invalid(path, None, format!("not a readable image: {e}")))?;
+    if width as u64 * height as u64 > MAX_MASK_PIXELS {
+        return Err(invalid(
+            path,
+            None,
+            format!(
+                "the mask is {width} x {height} pixels, more than the {MAX_MASK_PIXELS} flatray reads"
+            ),
+        ));
+    }
+    let decoded = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| invalid(path, None, format!("not an image: {e}")))?
+        .decode()
+        .map_err(|e| invalid(path, None, format!("not a readable image: {e}")))?
+        .to_rgba8();
+    let (w, h) = (width as usize, height as usize);
+    let pixel = |x: usize, y: usize| decoded.get_pixel(x as u32, y as u32).0;
+    let lamp = |[r, g, b, a]: [u8; 4]| a > 127 && r > 200 && g > 200 && b < 80;
+    let dark = |[r, g, b, a]: [u8; 4]| {
+        let luma = 0.2126 * r as f64 + 0.7152 * g as f64 + 0.0722 * b as f64;
+        a > 127 && luma < 128.0
+    };
+    let wall: Vec<bool> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| dark(pixel(x, y)))
+        .collect();
+    let is_wall = |x: i64, y: i64| {
+        x >= 0
+            && y >= 0
+            && (x as usize) < w
+            && (y as usize) < h
+            && wall[y as usize * w + x as usize]
+    };
+    let loops = trace(w as i64, h as i64, &is_wall);
+    let scale = options.scale;
+    // Simplified in mask pixels.
+    let tolerance = options.tolerance;
+    let mut walls = Vec::new();
+    for (k, outline) in loops.iter().enumerate() {
+        let simple = simplify_loop(outline, tolerance);
+        if simple.len() < 3 {
+            continue;
+        }
+        for i in 0..simple.len() {
+            let (a, b) = (simple[i] * scale, simple[(i + 1) % simple.len()] * scale);
+            walls.push(ImportedWall {
+                a,
+                b,
+                kind: WallKind::Diffuse(None),
+                emit: None,
+                source: format!("outline {k}"),
+            });
+        }
+    }
+    let lights = blobs(w, h, &|x, y| lamp(pixel(x, y)))
+        .into_iter()
+        .enumerate()
+        .map(|(k, centre)| ImportedLight::Point {
+            at: centre * scale,
+            color: [1.0, 1.0, 1.0],
+            intensity: LAMP_INTENSITY,
+            source: format!("yellow blob {k}"),
+        })
+        .collect();
+    Ok(Imported {
+        source: String::new(),
+        kind: "wall mask",
+        canvas: (
+            ((width as f64 * scale).ceil() as u32).max(1),
+            ((height as f64 * scale).ceil() as u32).max(1),
+        ),
+        floor: ImportedFloor::Color([0.8, 0.8, 0.8]),
+        walls,
+        lights,
+        glass: Vec::new(),
+        warnings: Vec::new(),
+        floor_file: None,
+    })
+}
+
+/// The outlines of the regions where `is_wall` holds, as closed loops of
+/// pixel corners with collinear runs merged. Each boundary edge keeps the
+/// wall on its right; where two wall pixels touch only at a corner, the
+/// loop turns so as to keep them apart (each its own loop, sharing that
+/// corner point exactly).
+fn trace(w: i64, h: i64, is_wall: &dyn Fn(i64, i64) -> bool) -> Vec<Vec<DVec2>> {
+    // Directed edges by start corner: (dx, dy) unit steps.
+    let mut next: HashMap<(i64, i64), Vec<(i64, i64)>> = HashMap::new();
+    for y in 0..h {
+        for x in 0..w {
+            if !is_wall(x, y) {
+                continue;
+            }
+            // Clockwise around the pixel (y down): wall on the right.
+            if !is_wall(x, y - 1) {
+                next.entry((x, y)).or_default().push((1, 0));
+            }
+            if !is_wall(x + 1, y) {
+                next.entry((x + 1, y)).or_default().push((0, 1));
+            }
+            if !is_wall(x, y + 1) {
+                next.entry((x + 1, y + 1)).or_default().push((-1, 0));
+            }
+            if !is_wall(x - 1, y) {
+                next.entry((x, y + 1)).or_default().push((0, -1));
+            }
+        }
+    }
+    let mut starts: Vec<(i64, i64)> = next.keys().copied().collect();
+    starts.sort_unstable();
+    let mut loops = Vec::new();
+    for start in starts {
+        while let Some(first) = next.get_mut(&start).and_then(Vec::pop) {
+            let mut corners = vec![start];
+            let mut at = (start.0 + first.0, start.1 + first.1);
+            let mut heading = first;
+            while at != start {
+                let Some(choices) = next.get_mut(&at) else {
+                    break;
+                };
+                // At a corner two regions touch: turn right, keeping them
+                // apart; else the one way on.
+                let right = (-heading.1, heading.0);
+                let pick = choices
+                    .iter()
+                    .position(|&d| d == right)
+                    .unwrap_or(choices.len() - 1);
+                let step = choices.swap_remove(pick);
+                if step != heading {
+                    corners.push(at);
+                }
+                heading = step;
+                at = (at.0 + step.0, at.1 + step.1);
+            }
+            if heading == first && corners.len() > 1 {
+                // The start lies mid-run: not a corner.
+                corners.remove(0);
+            }
+            if corners.len() >= 3 {
+                loops.push(
+                    corners
+                        .into_iter()
+                        .map(|(x, y)| DVec2::new(x as f64, y as f64))
+                        .collect(),
+                );
+            }
+        }
+    }
+    loops
+}
+
+/// The centres of the 4-connected regions where `inside` holds.
+fn blobs(w: usize, h: usize, inside: &dyn Fn(usize, usize) -> bool) -> Vec<DVec2> {
+    let mut seen = vec![false; w * h];
+    let mut centres = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            if seen[y * w + x] || !inside(x, y) {
+                continue;
+            }
+            let mut stack = vec![(x, y)];
+            seen[y * w + x] = true;
+            let (mut sum, mut count) = (DVec2::ZERO, 0.0);
+            while let Some((px, py)) = stack.pop() {
+                sum += DVec2::new(px as f64 + 0.5, py as f64 + 0.5);
+                count += 1.0;
+                let neighbours = [
+                    (px.wrapping_sub(1), py),
+                    (px + 1, py),
+                    (px, py.wrapping_sub(1)),
+                    (px, py + 1),
+                ];
+                for (nx, ny) in neighbours {
+                    if nx < w && ny < h && !seen[ny * w + nx] && inside(nx, ny) {
+                        seen[ny * w + nx] = true;
+                        stack.push((nx, ny));
+                    }
+                }
+            }
+            centres.push(sum / count);
+        }
+    }
+    centres
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_square_ring_traces_to_two_loops_of_four_corners() {
+        // A 6 x 6 ring of wall one pixel thick.
+        let is_wall = |x: i64, y: i64| {
+            (0..6).contains(&x) && (0..6).contains(&y) && (x == 0 || y == 0 || x == 5 || y == 5)
+        };
+        let mut loops = trace(6, 6, &is_wall);
+        loops.sort_by_key(|l| l.len());
+        assert_eq!(loops.len(), 2);
+        for l in &loops {
+            assert_eq!(l.len(), 4, "{l:?}");
+        }
+        let xs: Vec<f64> = loops.iter().flat_map(|l| l.iter().map(|p| p.x)).collect();
+        assert!(xs.contains(&0.0) && xs.contains(&6.0) && xs.contains(&1.0) && xs.contains(&5.0));
+    }
+
+    #[test]
+    fn pixels_touching_at_a_corner_make_two_loops_sharing_it() {
+        let is_wall = |x: i64, y: i64| (x, y) == (0, 0) || (x, y) == (1, 1);
+        let loops = trace(2, 2, &is_wall);
+        assert_eq!(loops.len(), 2, "{loops:?}");
+        let shared = DVec2::new(1.0, 1.0);
+        assert!(loops.iter().all(|l| l.contains(&shared)));
+    }
+}

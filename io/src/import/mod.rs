@@ -1,0 +1,500 @@
+//! Floor plans from other tools, turned into scene files: SVG drawings
+//! (`svg.rs`), Tiled maps in TMX or JSON (`tiled.rs`) and black-and-white
+//! wall masks (`mask.rs`). Each reader fills an [`Imported`] plan of walls,
+//! lights and glass in world units; [`Imported::to_ron`] writes it as a
+//! commented scene file that `render` reads and a user can edit.
+//! `docs/import.md` gives every convention.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use flatray_geometry::DVec2;
+
+mod mask;
+mod svg;
+mod tiled;
+
+/// How a plan is read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportOptions {
+    /// World units (pixels of the scene's canvas) per unit of the plan:
+    /// an SVG user unit (1/96 inch), a Tiled map pixel, a mask pixel.
+    pub scale: f64,
+    /// Curves are flattened, and traced outlines simplified, to within this
+    /// distance, in the plan's own units (as `scale`).
+    pub tolerance: f64,
+    /// The Tiled object layer whose objects are walls.
+    pub walls_layer: String,
+    /// The Tiled object layer whose objects are lights.
+    pub lights_layer: String,
+    /// Use the plan's bitmap (an SVG's first image) as the floor.
+    pub floor_image: bool,
+}
+
+impl Default for ImportOptions {
+    fn default() -> ImportOptions {
+        ImportOptions {
+            scale: 1.0,
+            tolerance: 1.0,
+            walls_layer: "walls".to_string(),
+            lights_layer: "lights".to_string(),
+            floor_image: false,
+        }
+    }
+}
+
+/// Why a plan could not be imported.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    /// The file could not be read.
+    #[error("{}: cannot read the plan: {message}", path.display())]
+    Read { path: PathBuf, message: String },
+    /// The file is not a plan flatray can read, or is malformed; with the
+    /// line and column where the reader gives them.
+    #[error("{}{}: {message}", path.display(), location.map_or(String::new(), |(l, c)| format!(":{l}:{c}")))]
+    Invalid {
+        path: PathBuf,
+        location: Option<(usize, usize)>,
+        message: String,
+    },
+}
+
+/// A wall's material, as imported.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WallKind {
+    /// Diffuse with its own albedo (linear), or the floor's.
+    Diffuse(Option<[f64; 3]>),
+    Mirror,
+    /// A transparent pane with its tint (linear).
+    Pane([f64; 3]),
+}
+
+/// One imported wall.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportedWall {
+    pub a: DVec2,
+    pub b: DVec2,
+    pub kind: WallKind,
+    /// Light the wall emits: colour (linear) and intensity.
+    pub emit: Option<([f64; 3], f64)>,
+    /// Where it came from, for the comment beside it.
+    pub source: String,
+}
+
+/// One imported light.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImportedLight {
+    Point {
+        at: DVec2,
+        color: [f64; 3],
+        intensity: f64,
+        source: String,
+    },
+    Line {
+        a: DVec2,
+        b: DVec2,
+        color: [f64; 3],
+        intensity: f64,
+        source: String,
+    },
+}
+
+/// One imported glass body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportedGlass {
+    pub points: Vec<DVec2>,
+    pub ior: f64,
+    pub source: String,
+}
+
+/// The floor of an imported plan.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImportedFloor {
+    Color([f64; 3]),
+    /// An image file, relative to the scene file.
+    Image(String),
+}
+
+/// A plan read from another tool, in world units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Imported {
+    /// What it was read from, for the header comment.
+    pub source: String,
+    /// The kind of plan (`SVG`, `Tiled map`, `wall mask`).
+    pub kind: &'static str,
+    pub canvas: (u32, u32),
+    pub floor: ImportedFloor,
+    pub walls: Vec<ImportedWall>,
+    pub lights: Vec<ImportedLight>,
+    pub glass: Vec<ImportedGlass>,
+    /// What was in the plan and was not imported, one line each.
+    pub warnings: Vec<String>,
+    /// A bitmap to write beside the scene for the floor: its file name
+    /// (as `floor` names it) and bytes.
+    pub floor_file: Option<(String, Vec<u8>)>,
+}
+
+/// The default intensity of an imported point light: bright enough to
+/// see under the default `Flatland` falloff at a few hundred units.
+pub const LAMP_INTENSITY: f64 = 50.0;
+/// The default intensity (per unit length) of an imported line light or
+/// emitting wall.
+pub const LINE_INTENSITY: f64 = 1.0;
+
+/// Reads the plan at `path`, its kind told by its extension, else by its
+/// first bytes.
+pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportError> {
+    let bytes = std::fs::read(path).map_err(|e| ImportError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    if !(options.scale.is_finite() && options.scale > 0.0 && options.scale <= 1e6) {
+        return Err(invalid(
+            path,
+            None,
+            format!(
+                "--scale: expected a number > 0 and at most 1e6, found {}",
+                options.scale
+            ),
+        ));
+    }
+    if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
+        return Err(invalid(
+            path,
+            None,
+            format!(
+                "--tolerance: expected a number > 0, found {}",
+                options.tolerance
+            ),
+        ));
+    }
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]).to_ascii_lowercase();
+    let head = head.trim_start_matches('\u{feff}').trim_start();
+    let mut imported = match extension.as_str() {
+        "svg" | "svgz" => svg::read(path, &bytes, options)?,
+        "tmx" => tiled::read_tmx(path, &bytes, options)?,
+        "json" | "tmj" => tiled::read_json(path, &bytes, options)?,
+        "png" | "bmp" | "gif" | "jpg" | "jpeg" | "tif" | "tiff" | "webp" => {
+            mask::read(path, &bytes, options)?
+        }
+        _ if head.starts_with("<svg") || (head.starts_with("<?xml") && head.contains("<svg")) => {
+            svg::read(path, &bytes, options)?
+        }
+        _ if head.starts_with("<map") || (head.starts_with("<?xml") && head.contains("<map")) => {
+            tiled::read_tmx(path, &bytes, options)?
+        }
+        _ if head.starts_with('{') => tiled::read_json(path, &bytes, options)?,
+        _ if bytes.starts_with(b"\x89PNG") => mask::read(path, &bytes, options)?,
+        _ => {
+            return Err(invalid(
+                path,
+                None,
+                "not a plan flatray imports: expected an SVG drawing (.svg), a Tiled map (.tmx, .json, .tmj) or a wall mask image (.png)".to_string(),
+            ));
+        }
+    };
+    imported.source = path.display().to_string();
+    let (w, h) = imported.canvas;
+    if w > crate::format::MAX_CANVAS_SIDE
+        || h > crate::format::MAX_CANVAS_SIDE
+        || w as u64 * h as u64 > crate::format::MAX_CANVAS_PIXELS
+    {
+        return Err(invalid(
+            path,
+            None,
+            format!(
+                "the canvas would be {w} x {h} pixels, more than flatray renders: import with a smaller --scale"
+            ),
+        ));
+    }
+    if imported.walls.is_empty() && imported.lights.is_empty() && imported.glass.is_empty() {
+        imported
+            .warnings
+            .push("the plan has no walls, lights or glass that flatray imports".to_string());
+    }
+    Ok(imported)
+}
+
+pub(crate) fn invalid(
+    path: &Path,
+    location: Option<(usize, usize)>,
+    message: String,
+) -> ImportError {
+    ImportError::Invalid {
+        path: path.to_path_buf(),
+        location,
+        message,
+    }
+}
+
+/// An sRGB colour of 8-bit channels as linear values.
+pub(crate) fn linear(rgb: [u8; 3]) -> [f64; 3] {
+    rgb.map(crate::output::srgb_to_linear)
+}
+
+/// An sRGB colour written `#rgb`, `#rrggbb` or `#aarrggbb` (Tiled's form)
+/// as linear values.
+pub(crate) fn parse_hex_color(text: &str) -> Option<[f64; 3]> {
+    let hex = text.trim().strip_prefix('#')?;
+    let digits: Vec<u8> = hex
+        .chars()
+        .map(|c| c.to_digit(16).map(|d| d as u8))
+        .collect::<Option<_>>()?;
+    let rgb = match digits.len() {
+        3 => [digits[0] * 17, digits[1] * 17, digits[2] * 17],
+        6 => [
+            digits[0] * 16 + digits[1],
+            digits[2] * 16 + digits[3],
+            digits[4] * 16 + digits[5],
+        ],
+        8 => [
+            digits[2] * 16 + digits[3],
+            digits[4] * 16 + digits[5],
+            digits[6] * 16 + digits[7],
+        ],
+        _ => return None,
+    };
+    Some(linear(rgb))
+}
+
+/// Points `(x, y)`, in order, simplified by Douglas-Peucker to within
+/// `tolerance`: the first and last are kept.
+pub(crate) fn simplify(points: &[DVec2], tolerance: f64) -> Vec<DVec2> {
+    if points.len() < 3 {
+        return points.to_vec();
+    }
+    let mut keep = vec![false; points.len()];
+    keep[0] = true;
+    keep[points.len() - 1] = true;
+    let mut stack = vec![(0, points.len() - 1)];
+    while let Some((first, last)) = stack.pop() {
+        let (a, b) = (points[first], points[last]);
+        let edge = b - a;
+        let length = edge.length();
+        let mut farthest = (0.0, first);
+        for (k, &p) in points.iter().enumerate().take(last).skip(first + 1) {
+            let d = if length > 0.0 {
+                edge.perp_dot(p - a).abs() / length
+            } else {
+                p.distance(a)
+            };
+            if d > farthest.0 {
+                farthest = (d, k);
+            }
+        }
+        if farthest.0 > tolerance {
+            keep[farthest.1] = true;
+            stack.push((first, farthest.1));
+            stack.push((farthest.1, last));
+        }
+    }
+    points
+        .iter()
+        .zip(keep)
+        .filter_map(|(&p, k)| k.then_some(p))
+        .collect()
+}
+
+/// A closed loop of points (the last joining the first), simplified to
+/// within `tolerance`; it keeps its first point and the point farthest
+/// from it, so its corners stay exactly where they were.
+pub(crate) fn simplify_loop(points: &[DVec2], tolerance: f64) -> Vec<DVec2> {
+    if points.len() < 4 {
+        return points.to_vec();
+    }
+    let far = (1..points.len())
+        .max_by(|&i, &j| {
+            points[i]
+                .distance_squared(points[0])
+                .total_cmp(&points[j].distance_squared(points[0]))
+        })
+        .unwrap_or(1);
+    let mut first: Vec<DVec2> = simplify(&points[..=far], tolerance);
+    let mut second: Vec<DVec2> = points[far..].to_vec();
+    second.push(points[0]);
+    let second = simplify(&second, tolerance);
+    first.pop();
+    first.extend_from_slice(&second[..second.len() - 1]);
+    first
+}
+
+fn number(x: f64) -> String {
+    // The shortest text that reads back as the same number.
+    let text = format!("{x:?}");
+    text.strip_suffix(".0").map_or(text.clone(), str::to_string)
+}
+
+fn point(p: DVec2) -> String {
+    format!("({}, {})", number(p.x), number(p.y))
+}
+
+fn color(c: [f64; 3]) -> String {
+    let round = |v: f64| (v * 1e4).round() / 1e4;
+    format!(
+        "({}, {}, {})",
+        number(round(c[0])),
+        number(round(c[1])),
+        number(round(c[2]))
+    )
+}
+
+/// A comment's text on one line, without anything that would end it.
+fn comment(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect()
+}
+
+impl Imported {
+    /// The plan as a commented scene file.
+    pub fn to_ron(&self) -> String {
+        let mut out = String::new();
+        out.push_str(&format!(
+            "// Imported by `flatray import` from the {} {}.\n",
+            self.kind,
+            comment(&self.source)
+        ));
+        out.push_str(&format!(
+            "// {} walls, {} lights, {} glass bodies. Edit freely: every field is in\n// docs/scene-format.md.\n",
+            self.walls.len(),
+            self.lights.len(),
+            self.glass.len()
+        ));
+        for warning in &self.warnings {
+            out.push_str(&format!("// Not imported: {}\n", comment(warning)));
+        }
+        out.push_str("Scene(\n");
+        out.push_str(&format!(
+            "    canvas: ({}, {}),\n",
+            self.canvas.0, self.canvas.1
+        ));
+        match &self.floor {
+            ImportedFloor::Color(c) => out.push_str(&format!("    floor: Color({}),\n", color(*c))),
+            ImportedFloor::Image(name) => {
+                out.push_str(&format!("    floor: Image({name:?}),\n"));
+            }
+        }
+        out.push_str("    walls: [\n");
+        for wall in &self.walls {
+            let material = match wall.kind {
+                WallKind::Diffuse(None) => String::new(),
+                WallKind::Diffuse(Some(albedo)) => {
+                    format!(", material: Diffuse(albedo: {})", color(albedo))
+                }
+                WallKind::Mirror => ", material: Mirror()".to_string(),
+                WallKind::Pane(tint) => format!(", material: Transparent(tint: {})", color(tint)),
+            };
+            let emit = wall.emit.map_or(String::new(), |(c, i)| {
+                format!(", emit: (color: {}, intensity: {})", color(c), number(i))
+            });
+            out.push_str(&format!(
+                "        Wall(a: {}, b: {}{material}{emit}), // {}\n",
+                point(wall.a),
+                point(wall.b),
+                comment(&wall.source)
+            ));
+        }
+        out.push_str("    ],\n    lights: [\n");
+        for light in &self.lights {
+            match light {
+                ImportedLight::Point {
+                    at,
+                    color: c,
+                    intensity,
+                    source,
+                } => out.push_str(&format!(
+                    "        Point(at: {}, color: {}, intensity: {}), // {}\n",
+                    point(*at),
+                    color(*c),
+                    number(*intensity),
+                    comment(source)
+                )),
+                ImportedLight::Line {
+                    a,
+                    b,
+                    color: c,
+                    intensity,
+                    source,
+                } => out.push_str(&format!(
+                    "        Line(a: {}, b: {}, color: {}, intensity: {}), // {}\n",
+                    point(*a),
+                    point(*b),
+                    color(*c),
+                    number(*intensity),
+                    comment(source)
+                )),
+            }
+        }
+        out.push_str("    ],\n");
+        if !self.glass.is_empty() {
+            out.push_str("    glass: [\n");
+            for body in &self.glass {
+                let points: Vec<String> = body.points.iter().map(|&p| point(p)).collect();
+                out.push_str(&format!(
+                    "        Glass(points: [{}], ior: {}), // {}\n",
+                    points.join(", "),
+                    number(body.ior),
+                    comment(&body.source)
+                ));
+            }
+            out.push_str("    ],\n");
+        }
+        out.push_str("    render: (samples: 64, bounces: 2),\n)\n");
+        out
+    }
+}
+
+impl fmt::Display for Imported {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} walls, {} lights, {} glass bodies on a {} x {} canvas",
+            self.walls.len(),
+            self.lights.len(),
+            self.glass.len(),
+            self.canvas.0,
+            self.canvas.1
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_staircase_simplifies_to_its_diagonal_and_a_loop_keeps_its_corners() {
+        let stairs: Vec<DVec2> = (0..20)
+            .flat_map(|k| {
+                let k = k as f64;
+                [DVec2::new(k, k), DVec2::new(k + 1.0, k)]
+            })
+            .collect();
+        let simple = simplify(&stairs, 1.0);
+        assert_eq!(simple, vec![stairs[0], stairs[stairs.len() - 1]]);
+        let square = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(5.0, 0.0),
+            DVec2::new(10.0, 0.0),
+            DVec2::new(10.0, 10.0),
+            DVec2::new(0.0, 10.0),
+        ];
+        assert_eq!(
+            simplify_loop(&square, 0.1),
+            vec![square[0], square[2], square[3], square[4]]
+        );
+    }
+
+    #[test]
+    fn hex_colours_read_as_tiled_and_css_write_them() {
+        assert_eq!(parse_hex_color("#ffffff"), Some([1.0; 3]));
+        assert_eq!(parse_hex_color("#80ff0000"), Some([1.0, 0.0, 0.0]));
+        assert_eq!(parse_hex_color("#0f0"), Some([0.0, 1.0, 0.0]));
+        assert_eq!(parse_hex_color("red"), None);
+    }
+}

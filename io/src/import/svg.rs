@@ -1,0 +1,407 @@
+//! SVG drawings: `usvg` resolves units, `viewBox`, transforms, CSS, `use`
+//! and shapes into absolute paths; each path becomes walls, lights or
+//! glass by the `id` of the element or of its nearest marked group.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use flatray_geometry::DVec2;
+use usvg::tiny_skia_path::PathSegment;
+
+use super::{
+    ImportError, ImportOptions, Imported, ImportedFloor, ImportedGlass, ImportedLight,
+    ImportedWall, LAMP_INTENSITY, LINE_INTENSITY, WallKind, invalid, linear,
+};
+
+/// What an element's `id` (or its group's) makes of it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mark {
+    Wall,
+    Mirror,
+    Pane,
+    Glass,
+    Lamp,
+    Light,
+    Emit,
+    Skip,
+}
+
+/// The mark an `id` names by its prefix, case aside, if any.
+fn mark_of(id: &str) -> Option<Mark> {
+    let id = id.to_ascii_lowercase();
+    [
+        ("mirror", Mark::Mirror),
+        ("pane", Mark::Pane),
+        ("window", Mark::Pane),
+        ("glass", Mark::Glass),
+        ("lamp", Mark::Lamp),
+        ("light", Mark::Light),
+        ("emit", Mark::Emit),
+        ("skip", Mark::Skip),
+        ("wall", Mark::Wall),
+    ]
+    .into_iter()
+    .find(|(prefix, _)| id.starts_with(prefix))
+    .map(|(_, mark)| mark)
+}
+
+/// `data-flatray-*` attributes by the `id` of the element that has them
+/// or whose ancestor has them (the nearest wins).
+fn attributes(text: &str) -> HashMap<String, HashMap<String, String>> {
+    let mut by_id = HashMap::new();
+    let Ok(doc) = roxmltree::Document::parse(text) else {
+        return by_id;
+    };
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        let Some(id) = node.attribute("id") else {
+            continue;
+        };
+        let mut found: HashMap<String, String> = HashMap::new();
+        for ancestor in node.ancestors().filter(|n| n.is_element()) {
+            for attribute in ancestor.attributes() {
+                if let Some(name) = attribute.name().strip_prefix("data-flatray-") {
+                    found
+                        .entry(name.to_string())
+                        .or_insert_with(|| attribute.value().to_string());
+                }
+            }
+        }
+        if !found.is_empty() {
+            by_id.insert(id.to_string(), found);
+        }
+    }
+    by_id
+}
+
+/// Elements the import reads nothing from, counted by name.
+fn unsupported(text: &str, floor_image: bool) -> Vec<String> {
+    let Ok(doc) = roxmltree::Document::parse(text) else {
+        return Vec::new();
+    };
+    let mut counts: Vec<(&str, usize)> = Vec::new();
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        let name = node.tag_name().name();
+        let ignored = match name {
+            "text" | "foreignObject" | "video" | "audio" => true,
+            "image" => !floor_image,
+            _ => false,
+        };
+        if ignored {
+            match counts.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, count)) => *count += 1,
+                None => counts.push((name, 1)),
+            }
+        }
+    }
+    counts
+        .into_iter()
+        .map(|(name, count)| {
+            format!(
+                "{count} <{name}> element{}",
+                if count == 1 { "" } else { "s" }
+            )
+        })
+        .collect()
+}
+
+/// Reads an SVG drawing.
+pub(super) fn read(
+    path: &Path,
+    bytes: &[u8],
+    options: &ImportOptions,
+) -> Result<Imported, ImportError> {
+    let usvg_options = usvg::Options {
+        resources_dir: path.parent().map(Path::to_path_buf),
+        ..usvg::Options::default()
+    };
+    let tree = usvg::Tree::from_data(bytes, &usvg_options).map_err(|e| {
+        let location = match &e {
+            usvg::Error::ParsingFailed(xml) => {
+                let p = xml.pos();
+                Some((p.row as usize, p.col as usize))
+            }
+            _ => None,
+        };
+        invalid(path, location, format!("not a valid SVG drawing: {e}"))
+    })?;
+    let text = String::from_utf8_lossy(bytes);
+    let size = tree.size();
+    let canvas = (
+        ((size.width() as f64 * options.scale).ceil() as u32).max(1),
+        ((size.height() as f64 * options.scale).ceil() as u32).max(1),
+    );
+    let mut reader = Reader {
+        options,
+        attributes: attributes(&text),
+        imported: Imported {
+            source: String::new(),
+            kind: "SVG drawing",
+            canvas,
+            floor: ImportedFloor::Color([0.8, 0.8, 0.8]),
+            walls: Vec::new(),
+            lights: Vec::new(),
+            glass: Vec::new(),
+            warnings: unsupported(&text, options.floor_image),
+            floor_file: None,
+        },
+        stem: path
+            .file_stem()
+            .map_or("plan".to_string(), |s| s.to_string_lossy().into_owned()),
+    };
+    reader.group(tree.root(), Mark::Wall, "");
+    Ok(reader.imported)
+}
+
+struct Reader<'a> {
+    options: &'a ImportOptions,
+    attributes: HashMap<String, HashMap<String, String>>,
+    imported: Imported,
+    stem: String,
+}
+
+impl Reader<'_> {
+    /// A `data-flatray-NAME` number given to `id` (or its ancestors).
+    fn number(&self, id: &str, name: &str) -> Option<f64> {
+        self.attributes
+            .get(id)
+            .and_then(|a| a.get(name))
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .filter(|v| v.is_finite())
+    }
+
+    fn group(&mut self, group: &usvg::Group, inherited: Mark, marked_by: &str) {
+        let own = mark_of(group.id());
+        let (mark, marked_by) = match own {
+            Some(mark) => (mark, group.id()),
+            None => (inherited, marked_by),
+        };
+        for node in group.children() {
+            match node {
+                usvg::Node::Group(g) => self.group(g, mark, marked_by),
+                usvg::Node::Path(p) => {
+                    let (mark, by) = match mark_of(p.id()) {
+                        Some(m) => (m, p.id()),
+                        None => (mark, marked_by),
+                    };
+                    if mark != Mark::Skip && p.is_visible() {
+                        self.path(p, mark, if p.id().is_empty() { by } else { p.id() });
+                    }
+                }
+                usvg::Node::Image(image) => self.image(image),
+                usvg::Node::Text(_) => {}
+            }
+        }
+    }
+
+    fn image(&mut self, image: &usvg::Image) {
+        if !self.options.floor_image || self.imported.floor_file.is_some() {
+            return;
+        }
+        let (bytes, extension) = match image.kind() {
+            usvg::ImageKind::PNG(data) => (data.as_ref().clone(), "png"),
+            usvg::ImageKind::JPEG(data) => (data.as_ref().clone(), "jpg"),
+            _ => {
+                self.imported
+                    .warnings
+                    .push("an image that is neither PNG nor JPEG, for the floor".to_string());
+                return;
+            }
+        };
+        let name = format!("{}-floor.{extension}", self.stem);
+        self.imported.floor = ImportedFloor::Image(name.clone());
+        self.imported.floor_file = Some((name, bytes));
+    }
+
+    /// The subpaths of `p` in world units, curves flattened: each with
+    /// whether it is closed.
+    fn subpaths(&self, p: &usvg::Path) -> Vec<(Vec<DVec2>, bool)> {
+        let transform = p.abs_transform();
+        let scale = self.options.scale;
+        let world = |pt: usvg::tiny_skia_path::Point| {
+            let mut q = [pt];
+            transform.map_points(&mut q);
+            DVec2::new(q[0].x as f64 * scale, q[0].y as f64 * scale)
+        };
+        // Pieces per curve, from how far its control points stray from
+        // its chord (a bound on the curve's own distance from it).
+        let pieces = |from: DVec2, controls: &[DVec2], to: DVec2| -> usize {
+            let chord = to - from;
+            let length = chord.length();
+            let stray = controls
+                .iter()
+                .map(|&c| {
+                    if length > 0.0 {
+                        chord.perp_dot(c - from).abs() / length
+                    } else {
+                        c.distance(from)
+                    }
+                })
+                .fold(0.0, f64::max);
+            let tolerance = self.options.tolerance * scale;
+            ((stray / tolerance).sqrt().ceil() as usize).clamp(1, 256)
+        };
+        let mut out: Vec<(Vec<DVec2>, bool)> = Vec::new();
+        let mut current: Vec<DVec2> = Vec::new();
+        for segment in p.data().segments() {
+            match segment {
+                PathSegment::MoveTo(pt) => {
+                    if current.len() > 1 {
+                        out.push((std::mem::take(&mut current), false));
+                    }
+                    current = vec![world(pt)];
+                }
+                PathSegment::LineTo(pt) => current.push(world(pt)),
+                PathSegment::QuadTo(c, pt) => {
+                    let from = current.last().copied().unwrap_or(DVec2::ZERO);
+                    let (c, to) = (world(c), world(pt));
+                    let n = pieces(from, &[c], to);
+                    for k in 1..n {
+                        let t = k as f64 / n as f64;
+                        let s = 1.0 - t;
+                        current.push(from * (s * s) + c * (2.0 * s * t) + to * (t * t));
+                    }
+                    current.push(to);
+                }
+                PathSegment::CubicTo(c1, c2, pt) => {
+                    let from = current.last().copied().unwrap_or(DVec2::ZERO);
+                    let (c1, c2, to) = (world(c1), world(c2), world(pt));
+                    let n = pieces(from, &[c1, c2], to);
+                    for k in 1..n {
+                        let t = k as f64 / n as f64;
+                        let s = 1.0 - t;
+                        current.push(
+                            from * (s * s * s)
+                                + c1 * (3.0 * s * s * t)
+                                + c2 * (3.0 * s * t * t)
+                                + to * (t * t * t),
+                        );
+                    }
+                    current.push(to);
+                }
+                PathSegment::Close => {
+                    if let (Some(&first), Some(&last)) = (current.first(), current.last())
+                        && first == last
+                    {
+                        current.pop();
+                    }
+                    if current.len() > 1 {
+                        let first = current[0];
+                        out.push((std::mem::take(&mut current), true));
+                        current = vec![first];
+                    }
+                }
+            }
+        }
+        if current.len() > 1 {
+            out.push((current, false));
+        }
+        // Repeated points make no wall.
+        for (points, _) in &mut out {
+            points.dedup();
+        }
+        out
+    }
+
+    fn path(&mut self, p: &usvg::Path, mark: Mark, id: &str) {
+        let paint = |paint: &usvg::Paint| match paint {
+            usvg::Paint::Color(c) => Some(linear([c.red, c.green, c.blue])),
+            _ => None,
+        };
+        let stroke = p.stroke().and_then(|s| paint(s.paint()));
+        let fill = p.fill().and_then(|f| paint(f.paint()));
+        let colour = stroke.or(fill);
+        let source = if id.is_empty() {
+            "an unnamed path".to_string()
+        } else {
+            id.to_string()
+        };
+        let subpaths = self.subpaths(p);
+        match mark {
+            Mark::Lamp => {
+                let points: Vec<DVec2> = subpaths.iter().flat_map(|(s, _)| s.clone()).collect();
+                if points.is_empty() {
+                    return;
+                }
+                let (low, high) = points.iter().fold(
+                    (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+                    |(lo, hi), &q| (lo.min(q), hi.max(q)),
+                );
+                self.imported.lights.push(ImportedLight::Point {
+                    at: (low + high) * 0.5,
+                    color: fill.or(stroke).unwrap_or([1.0; 3]),
+                    intensity: self.number(id, "intensity").unwrap_or(LAMP_INTENSITY),
+                    source,
+                });
+            }
+            Mark::Light => {
+                for (points, closed) in &subpaths {
+                    for (a, b) in edges(points, *closed) {
+                        self.imported.lights.push(ImportedLight::Line {
+                            a,
+                            b,
+                            color: colour.unwrap_or([1.0; 3]),
+                            intensity: self.number(id, "intensity").unwrap_or(LINE_INTENSITY),
+                            source: source.clone(),
+                        });
+                    }
+                }
+            }
+            Mark::Glass => {
+                for (points, closed) in &subpaths {
+                    if *closed && points.len() >= 3 {
+                        self.imported.glass.push(ImportedGlass {
+                            points: points.clone(),
+                            ior: self.number(id, "ior").unwrap_or(1.5),
+                            source: source.clone(),
+                        });
+                    } else {
+                        self.imported.warnings.push(format!(
+                            "{source}: a glass body must be a closed shape of at least 3 points"
+                        ));
+                    }
+                }
+            }
+            Mark::Wall | Mark::Mirror | Mark::Pane | Mark::Emit => {
+                let kind = match mark {
+                    Mark::Mirror => WallKind::Mirror,
+                    Mark::Pane => WallKind::Pane(colour.unwrap_or([1.0; 3])),
+                    _ => WallKind::Diffuse(colour),
+                };
+                let emit = (mark == Mark::Emit).then(|| {
+                    (
+                        colour.unwrap_or([1.0; 3]),
+                        self.number(id, "intensity").unwrap_or(LINE_INTENSITY),
+                    )
+                });
+                let kind = if emit.is_some() {
+                    WallKind::Diffuse(self.number(id, "albedo").map(|a| [a; 3]))
+                } else {
+                    kind
+                };
+                for (points, closed) in &subpaths {
+                    for (a, b) in edges(points, *closed) {
+                        self.imported.walls.push(ImportedWall {
+                            a,
+                            b,
+                            kind,
+                            emit,
+                            source: source.clone(),
+                        });
+                    }
+                }
+            }
+            Mark::Skip => {}
+        }
+    }
+}
+
+/// The edges of a polyline, and its closing edge when closed; none of
+/// zero length.
+fn edges(points: &[DVec2], closed: bool) -> Vec<(DVec2, DVec2)> {
+    let mut out: Vec<(DVec2, DVec2)> = points.windows(2).map(|w| (w[0], w[1])).collect();
+    if closed && points.len() > 2 {
+        out.push((points[points.len() - 1], points[0]));
+    }
+    out.retain(|(a, b)| a != b);
+    out
+}
