@@ -380,6 +380,12 @@ fn the_command_line_imports_and_renders_and_refuses_bad_plans() {
             ":2:",
         ),
         ("bad.txt", "not a plan", ""),
+        // Well formed, but a coordinate that no scene can hold.
+        (
+            "nan.tmx",
+            "<map width=\"2\" height=\"2\" tilewidth=\"16\" tileheight=\"16\">\n<objectgroup name=\"walls\"><object id=\"1\" x=\"NaN\" y=\"5\"><polyline points=\"0,0 10,0\"/></object></objectgroup>\n</map>",
+            ": the plan does not make a valid scene",
+        ),
     ] {
         let plan = dir.write(name, text);
         let target = dir.path().join("never.ron");

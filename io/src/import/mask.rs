@@ -4,7 +4,6 @@
 //! exactly, so no light leaks through a traced wall. Pure yellow blobs
 //! (red and green above 200, blue below 80) are lamps at their centres.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use flatray_geometry::DVec2;
@@ -113,10 +112,22 @@ pub(super) fn read(
 /// pixel corners with collinear runs merged. Each boundary edge keeps the
 /// wall on its right; where two wall pixels touch only at a corner, the
 /// loop turns so as to keep them apart (each its own loop, sharing that
-/// corner point exactly).
+/// corner point exactly). Memory: two bytes per pixel corner.
 fn trace(w: i64, h: i64, is_wall: &dyn Fn(i64, i64) -> bool) -> Vec<Vec<DVec2>> {
-    // Directed edges by start corner: (dx, dy) unit steps.
-    let mut next: HashMap<(i64, i64), Vec<(i64, i64)>> = HashMap::new();
+    // Unit steps by code; a corner has at most two edges leaving it.
+    const STEPS: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
+    const NONE: u8 = u8::MAX;
+    let columns = w + 1;
+    let index = |(x, y): (i64, i64)| (y * columns + x) as usize;
+    let mut leaving = vec![[NONE; 2]; ((w + 1) * (h + 1)) as usize];
+    let mut add = |corner: (i64, i64), code: u8| {
+        let slots = &mut leaving[index(corner)];
+        if slots[0] == NONE {
+            slots[0] = code;
+        } else {
+            slots[1] = code;
+        }
+    };
     for y in 0..h {
         for x in 0..w {
             if !is_wall(x, y) {
@@ -124,56 +135,67 @@ fn trace(w: i64, h: i64, is_wall: &dyn Fn(i64, i64) -> bool) -> Vec<Vec<DVec2>> 
             }
             // Clockwise around the pixel (y down): wall on the right.
             if !is_wall(x, y - 1) {
-                next.entry((x, y)).or_default().push((1, 0));
+                add((x, y), 0);
             }
             if !is_wall(x + 1, y) {
-                next.entry((x + 1, y)).or_default().push((0, 1));
+                add((x + 1, y), 1);
             }
             if !is_wall(x, y + 1) {
-                next.entry((x + 1, y + 1)).or_default().push((-1, 0));
+                add((x + 1, y + 1), 2);
             }
             if !is_wall(x - 1, y) {
-                next.entry((x, y + 1)).or_default().push((0, -1));
+                add((x, y + 1), 3);
             }
         }
     }
-    let mut starts: Vec<(i64, i64)> = next.keys().copied().collect();
-    starts.sort_unstable();
+    // Takes an edge leaving `corner`: the one `prefer` names if there, else
+    // any.
+    let take = |leaving: &mut Vec<[u8; 2]>, corner: (i64, i64), prefer: Option<u8>| -> Option<u8> {
+        let slots = &mut leaving[index(corner)];
+        let k = match prefer {
+            Some(code) if slots[1] == code => 1,
+            _ if slots[0] != NONE => 0,
+            _ if slots[1] != NONE => 1,
+            _ => return None,
+        };
+        let code = slots[k];
+        slots[k] = NONE;
+        Some(code)
+    };
     let mut loops = Vec::new();
-    for start in starts {
-        while let Some(first) = next.get_mut(&start).and_then(Vec::pop) {
-            let mut corners = vec![start];
-            let mut at = (start.0 + first.0, start.1 + first.1);
-            let mut heading = first;
-            while at != start {
-                let Some(choices) = next.get_mut(&at) else {
-                    break;
-                };
-                // At a corner two regions touch: turn right, keeping them
-                // apart; else the one way on.
-                let right = (-heading.1, heading.0);
-                let pick = choices
-                    .iter()
-                    .position(|&d| d == right)
-                    .unwrap_or(choices.len() - 1);
-                let step = choices.swap_remove(pick);
-                if step != heading {
-                    corners.push(at);
+    for y in 0..=h {
+        for x in 0..=w {
+            let start = (x, y);
+            while let Some(first) = take(&mut leaving, start, None) {
+                let mut corners = vec![start];
+                let step = STEPS[first as usize];
+                let mut at = (start.0 + step.0, start.1 + step.1);
+                let mut heading = first;
+                while at != start {
+                    // Turn right where two regions touch, else the one way.
+                    let right = (heading + 1) % 4;
+                    let Some(code) = take(&mut leaving, at, Some(right)) else {
+                        break;
+                    };
+                    if code != heading {
+                        corners.push(at);
+                    }
+                    heading = code;
+                    let step = STEPS[code as usize];
+                    at = (at.0 + step.0, at.1 + step.1);
                 }
-                heading = step;
-                at = (at.0 + step.0, at.1 + step.1);
-            }
-            if heading == first && corners.len() > 1 {
-                // The start lies mid-run: not a corner.
-                corners.remove(0);
-            }
-            if corners.len() >= 3 {
-                loops.push(
-                    corners
-                        .into_iter()
-                        .map(|(x, y)| DVec2::new(x as f64, y as f64))
-                        .collect(),
-                );
+                if heading == first && corners.len() > 1 {
+                    // The start lies mid-run: not a corner.
+                    corners.remove(0);
+                }
+                if corners.len() >= 3 {
+                    loops.push(
+                        corners
+                            .into_iter()
+                            .map(|(x, y)| DVec2::new(x as f64, y as f64))
+                            .collect(),
+                    );
+                }
             }
         }
     }

@@ -212,6 +212,22 @@ pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportEr
             ),
         ));
     }
+    // What is written must load: numbers finite and within the scene
+    // format's bounds, walls and glass valid (checked with a plain floor:
+    // the floor image is written later).
+    let mut check = imported.clone();
+    check.floor = ImportedFloor::Color([0.5; 3]);
+    if let Err(e) = crate::parse(
+        &check.to_ron(),
+        Path::new("(imported scene)"),
+        Path::new("."),
+    ) {
+        return Err(invalid(
+            path,
+            None,
+            format!("the plan does not make a valid scene: {e}"),
+        ));
+    }
     if imported.walls.is_empty() && imported.lights.is_empty() && imported.glass.is_empty() {
         imported
             .warnings
