@@ -26,9 +26,28 @@ pub const EXIT_FAILURE: i32 = 1;
 /// Exit code: bad usage or a bad scene.
 pub const EXIT_USAGE: i32 = 2;
 
-/// flatray: a 2D Monte Carlo path tracer for floor plans.
+/// What `flatray --help` says first.
+const LONG_ABOUT: &str = "\
+Lights a floor plan seen from above: walls (diffuse, mirror, transparent), \
+glass and lamps, with shadows, light bounced off walls and their colour, \
+mirrors and caustics. flatray writes a tone-mapped PNG or a linear EXR.
+
+Examples:
+  flatray render scenes/room.ron -o room.png            render the example room
+  flatray render scenes/room.ron --scale 0.25 --spp 8   a quick preview
+  flatray plan scenes/room.ron                          which effects the scene calls for
+  flatray import plan.svg -o plan.ron                   a plan from Inkscape, Tiled or a mask
+
+Scene files: docs/scene-format.md. The physics: docs/model.md.";
+
+/// flatray: a 2D path tracer for floor plans.
 #[derive(Debug, Parser)]
-#[command(name = "flatray", version, about, long_about = None)]
+#[command(
+    name = "flatray",
+    version,
+    about = "Lights a floor plan: a 2D path tracer for walls, mirrors, glass and lamps seen from above",
+    long_about = LONG_ABOUT
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -63,6 +82,14 @@ enum Command {
     /// Turn a floor plan from another tool (an SVG drawing, a Tiled map in
     /// TMX or JSON, a wall-mask image) into a commented scene file.
     Import(ImportArgs),
+    /// Print a shell completion script (for example:
+    /// `flatray completions bash > ~/.local/share/bash-completion/completions/flatray`).
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page in roff (for example: `flatray man | man -l -`).
+    Man,
 }
 
 #[derive(Debug, clap::Args)]
@@ -174,7 +201,18 @@ where
         Ok(cli) => cli,
         Err(e) => {
             let code = if e.use_stderr() { EXIT_USAGE } else { EXIT_OK };
-            let text = e.render().ansi().to_string();
+            // Colour only for a terminal, and never with NO_COLOR set.
+            let terminal = if e.use_stderr() {
+                std::io::stderr().is_terminal()
+            } else {
+                std::io::stdout().is_terminal()
+            };
+            let colour = terminal && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty());
+            let text = if colour {
+                e.render().ansi().to_string()
+            } else {
+                e.render().to_string()
+            };
             let _ = if e.use_stderr() {
                 write!(err, "{text}")
             } else {
@@ -195,6 +233,14 @@ where
         } => plan(&scene, bounces, cache, integrator, &mut out),
         Command::Converge(args) => converge::converge(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
+        Command::Completions { shell } => {
+            let mut command = <Cli as clap::CommandFactory>::command();
+            clap_complete::generate(shell, &mut command, "flatray", &mut out);
+            Ok(())
+        }
+        Command::Man => clap_mangen::Man::new(<Cli as clap::CommandFactory>::command())
+            .render(&mut out)
+            .map_err(|e| Failure::other(format!("cannot write the manual: {e}"))),
     };
     let result = result.and_then(|()| out.finish());
     match result {
@@ -278,19 +324,74 @@ impl Failure {
 }
 
 /// Loads a scene: any failure, to read it or to understand it, is a bad
-/// scene (exit 2).
+/// scene (exit 2). A located error shows its line with a caret under the
+/// column, and a hint for common mistakes.
 pub(crate) fn load(path: &Path) -> Result<Loaded, Failure> {
-    flatray_io::load(path).map_err(Failure::usage)
+    flatray_io::load(path).map_err(|e| {
+        let mut message = e.to_string();
+        if let Some((line, column)) = e.location()
+            && let Ok(text) = std::fs::read_to_string(path)
+            && let Some(source) = text
+                .trim_start_matches('\u{feff}')
+                .lines()
+                .nth(line.saturating_sub(1))
+        {
+            message.push_str(&snippet(source, line, column));
+            if let Some(hint) = hint(&message, source) {
+                message.push_str(&format!("\n  hint: {hint}"));
+            }
+        }
+        Failure::usage(message)
+    })
+}
+
+/// The source line and a caret under `column` (in characters), as rustc
+/// shows them.
+fn snippet(source: &str, line: usize, column: usize) -> String {
+    let number = line.to_string();
+    let pad = " ".repeat(number.len());
+    let shown: String = source.chars().take(160).collect();
+    let before: String = source
+        .chars()
+        .take(column.saturating_sub(1))
+        .map(|c| if c == '\t' { '\t' } else { ' ' })
+        .collect();
+    format!("\n {pad} |\n {number} | {shown}\n {pad} | {before}^")
+}
+
+/// A suggestion for the mistakes a scene's author makes most often.
+fn hint(message: &str, source: &str) -> Option<&'static str> {
+    let compact: String = source.chars().filter(|c| !c.is_whitespace()).collect();
+    if compact.contains("Color(")
+        && !compact.contains("Color((")
+        && message.contains("Expected opening `(`")
+    {
+        return Some("a colour is a tuple inside the variant: `Color((0.8, 0.75, 0.65))`");
+    }
+    if message.contains("Expected opening `(`") && compact.contains("Image(") {
+        return Some("a floor image is a path in quotes: `Image(\"floor.png\")`");
+    }
+    if message.contains("Unexpected field") || message.contains("unknown field") {
+        return Some("every field is listed in docs/scene-format.md");
+    }
+    None
 }
 
 fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
     let loaded = load(scene)?;
+    let counts = loaded.counts;
+    let emitting = if counts.emitting_walls > 0 {
+        format!(" ({} emitting)", counts.emitting_walls)
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         out,
-        "{}: ok ({} walls, {} lights, canvas {} x {})",
+        "{}: ok ({} walls{emitting}, {} lights, {} glass bodies, canvas {} x {})",
         scene.display(),
-        loaded.scene.walls.len(),
-        loaded.scene.lights.len(),
+        counts.walls,
+        counts.lights,
+        counts.glass,
         loaded.scene.canvas.width,
         loaded.scene.canvas.height
     );
@@ -569,9 +670,21 @@ pub(crate) fn progress_bar(total: u64, quiet: bool, what: &str) -> ProgressBar {
     }
     let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
     let template = format!(
-        "{{spinner}} {what} [{{bar:40}}] {{percent:>3}}%  {{elapsed_precise}} elapsed, ETA {{eta}}"
+        "{{spinner}} {what} [{{bar:40}}] {{percent:>3}}%  {{elapsed_precise}} elapsed, {{sane_eta}}"
     );
     if let Ok(style) = ProgressStyle::with_template(&template) {
+        // No estimate until a little of the work is done: before the first
+        // samples (while the memo fills) the rate says nothing yet.
+        let style = style.with_key(
+            "sane_eta",
+            |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let _ = if state.fraction() < 0.02 {
+                    write!(w, "estimating")
+                } else {
+                    write!(w, "ETA {:#}", indicatif::HumanDuration(state.eta()))
+                };
+            },
+        );
         bar.set_style(style.progress_chars("=> "));
     }
     bar

@@ -303,3 +303,107 @@ fn inputs_that_would_exhaust_memory_end_cleanly_under_a_limit() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Help and usage errors written to a pipe carry no escape codes; help
+/// opens with what flatray does and shows examples.
+#[test]
+fn help_in_a_pipe_is_plain_text() {
+    for args in [
+        vec!["--help"],
+        vec!["render", "--help"],
+        vec!["render", "--no-such-flag"],
+    ] {
+        let output = flatray().args(&args).output().unwrap();
+        for stream in [&output.stdout, &output.stderr] {
+            assert!(
+                !stream.contains(&0x1b),
+                "{args:?}: {}",
+                String::from_utf8_lossy(stream)
+            );
+        }
+    }
+    let output = flatray().arg("--help").output().unwrap();
+    let help = String::from_utf8_lossy(&output.stdout);
+    assert!(help.starts_with("Lights a floor plan"), "{help}");
+    assert!(
+        help.contains("Examples:") && help.contains("flatray import"),
+        "{help}"
+    );
+}
+
+/// A scene error shows the line with a caret under the column, and a
+/// hint for a colour written without its inner parentheses.
+#[test]
+fn a_scene_error_shows_its_line_a_caret_and_a_hint() {
+    let dir = scratch("caret");
+    let scene = dir.join("s.ron");
+    std::fs::write(
+        &scene,
+        "Scene(\n  canvas: (10, 10),\n  floor: Color(0.8, 0.75, 0.65),\n)",
+    )
+    .unwrap();
+    let output = flatray()
+        .args(["check", scene.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert!(
+        lines[0].starts_with(&format!("error: {}:3:", scene.display())),
+        "{stderr}"
+    );
+    assert_eq!(
+        lines[2], " 3 |   floor: Color(0.8, 0.75, 0.65),",
+        "{stderr}"
+    );
+    let column: usize = lines[0].split(':').nth(3).unwrap().trim().parse().unwrap();
+    assert_eq!(lines[3].find('^'), Some(4 + column), "{stderr}");
+    assert!(stderr.contains("hint: a colour is a tuple"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `check` counts lights as the file lists them: an emitting wall is a
+/// wall that emits, not one more light.
+#[test]
+fn check_counts_what_the_file_lists() {
+    let dir = scratch("counts");
+    let scene = dir.join("s.ron");
+    std::fs::write(
+        &scene,
+        "Scene(canvas: (10, 10), floor: Color((1, 1, 1)),
+           walls: [Wall(a: (1, 1), b: (9, 1)), Wall(a: (1, 5), b: (9, 5), emit: (intensity: 1))],
+           lights: [Point(at: (5, 3)), Point(at: (5, 7)), Line(a: (1, 8), b: (9, 8), solid: true),
+                    Directional(direction: (1, 1))])",
+    )
+    .unwrap();
+    let output = flatray()
+        .args(["check", scene.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        stdout.contains("ok (2 walls (1 emitting), 4 lights, 0 glass bodies, canvas 10 x 10)"),
+        "{stdout}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Shell completions and the manual page come from the flag definitions.
+#[test]
+fn completions_and_the_manual_are_generated() {
+    let output = flatray().args(["completions", "bash"]).output().unwrap();
+    assert_eq!(output.status.code(), Some(0));
+    let script = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        script.contains("flatray") && script.contains("--spp"),
+        "{script}"
+    );
+    let output = flatray().arg("man").output().unwrap();
+    assert_eq!(output.status.code(), Some(0));
+    let page = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        page.starts_with(".ie") || page.contains(".TH flatray"),
+        "{page}"
+    );
+}

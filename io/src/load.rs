@@ -26,6 +26,18 @@ pub struct Loaded {
     /// from one) and its floor image (when it has one). A render must
     /// never write over them.
     pub inputs: Vec<PathBuf>,
+    /// What the file lists, as it lists it.
+    pub counts: Counts,
+}
+
+/// What a scene file lists: its walls (of which some emit), its lights
+/// (an emitting wall is not counted among them) and its glass bodies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    pub walls: usize,
+    pub emitting_walls: usize,
+    pub lights: usize,
+    pub glass: usize,
 }
 
 /// Reads and validates the scene file at `path`. Relative paths inside it
@@ -354,6 +366,12 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         options,
         tonemap: file.render.tonemap,
         inputs,
+        counts: Counts {
+            walls: file.walls.len(),
+            emitting_walls: file.walls.iter().filter(|w| w.emit.is_some()).count(),
+            lights: file.lights.len(),
+            glass: file.glass.len(),
+        },
     })
 }
 

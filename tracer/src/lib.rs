@@ -2,7 +2,7 @@
 //! and random streams, and the parallel render loop with its statistics.
 //!
 //! What it is for: estimating, for every floor pixel, the quantity that
-//! `shared/spec/model.md` defines (exposure times floor albedo times the
+//! `docs/model.md` defines (exposure times floor albedo times the
 //! pixel's mean fluence), reproducibly: every sample draws from a stream
 //! keyed by (seed, pixel, sample), so an image is bit-identical for any
 //! number of threads.
