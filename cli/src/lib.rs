@@ -158,6 +158,11 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Draw the walls over the image (PNG only), each material in its own
+    /// colour: diffuse walls in theirs, mirrors silver-blue, panes in
+    /// their tint, glass pale cyan, emitting walls yellow.
+    #[arg(long)]
+    draw_walls: bool,
     /// Debugging and benchmarking: run every effect even where the plan
     /// would skip it (only where that cannot change the image).
     #[arg(long, hide = true)]
@@ -430,7 +435,12 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         Some(path) => path.clone(),
         None => default_output(&args.scene),
     };
-    Format::from_path(&output).map_err(Failure::usage)?;
+    let format = Format::from_path(&output).map_err(Failure::usage)?;
+    if args.draw_walls && format != Format::Png {
+        return Err(Failure::usage(
+            "--draw-walls: walls are drawn on PNG images only (an EXR keeps the linear values untouched)",
+        ));
+    }
     if !(args.scale.is_finite() && args.scale > 0.0) {
         return Err(Failure::usage(format!(
             "--scale: expected a finite number > 0, found {}",
@@ -487,7 +497,13 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     bar.finish_and_clear();
     let rendered_at = Instant::now();
 
-    flatray_io::write_image(&rendered.image, loaded.tonemap, &output).map_err(Failure::other)?;
+    if args.draw_walls {
+        flatray_io::write_png_with_walls(&rendered.image, loaded.tonemap, &loaded.scene, &output)
+            .map_err(Failure::other)?;
+    } else {
+        flatray_io::write_image(&rendered.image, loaded.tonemap, &output)
+            .map_err(Failure::other)?;
+    }
     let written_at = Instant::now();
 
     let _ = writeln!(

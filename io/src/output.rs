@@ -100,6 +100,23 @@ pub fn write_png(image: &Image, tonemap: ToneMap, path: &Path) -> Result<(), Wri
     })
 }
 
+/// Writes a tone-mapped 8-bit sRGB PNG with the walls of `scene` drawn
+/// over it (`crate::overlay`), so that the plan shows.
+pub fn write_png_with_walls(
+    image: &Image,
+    tonemap: ToneMap,
+    scene: &flatray_tracer::Scene,
+    path: &Path,
+) -> Result<(), WriteError> {
+    let mut bytes = to_srgb8(image, tonemap);
+    crate::overlay::draw_walls(&mut bytes, (image.width, image.height), scene, 1.5);
+    write_atomically(path, |w| {
+        PngEncoder::new(w)
+            .write_image(&bytes, image.width, image.height, ExtendedColorType::Rgb8)
+            .map_err(|e| e.to_string())
+    })
+}
+
 /// The PNG file bytes of `image`, for snapshots and in-memory use.
 pub fn png_bytes(image: &Image, tonemap: ToneMap) -> Result<Vec<u8>, String> {
     let bytes = to_srgb8(image, tonemap);

@@ -1,0 +1,157 @@
+//! Walls drawn over a tone-mapped image, so that a render shows its plan:
+//! anti-aliased lines in a colour that tells the material (diffuse walls
+//! in their own colour, mirrors silver-blue, panes in their tint, glass
+//! pale cyan, emitting walls warm yellow).
+
+use flatray_geometry::DVec2;
+use flatray_tracer::{Material, Scene};
+
+/// The colour (sRGB, 0 to 1) a wall is drawn in.
+fn wall_colour(scene: &Scene, index: usize) -> [f64; 3] {
+    if scene.light_of_wall(index as u32).is_some() {
+        return [1.0, 0.85, 0.3];
+    }
+    match scene.walls[index].material {
+        Material::Diffuse { albedo: Some(a) } => {
+            // Darkened a little, so that a white wall shows on a white floor.
+            [a.x, a.y, a.z].map(|c| (0.15 + 0.7 * c).clamp(0.0, 1.0))
+        }
+        Material::Diffuse { albedo: None } => [0.9, 0.9, 0.88],
+        Material::Mirror { .. } => [0.7, 0.82, 1.0],
+        Material::Transparent { tint } => {
+            [0.3 + 0.5 * tint.x, 0.5 + 0.5 * tint.y, 0.55 + 0.45 * tint.z]
+        }
+        Material::Glass { .. } => [0.6, 0.95, 0.95],
+    }
+}
+
+/// Draws every wall of `scene`, `width` pixels wide, over the 8-bit RGB
+/// `bytes` of an image of `size` pixels covering the scene's canvas: first
+/// a dark halo a pixel wider, then the wall's colour, so that walls show
+/// on light and dark floors alike.
+pub fn draw_walls(bytes: &mut [u8], size: (u32, u32), scene: &Scene, width: f64) {
+    draw(bytes, size, scene, width + 1.0, Some(([0.0; 3], 0.6)));
+    draw(bytes, size, scene, width, None);
+}
+
+/// One pass: each wall in its colour, or all in `fixed` (a colour and an
+/// opacity).
+fn draw(
+    bytes: &mut [u8],
+    size: (u32, u32),
+    scene: &Scene,
+    width: f64,
+    fixed: Option<([f64; 3], f64)>,
+) {
+    let (w, h) = (size.0 as i64, size.1 as i64);
+    if bytes.len() < (w * h * 3) as usize {
+        return;
+    }
+    let step = DVec2::new(
+        size.0 as f64 / scene.canvas.width as f64,
+        size.1 as f64 / scene.canvas.height as f64,
+    );
+    let to_pixels = |p: DVec2| (p - scene.canvas.origin) * step;
+    let half = 0.5 * width;
+    for (index, wall) in scene.walls.iter().enumerate() {
+        let (colour, opacity) = fixed.unwrap_or((wall_colour(scene, index), 1.0));
+        let colour = colour.map(|c| c * 255.0);
+        let (a, b) = (to_pixels(wall.segment.a), to_pixels(wall.segment.b));
+        if !(a.is_finite() && b.is_finite()) {
+            continue;
+        }
+        let edge = b - a;
+        let length = edge.length();
+        // Along the major axis, one step per pixel; across it, the pixels
+        // within reach of the line.
+        let steep = edge.y.abs() > edge.x.abs();
+        let (major_a, major_b) = if steep { (a.y, b.y) } else { (a.x, b.x) };
+        let (low, high) = (
+            major_a.min(major_b) - half - 1.0,
+            major_a.max(major_b) + half + 1.0,
+        );
+        let limit = if steep { h } else { w };
+        let first = (low.floor() as i64).max(0);
+        let last = (high.ceil() as i64).min(limit - 1);
+        let reach = (half + 1.5).ceil() as i64;
+        let mut i = first;
+        while i <= last {
+            let centre_major = i as f64 + 0.5;
+            // Where the line crosses this row (or column).
+            let t = if major_b != major_a {
+                ((centre_major - major_a) / (major_b - major_a)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let on = a + edge * t;
+            let minor = if steep { on.x } else { on.y };
+            let centre = minor.floor() as i64;
+            for j in centre - reach..=centre + reach {
+                let (x, y) = if steep { (j, i) } else { (i, j) };
+                if x < 0 || y < 0 || x >= w || y >= h {
+                    continue;
+                }
+                let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                let distance = if length > 0.0 {
+                    let u = ((p - a).dot(edge) / (length * length)).clamp(0.0, 1.0);
+                    p.distance(a + edge * u)
+                } else {
+                    p.distance(a)
+                };
+                let coverage = (half + 0.5 - distance).clamp(0.0, 1.0) * opacity;
+                if coverage > 0.0 {
+                    let k = ((y * w + x) * 3) as usize;
+                    for c in 0..3 {
+                        let old = bytes[k + c] as f64;
+                        bytes[k + c] = (old + (colour[c] - old) * coverage).round() as u8;
+                    }
+                }
+            }
+            i += 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatray_geometry::Segment;
+    use flatray_tracer::{Canvas, Floor, Rgb, Wall};
+
+    #[test]
+    fn a_wall_is_drawn_along_its_line_and_nowhere_else() {
+        let wall = |a: (f64, f64), b: (f64, f64), material| Wall {
+            segment: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)),
+            material,
+        };
+        let scene = Scene::new(
+            Canvas {
+                width: 40,
+                height: 20,
+                origin: DVec2::ZERO,
+            },
+            Floor::Color(Rgb::ONE),
+            0.5,
+            vec![
+                wall((2.0, 5.0), (38.0, 5.0), Material::Mirror { tint: Rgb::ONE }),
+                wall(
+                    (10.0, 8.0),
+                    (30.0, 18.0),
+                    Material::Diffuse { albedo: None },
+                ),
+            ],
+            Vec::new(),
+        );
+        // At half scale: 20 x 10 pixels.
+        let mut bytes = vec![0u8; 20 * 10 * 3];
+        draw_walls(&mut bytes, (20, 10), &scene, 1.5);
+        let at = |x: usize, y: usize| &bytes[(y * 20 + x) * 3..(y * 20 + x) * 3 + 3];
+        // The mirror at y = 2.5 pixels: full colour on rows 2 (centre 2.5).
+        assert_eq!(at(10, 2), &[179, 209, 255]);
+        // The diagonal passes (10, 6.5) in pixels.
+        assert!(at(10, 6)[0] > 60, "{:?}", at(10, 6));
+        // Far from both walls, untouched.
+        assert_eq!(at(2, 8), &[0, 0, 0]);
+        assert_eq!(at(18, 0), &[0, 0, 0]);
+    }
+}
