@@ -76,6 +76,10 @@ enum Command {
         /// The estimator (overrides the scene).
         #[arg(long, value_enum)]
         integrator: Option<IntegratorArg>,
+        /// Also say how the work is done (shared shadow rays, culling,
+        /// the kind of ray queries).
+        #[arg(long, short)]
+        verbose: bool,
     },
     /// Measure error against seconds and samples for each way of rendering.
     Converge(converge::ConvergeArgs),
@@ -155,6 +159,10 @@ struct RenderArgs {
     /// Print counts of rays, paths and seconds per phase.
     #[arg(long)]
     stats: bool,
+    /// With --stats: also how the work was done (the full plan, culling,
+    /// cache hits, shared shadow rays).
+    #[arg(long, short)]
+    verbose: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -235,7 +243,8 @@ where
             bounces,
             cache,
             integrator,
-        } => plan(&scene, bounces, cache, integrator, &mut out),
+            verbose,
+        } => plan(&scene, bounces, cache, integrator, verbose, &mut out),
         Command::Converge(args) => converge::converge(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
         Command::Completions { shell } => {
@@ -408,6 +417,7 @@ fn plan(
     bounces: Option<u32>,
     cache: Option<Switch>,
     integrator: Option<IntegratorArg>,
+    verbose: bool,
     out: &mut dyn Write,
 ) -> Result<(), Failure> {
     let loaded = load(scene)?;
@@ -425,7 +435,11 @@ fn plan(
         ..loaded.options
     };
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
-    let _ = writeln!(out, "{}", plan);
+    if verbose {
+        let _ = writeln!(out, "{}", plan.verbose());
+    } else {
+        let _ = writeln!(out, "{}", plan.summary());
+    }
     Ok(())
 }
 
@@ -523,12 +537,14 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         );
     }
     if args.stats {
-        let _ = writeln!(
-            out,
-            "plan\n{}",
-            flatray_tracer::Plan::new(&loaded.scene, &options)
-        );
-        let _ = writeln!(out, "{}", rendered.stats);
+        let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
+        if args.verbose {
+            let _ = writeln!(out, "plan\n{}", plan.verbose());
+            let _ = writeln!(out, "{}", rendered.stats);
+        } else {
+            let _ = writeln!(out, "plan\n{}", plan.summary());
+            let _ = writeln!(out, "{}", rendered.stats.summary());
+        }
         let _ = writeln!(out, "seconds");
         let _ = writeln!(
             out,

@@ -407,3 +407,62 @@ fn completions_and_the_manual_are_generated() {
         "{page}"
     );
 }
+
+/// By default `plan` and `--stats` speak of effects and costs; how the
+/// work is done (culling, shared rays, ray queries) needs --verbose.
+#[test]
+fn internals_need_verbose() {
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    let plain = flatray()
+        .args(["plan", room.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let plain = String::from_utf8_lossy(&plain.stdout).into_owned();
+    let verbose = flatray()
+        .args(["plan", "-v", room.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let verbose = String::from_utf8_lossy(&verbose.stdout).into_owned();
+    for internal in [
+        "ray queries",
+        "walls culled by direction",
+        "share shadow rays",
+    ] {
+        assert!(!plain.contains(internal), "{plain}");
+        assert!(verbose.contains(internal), "{verbose}");
+    }
+    assert!(
+        plain.contains("cache: wall irradiance") && plain.contains("mirrors"),
+        "{plain}"
+    );
+    let dir = scratch("verbose");
+    let out = dir.join("room.png");
+    let stats = |extra: &[&str]| {
+        let output = flatray()
+            .args([
+                "render",
+                room.to_str().unwrap(),
+                "--scale",
+                "0.1",
+                "--spp",
+                "1",
+                "--stats",
+            ])
+            .args(extra)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let (plain, verbose) = (stats(&[]), stats(&["--verbose"]));
+    assert!(
+        plain.contains("shadow rays") && !plain.contains("walls tested"),
+        "{plain}"
+    );
+    assert!(
+        verbose.contains("walls tested") && verbose.contains("arc has no wall"),
+        "{verbose}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

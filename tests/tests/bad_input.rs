@@ -117,7 +117,7 @@ fn a_wall_memo_over_its_budget_is_switched_off() {
         let line = run
             .stdout
             .lines()
-            .find(|l| l.contains("memo: wall irradiance"))
+            .find(|l| l.contains("cache: wall irradiance"))
             .unwrap_or_default();
         assert!(
             line.starts_with("skipped") && line.contains("budget"),
@@ -206,7 +206,7 @@ fn coherence_masks_over_their_budget_are_not_built() {
             lights.join(", ")
         ),
     );
-    let run = flatray(&["plan", s(&scene)]);
+    let run = flatray(&["plan", "--verbose", s(&scene)]);
     assert_eq!(run.code, 0, "{run:?}");
     let line = run
         .stdout

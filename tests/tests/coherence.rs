@@ -38,7 +38,14 @@ fn assert_same_image(name: &str, scene: &Scene, options: &RenderOptions) -> u64 
 
 #[test]
 fn the_example_scenes_render_the_same_with_fewer_shadow_rays() {
-    for name in ["room", "colour-bleed", "soft-shadow", "lens", "prism", "first-flat"] {
+    for name in [
+        "room",
+        "colour-bleed",
+        "soft-shadow",
+        "lens",
+        "prism",
+        "first-flat",
+    ] {
         let loaded =
             flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
         let options = RenderOptions {

@@ -21,7 +21,14 @@ fn plan_of_file(name: &str) -> String {
 
 #[test]
 fn plans_of_the_example_scenes() {
-    for name in ["room", "colour-bleed", "soft-shadow", "lens", "prism", "first-flat"] {
+    for name in [
+        "room",
+        "colour-bleed",
+        "soft-shadow",
+        "lens",
+        "prism",
+        "first-flat",
+    ] {
         insta::assert_snapshot!(format!("plan-{name}"), plan_of_file(name));
     }
 }

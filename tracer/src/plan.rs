@@ -20,6 +20,22 @@ pub struct Effect {
     pub why: String,
 }
 
+/// Effects that say how the work is done rather than what is simulated:
+/// printed only in the verbose plan.
+const INTERNAL: [&str; 3] = [
+    "cache: floor strata share shadow rays",
+    "floor rays: walls culled by direction",
+    "ray queries",
+];
+
+impl Effect {
+    /// Whether the effect is about how the work is done (culling, shared
+    /// rays, the kind of ray queries), not about what is simulated.
+    pub fn is_internal(&self) -> bool {
+        INTERNAL.contains(&self.name)
+    }
+}
+
 /// What a render of a scene does.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Plan {
@@ -251,12 +267,12 @@ impl Plan {
             },
         );
         add(
-            "memo: wall irradiance",
+            "cache: wall irradiance",
             wall_memo,
             if tracing_light {
                 "light tracing does not read it".into()
             } else if !options.memo.enabled {
-                "the memo is switched off".into()
+                "the cache is switched off (--cache off)".into()
             } else if !indirect {
                 "no indirect light is traced, so no path reads it".into()
             } else if diffuse == 0 && !force {
@@ -275,12 +291,12 @@ impl Plan {
             },
         );
         add(
-            "memo: floor direct light per pixel",
+            "cache: floor direct light per pixel",
             floor_memo,
             if tracing_light {
                 "light tracing does not read it".into()
             } else if !options.memo.enabled {
-                "the memo is switched off".into()
+                "the cache is switched off (--cache off)".into()
             } else if !indirect {
                 "no indirect path would reuse it".into()
             } else {
@@ -292,10 +308,10 @@ impl Plan {
             },
         );
         add(
-            "memo: floor strata share shadow rays",
+            "cache: floor strata share shadow rays",
             floor_coherence,
             if !floor_memo {
-                "no floor memo".into()
+                "no floor cache".into()
             } else if !shadows {
                 "no shadow rays".into()
             } else if !options.memo.floor_coherence {
@@ -375,7 +391,7 @@ impl Plan {
                     String::new()
                 };
                 format!(
-                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet{off_mirrors}; the floor memo's shadow rays, only the walls between the pixels and the light"
+                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet{off_mirrors}; the floor cache's shadow rays, only the walls between the pixels and the light"
                 )
             },
         );
@@ -402,6 +418,50 @@ impl Plan {
             floor_ray_culling,
             effects,
         }
+    }
+}
+
+impl Plan {
+    /// The plan for a user: the effects simulated and skipped, without how
+    /// the work is done (`{:#}` of the plan, or [`Plan::verbose`], has it all).
+    pub fn summary(&self) -> impl fmt::Display + '_ {
+        PlanText {
+            plan: self,
+            verbose: false,
+        }
+    }
+
+    /// Every effect, the internal ones too.
+    pub fn verbose(&self) -> impl fmt::Display + '_ {
+        PlanText {
+            plan: self,
+            verbose: true,
+        }
+    }
+}
+
+struct PlanText<'a> {
+    plan: &'a Plan,
+    verbose: bool,
+}
+
+impl fmt::Display for PlanText<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let shown = || {
+            self.plan
+                .effects
+                .iter()
+                .filter(|e| self.verbose || !e.is_internal())
+        };
+        let width = shown().map(|e| e.name.len()).max().unwrap_or(0);
+        for (k, e) in shown().enumerate() {
+            if k > 0 {
+                writeln!(f)?;
+            }
+            let mark = if e.runs { "runs   " } else { "skipped" };
+            write!(f, "{mark}  {:<width$}  {}", e.name, e.why)?;
+        }
+        Ok(())
     }
 }
 

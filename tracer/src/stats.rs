@@ -106,6 +106,43 @@ impl Stats {
     }
 }
 
+impl Stats {
+    /// The counts a user can act on: rays and paths by how they ended,
+    /// events, the cache's size, samples left out. `Display` adds the work
+    /// counters (culling, cache hits and reuses).
+    pub fn summary(&self) -> impl fmt::Display + '_ {
+        StatsSummary(self)
+    }
+}
+
+struct StatsSummary<'a>(&'a Stats);
+
+impl fmt::Display for StatsSummary<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = self.0;
+        writeln!(f, "rays")?;
+        writeln!(f, "  camera samples   {:>14}", s.camera_samples)?;
+        writeln!(f, "  shadow rays      {:>14}", s.shadow_rays)?;
+        writeln!(f, "  bounce rays      {:>14}", s.bounce_rays)?;
+        writeln!(f, "  light paths      {:>14}", s.light_paths)?;
+        writeln!(f, "paths ended by")?;
+        writeln!(f, "  escaping         {:>14}", s.paths_escaped)?;
+        writeln!(f, "  bounce limit     {:>14}", s.paths_bounce_limit)?;
+        writeln!(f, "  absorption       {:>14}", s.paths_absorbed)?;
+        writeln!(f, "events")?;
+        writeln!(f, "  mirror bounces   {:>14}", s.mirror_reflections)?;
+        writeln!(f, "  transparent      {:>14}", s.transparent_passes)?;
+        writeln!(f, "  glass            {:>14}", s.glass_events)?;
+        writeln!(f, "cache")?;
+        writeln!(f, "  wall bytes       {:>14}", s.memo_bytes)?;
+        write!(f, "non-finite samples {:>14}", s.nonfinite_samples)?;
+        if let Some((x, y, k)) = s.first_nonfinite {
+            write!(f, " (first: pixel ({x}, {y}), sample {k})")?;
+        }
+        Ok(())
+    }
+}
+
 impl fmt::Display for Stats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "rays")?;
@@ -127,7 +164,7 @@ impl fmt::Display for Stats {
         writeln!(f, "  glass            {:>14}", self.glass_events)?;
         writeln!(f, "  floor albedo     {:>14}", self.floor_albedo_reads)?;
         writeln!(f, "  emission tests   {:>14}", self.emission_tests)?;
-        writeln!(f, "memo")?;
+        writeln!(f, "cache")?;
         writeln!(f, "  wall entries     {:>14}", self.memo_entries)?;
         writeln!(f, "  wall bytes       {:>14}", self.memo_bytes)?;
         writeln!(f, "  fill rays        {:>14}", self.memo_fill_rays)?;
