@@ -522,12 +522,13 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
 
     let _ = writeln!(
         out,
-        "wrote {} ({width} x {height}, {} spp, {} bounce{}) in {:.2} s",
+        "wrote {} ({width} x {height}, {} spp, {} bounce{}) in {:.2} s; noise {}",
         output.display(),
         options.samples,
         options.bounces,
         if options.bounces == 1 { "" } else { "s" },
-        (written_at - started).as_secs_f64()
+        (written_at - started).as_secs_f64(),
+        rendered.stats.noise
     );
     if rendered.stats.nonfinite_samples > 0 {
         let _ = writeln!(

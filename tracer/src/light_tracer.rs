@@ -139,10 +139,23 @@ pub fn render_light(
         .collect();
 
     let mut fluence = vec![Rgb::ZERO; pixels];
-    for (buffer, chunk_stats) in &results {
+    // The first half of the chunks' paths apart, for the noise estimate.
+    let first_chunks = chunks / 2;
+    let first_paths = (first_chunks as u64 * per_chunk).min(paths);
+    let mut first = if first_chunks > 0 {
+        vec![Rgb::ZERO; pixels]
+    } else {
+        Vec::new()
+    };
+    for (chunk, (buffer, chunk_stats)) in results.iter().enumerate() {
         stats.merge(chunk_stats);
         for (f, b) in fluence.iter_mut().zip(buffer) {
             *f += *b;
+        }
+        if chunk < first_chunks {
+            for (f, b) in first.iter_mut().zip(buffer) {
+                *f += *b;
+            }
         }
     }
     let step = DVec2::new(
@@ -153,8 +166,17 @@ pub fn render_light(
         for x in 0..width {
             let k = y as usize * width as usize + x as usize;
             let centre = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-            let value =
-                fluence[k] * scene.floor.albedo_at(&scene.canvas, centre) * options.exposure;
+            let scale = scene.floor.albedo_at(&scene.canvas, centre) * options.exposure;
+            let value = fluence[k] * scale;
+            if first_paths > 0 && first_paths < paths {
+                // Each half's estimate of the pixel, from its own paths.
+                let (p, p1) = (paths as f64, first_paths as f64);
+                let a = first[k] * (p / p1);
+                let b = (fluence[k] - first[k]) * (p / (p - p1));
+                stats
+                    .noise
+                    .add((a - b) * scale, value, p1 * (p - p1) / (p * p));
+            }
             if value.is_finite() {
                 image.pixels[k] = [value.x as f32, value.y as f32, value.z as f32];
             } else {

@@ -376,33 +376,70 @@ fn render_pixel(
         direct = strata_sum(&floor.values, (x, y), stats) / (grid * grid) as f64;
         stats.floor_memo_reuses += options.samples as u64;
     }
-    let mut sum = Rgb::ZERO;
+    let mut sums = Sums::new(options.samples);
     match culled {
         Some(culled) => {
             // Unchecked, a sample that is not finite makes the sum not
             // finite; then the pixel's samples are taken again, each
             // checked (a rare case: no test per sample in the common one).
             let before = *stats;
-            culled_samples::<false>(context, &pixel, culled, &mut sum, stats);
-            if !sum.is_finite() {
+            culled_samples::<false>(context, &pixel, culled, &mut sums, stats);
+            if !sums.all.is_finite() {
                 *stats = before;
-                sum = Rgb::ZERO;
-                checked_culled_samples(context, &pixel, culled, &mut sum, stats);
+                sums = Sums::new(options.samples);
+                checked_culled_samples(context, &pixel, culled, &mut sums, stats);
             }
         }
         None => {
             for (_, of_arc) in sample_order(pixel.arc_offset, options.samples) {
                 for sample in of_arc {
                     let value = sample_with(context, &pixel, sample, stats);
-                    add_sample::<true>(&mut sum, value, (x, y, sample), stats);
+                    add_sample::<true>(&mut sums, value, (x, y, sample), stats);
                 }
             }
         }
     }
-    let mean = direct + sum / options.samples.max(1) as f64;
+    let mean = direct + sums.all / options.samples.max(1) as f64;
     let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
-    let value = mean * albedo * options.exposure;
+    let scale = albedo * options.exposure;
+    let value = mean * scale;
+    // The pixel's noise, from its two halves of samples (and of strata).
+    let (n, first) = (options.samples, sums.half);
+    if first > 0 {
+        let (direct_first, direct_second) = if floor_memo {
+            strata_halves(&batch.floor.values, floor_grid(&options.memo, n))
+        } else {
+            (Rgb::ZERO, Rgb::ZERO)
+        };
+        let a = direct_first + sums.first / first as f64;
+        let b = direct_second + (sums.all - sums.first) / (n - first) as f64;
+        let weight = first as f64 * (n - first) as f64 / (n as f64 * n as f64);
+        stats.noise.add((a - b) * scale, value, weight);
+    }
     [value.x as f32, value.y as f32, value.z as f32]
+}
+
+/// The means of a pixel's floor strata over the two colours of a
+/// checkerboard of its grid: two estimates of its direct light, each over
+/// the whole pixel. Strata that are not finite are left out.
+fn strata_halves(values: &[Rgb], grid: u32) -> (Rgb, Rgb) {
+    let mut sums = [Rgb::ZERO; 2];
+    let mut counts = [0u32; 2];
+    for (row, values) in values.chunks(grid.max(1) as usize).enumerate() {
+        for (column, &value) in values.iter().enumerate() {
+            let colour = (row + column) & 1;
+            if value.is_finite() {
+                sums[colour] += value;
+                counts[colour] += 1;
+            }
+        }
+    }
+    let mean = |k: usize| sums[k] / counts[k].max(1) as f64;
+    if counts[1] == 0 {
+        // One stratum: both halves hold it, and it adds no difference.
+        return (mean(0), mean(0));
+    }
+    (mean(0), mean(1))
 }
 
 /// The sum of a pixel's floor strata, those that are not finite left out
@@ -507,7 +544,7 @@ fn culled_samples<const CHECKED: bool>(
     context: &Context,
     pixel: &Pixel,
     culled: &BlockCulling,
-    sum: &mut Rgb,
+    sum: &mut Sums,
     stats: &mut Stats,
 ) {
     let trace = &context.trace;
@@ -575,10 +612,39 @@ fn checked_culled_samples(
     context: &Context,
     pixel: &Pixel,
     culled: &BlockCulling,
-    sum: &mut Rgb,
+    sum: &mut Sums,
     stats: &mut Stats,
 ) {
     culled_samples::<true>(context, pixel, culled, sum, stats);
+}
+
+/// A pixel's sum of sample values, and apart the sum of its first half
+/// of samples (those below `half`), whose difference from the second
+/// half estimates the pixel's noise. The sum of all is taken in the same
+/// order with or without the halves: the image does not change.
+#[derive(Clone, Copy, Debug)]
+struct Sums {
+    all: Rgb,
+    first: Rgb,
+    half: u32,
+}
+
+impl Sums {
+    fn new(samples: u32) -> Sums {
+        Sums {
+            all: Rgb::ZERO,
+            first: Rgb::ZERO,
+            half: samples / 2,
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, sample: u32, value: Rgb) {
+        self.all += value;
+        if sample < self.half {
+            self.first += value;
+        }
+    }
 }
 
 /// Adds a sample's value to its pixel's sum. `CHECKED`, a value that is
@@ -586,13 +652,13 @@ fn checked_culled_samples(
 /// sum is no longer finite: the caller checks the sum).
 #[inline(always)]
 fn add_sample<const CHECKED: bool>(
-    sum: &mut Rgb,
+    sum: &mut Sums,
     value: Rgb,
     (x, y, sample): (u32, u32, u32),
     stats: &mut Stats,
 ) {
     if !CHECKED || value.is_finite() {
-        *sum += value;
+        sum.add(sample, value);
     } else {
         stats.record_nonfinite(x, y, sample);
     }
@@ -606,7 +672,7 @@ fn add_sample<const CHECKED: bool>(
 #[inline(always)]
 fn arc_in_lanes<const CHECKED: bool, const N: usize>(
     (context, pixel, arc, walls, of_arc): (&Context, &Pixel, usize, &[u32], StepBy<Range<u32>>),
-    sum: &mut Rgb,
+    sum: &mut Sums,
     stats: &mut Stats,
 ) {
     let trace = &context.trace;

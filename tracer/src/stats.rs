@@ -4,7 +4,7 @@ use std::fmt;
 
 /// What a render did: rays by kind, paths by how they ended, and samples
 /// whose estimate was not finite.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Stats {
     /// Receiver points drawn on the floor (one per pixel sample).
     pub camera_samples: u64,
@@ -60,6 +60,77 @@ pub struct Stats {
     /// The first such sample taken, in tile order, then in the pixel's
     /// order of samples: (x, y, sample index).
     pub first_nonfinite: Option<(u32, u32, u32)>,
+    /// The render's estimate of its own noise.
+    pub noise: Noise,
+}
+
+/// A render's estimate of its own error, from the samples themselves: each
+/// pixel's two halves of samples are two independent estimates of its
+/// value, and their difference, scaled by the halves' sizes, estimates
+/// the error of the whole. Summed over pixels in tile order.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Noise {
+    /// Pixels with an estimate (those of at least two samples).
+    pub pixels: u64,
+    /// Per channel, the sum over pixels of the estimated squared error.
+    pub error_squared: [f64; 3],
+    /// Per channel, the sum over pixels of the squared value.
+    pub value_squared: [f64; 3],
+}
+
+impl Noise {
+    /// Adds a pixel whose halves differ by `difference` (in image units),
+    /// of value `value`; `weight` is `n1 n2 / n^2` for halves of `n1` and
+    /// `n2` of `n` samples (a quarter for equal halves).
+    pub fn add(&mut self, difference: crate::Rgb, value: crate::Rgb, weight: f64) {
+        if !(difference.is_finite() && value.is_finite()) {
+            return;
+        }
+        self.pixels += 1;
+        for c in 0..3 {
+            self.error_squared[c] += difference[c] * difference[c] * weight;
+            self.value_squared[c] += value[c] * value[c];
+        }
+    }
+
+    pub fn merge(&mut self, other: &Noise) {
+        self.pixels += other.pixels;
+        for c in 0..3 {
+            self.error_squared[c] += other.error_squared[c];
+            self.value_squared[c] += other.value_squared[c];
+        }
+    }
+
+    /// The estimated relative RMS error over every pixel and channel (as
+    /// `flatray converge` measures it against a reference), if any pixel
+    /// had an estimate and the image is not black.
+    pub fn relative(&self) -> Option<f64> {
+        let error: f64 = self.error_squared.iter().sum();
+        let value: f64 = self.value_squared.iter().sum();
+        (self.pixels > 0 && value > 0.0).then(|| (error / value).sqrt())
+    }
+
+    /// The same, per channel.
+    pub fn relative_per_channel(&self) -> Option<[f64; 3]> {
+        (self.pixels > 0).then(|| {
+            std::array::from_fn(|c| {
+                if self.value_squared[c] > 0.0 {
+                    (self.error_squared[c] / self.value_squared[c]).sqrt()
+                } else {
+                    0.0
+                }
+            })
+        })
+    }
+}
+
+impl fmt::Display for Noise {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.relative() {
+            Some(r) => write!(f, "about {:.2} % relative RMS error", r * 100.0),
+            None => write!(f, "not estimated (it takes at least 2 samples per pixel)"),
+        }
+    }
 }
 
 impl Stats {
@@ -98,6 +169,7 @@ impl Stats {
         if self.first_nonfinite.is_none() {
             self.first_nonfinite = other.first_nonfinite;
         }
+        self.noise.merge(&other.noise);
     }
 
     /// All rays cast.
@@ -135,6 +207,7 @@ impl fmt::Display for StatsSummary<'_> {
         writeln!(f, "  glass            {:>14}", s.glass_events)?;
         writeln!(f, "cache")?;
         writeln!(f, "  wall bytes       {:>14}", s.memo_bytes)?;
+        write_noise(f, &s.noise)?;
         write!(f, "non-finite samples {:>14}", s.nonfinite_samples)?;
         if let Some((x, y, k)) = s.first_nonfinite {
             write!(f, " (first: pixel ({x}, {y}), sample {k})")?;
@@ -171,10 +244,29 @@ impl fmt::Display for Stats {
         writeln!(f, "  wall hits        {:>14}", self.memo_lookups)?;
         writeln!(f, "  floor reuses     {:>14}", self.floor_memo_reuses)?;
         writeln!(f, "  floor shared     {:>14}", self.floor_shared_visibility)?;
+        write_noise(f, &self.noise)?;
         write!(f, "non-finite samples {:>14}", self.nonfinite_samples)?;
         if let Some((x, y, s)) = self.first_nonfinite {
             write!(f, " (first: pixel ({x}, {y}), sample {s})")?;
         }
         Ok(())
+    }
+}
+
+/// The noise estimate, overall and per channel.
+fn write_noise(f: &mut fmt::Formatter<'_>, noise: &Noise) -> fmt::Result {
+    writeln!(f, "noise (estimated from two halves of the samples)")?;
+    match (noise.relative(), noise.relative_per_channel()) {
+        (Some(all), Some([r, g, b])) => {
+            writeln!(f, "  relative RMS     {:>13.3}%", all * 100.0)?;
+            writeln!(
+                f,
+                "  red, green, blue {:>5.3}%, {:.3}%, {:.3}%",
+                r * 100.0,
+                g * 100.0,
+                b * 100.0
+            )
+        }
+        _ => writeln!(f, "  not estimated (at least 2 samples per pixel)"),
     }
 }
