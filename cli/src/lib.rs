@@ -132,7 +132,7 @@ struct RenderArgs {
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// Samples per pixel (overrides the scene).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)), conflicts_with_all = ["target_error", "time"])]
     spp: Option<u32>,
     /// Most wall reflections between a light and the floor (overrides the scene).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
@@ -159,6 +159,16 @@ struct RenderArgs {
     /// Print counts of rays, paths and seconds per phase.
     #[arg(long)]
     stats: bool,
+    /// Render until the estimated noise (relative RMS error) is at most
+    /// this many percent: a short first pass measures the noise, the next
+    /// renders anew with the samples that should reach it. The image is
+    /// exactly the single render with the samples reached.
+    #[arg(long, value_name = "PERCENT")]
+    target_error: Option<f64>,
+    /// Render with as many samples as fit in this many seconds (with
+    /// --target-error: stop at whichever comes first).
+    #[arg(long, value_name = "SECONDS")]
+    time: Option<f64>,
     /// With --stats: also how the work was done (the full plan, culling,
     /// cache hits, shared shadow rays).
     #[arg(long, short)]
@@ -496,19 +506,37 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let pixels = width as u64 * height as u64;
     let loaded_at = Instant::now();
 
-    let total = pixels * options.samples as u64;
-    let bar = progress_bar(total, args.quiet, "rendering");
-    let progress = |n: u64| bar.inc(n);
-
-    let rendered = match args.threads {
-        None => flatray_tracer::render(&loaded.scene, &options, &progress),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n as usize)
-            .build()
-            .map_err(|e| Failure::other(format!("cannot start {n} threads: {e}")))?
-            .install(|| flatray_tracer::render(&loaded.scene, &options, &progress)),
+    let pool = match args.threads {
+        None => None,
+        Some(n) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n as usize)
+                .build()
+                .map_err(|e| Failure::other(format!("cannot start {n} threads: {e}")))?,
+        ),
     };
-    bar.finish_and_clear();
+    // One render of `samples` samples per pixel, with its progress bar.
+    let render_at = |samples: u32, what: &str| {
+        let options = RenderOptions { samples, ..options };
+        let bar = progress_bar(pixels * samples as u64, args.quiet, what);
+        let progress = |n: u64| bar.inc(n);
+        let rendered = match &pool {
+            None => flatray_tracer::render(&loaded.scene, &options, &progress),
+            Some(pool) => {
+                pool.install(|| flatray_tracer::render(&loaded.scene, &options, &progress))
+            }
+        };
+        bar.finish_and_clear();
+        rendered
+    };
+    let (rendered, options, passes) = match (args.target_error, args.time) {
+        (None, None) => (render_at(options.samples, "rendering"), options, 1),
+        (target, time) => {
+            let (rendered, samples, passes) =
+                render_to_target(&render_at, target.map(|t| t / 100.0), time, loaded_at)?;
+            (rendered, RenderOptions { samples, ..options }, passes)
+        }
+    };
     let rendered_at = Instant::now();
 
     if args.draw_walls {
@@ -522,11 +550,16 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
 
     let _ = writeln!(
         out,
-        "wrote {} ({width} x {height}, {} spp, {} bounce{}) in {:.2} s; noise {}",
+        "wrote {} ({width} x {height}, {} spp, {} bounce{}{}) in {:.2} s; noise {}",
         output.display(),
         options.samples,
         options.bounces,
         if options.bounces == 1 { "" } else { "s" },
+        if passes > 1 {
+            format!(", {passes} passes")
+        } else {
+            String::new()
+        },
         (written_at - started).as_secs_f64(),
         rendered.stats.noise
     );
@@ -600,6 +633,70 @@ fn import(args: ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let _ = writeln!(out, "wrote {} ({imported})", output.display());
     Ok(())
 }
+
+/// Renders until the estimated relative noise is at most `target`, or
+/// until `time` seconds from `since` would be exceeded: a first pass of
+/// [`FIRST_PASS`] samples measures the noise and the seconds per sample,
+/// and each next pass renders anew with the samples predicted to reach
+/// the target within the time left. Returns the last render, its samples and the
+/// number of passes. Every pass is a complete render: the image is the
+/// single render with those samples, bit for bit.
+fn render_to_target(
+    render_at: &dyn Fn(u32, &str) -> flatray_tracer::Rendered,
+    target: Option<f64>,
+    time: Option<f64>,
+    since: Instant,
+) -> Result<(flatray_tracer::Rendered, u32, u32), Failure> {
+    if let Some(t) = target
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(Failure::usage(format!(
+            "--target-error: expected a percentage > 0, found {}",
+            t * 100.0
+        )));
+    }
+    if let Some(t) = time
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(Failure::usage(format!(
+            "--time: expected seconds > 0, found {t}"
+        )));
+    }
+    let max = flatray_io::format::MAX_SAMPLES;
+    let mut samples = FIRST_PASS;
+    let mut passes = 0;
+    loop {
+        let started = Instant::now();
+        let rendered = render_at(samples, &format!("pass {} ({samples} spp)", passes + 1));
+        passes += 1;
+        let per_sample = started.elapsed().as_secs_f64() / samples as f64;
+        let noise = rendered.stats.noise.relative();
+        // Samples the target asks for, and samples the time leaves room for.
+        let wanted = match (target, noise) {
+            // Noise falls as samples^-0.5 (independent samples) to about
+            // samples^-0.7 (stratified paths, whose estimate from few
+            // samples also runs high): aim by 1.5, between the two; a pass
+            // that falls short is followed by another.
+            (Some(t), Some(e)) if e > t => (samples as f64 * (e / t).powf(1.5)).ceil(),
+            (Some(_), Some(_)) => return Ok((rendered, samples, passes)),
+            (Some(_), None) => samples as f64 * 4.0,
+            (None, _) => f64::INFINITY,
+        };
+        let affordable = match time {
+            Some(t) => ((t - since.elapsed().as_secs_f64()) / per_sample.max(1e-12)).floor(),
+            None => f64::INFINITY,
+        };
+        let next = wanted.min(affordable).min(max as f64);
+        if next <= samples as f64 || passes >= 8 {
+            return Ok((rendered, samples, passes));
+        }
+        samples = next as u32;
+    }
+}
+
+/// The samples per pixel of the first pass of `--target-error` and
+/// `--time`: enough for a noise estimate that does not run far high.
+const FIRST_PASS: u32 = 16;
 
 /// The image size at `scale`, or a usage error when it is more than
 /// flatray renders.

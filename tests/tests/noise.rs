@@ -66,3 +66,59 @@ fn one_sample_per_pixel_has_no_estimate_and_the_image_does_not_change() {
         "not estimated (it takes at least 2 samples per pixel)"
     );
 }
+
+/// `--target-error` stops at or below its target, and its image is the
+/// single render with the samples it reached, to the bit.
+#[test]
+fn a_target_error_is_met_and_the_image_is_the_single_render() {
+    let dir = flatray_tests::TempDir::new("target-error");
+    let scene = workspace_root().join("scenes/first-flat.ron");
+    let scene = scene.to_str().unwrap_or_default();
+    let target = dir.path().join("target.exr");
+    let run = flatray_tests::flatray(&[
+        "render",
+        scene,
+        "-q",
+        "--scale",
+        "0.25",
+        "--target-error",
+        "2",
+        "-o",
+        target.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(run.code, 0, "{run:?}");
+    // "wrote ... (100 x 75, N spp, 2 bounces, K passes) in ... s; noise about E % ..."
+    let number_before = |marker: &str| -> f64 {
+        let end = run.stdout.find(marker).unwrap_or_else(|| panic!("{run:?}"));
+        let start = run.stdout[..end].rfind([' ', '(']).map_or(0, |k| k + 1);
+        run.stdout[start..end]
+            .trim()
+            .parse()
+            .unwrap_or_else(|e| panic!("{e}: {run:?}"))
+    };
+    let spp = number_before(" spp") as u32;
+    let noise = number_before(" % relative");
+    assert!(noise <= 2.0, "{run:?}");
+    assert!(
+        spp > 16,
+        "the first pass alone should not reach 2 %: {run:?}"
+    );
+    let single = dir.path().join("single.exr");
+    let run = flatray_tests::flatray(&[
+        "render",
+        scene,
+        "-q",
+        "--scale",
+        "0.25",
+        "--spp",
+        &spp.to_string(),
+        "-o",
+        single.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(run.code, 0, "{run:?}");
+    let read = |p: &std::path::Path| flatray_io::read_exr(p).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        read(&target) == read(&single),
+        "the passes' image differs from the single render"
+    );
+}
