@@ -299,6 +299,9 @@ impl<'a> Checked<'a> {
         }
         match self.failed {
             None => Ok(()),
+            // The reader has gone (`flatray plan | head -3`): nothing is
+            // lost that anyone reads, as for any command-line tool.
+            Some(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
             Some(e) => Err(Failure::other(format!(
                 "cannot write to standard output: {e}"
             ))),

@@ -278,6 +278,17 @@ pub(crate) fn parse_hex_color(text: &str) -> Option<[f64; 3]> {
     Some(linear(rgb))
 }
 
+/// The edges of a polyline, and its closing edge when closed; none of
+/// zero length.
+pub(crate) fn edges(points: &[DVec2], closed: bool) -> Vec<(DVec2, DVec2)> {
+    let mut out: Vec<(DVec2, DVec2)> = points.windows(2).map(|w| (w[0], w[1])).collect();
+    if closed && points.len() > 2 {
+        out.push((points[points.len() - 1], points[0]));
+    }
+    out.retain(|(a, b)| a != b);
+    out
+}
+
 /// Points `(x, y)`, in order, simplified by Douglas-Peucker to within
 /// `tolerance`: the first and last are kept.
 pub(crate) fn simplify(points: &[DVec2], tolerance: f64) -> Vec<DVec2> {

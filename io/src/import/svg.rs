@@ -10,7 +10,7 @@ use usvg::tiny_skia_path::PathSegment;
 
 use super::{
     ImportError, ImportOptions, Imported, ImportedFloor, ImportedGlass, ImportedLight,
-    ImportedWall, LAMP_INTENSITY, LINE_INTENSITY, WallKind, invalid, linear,
+    ImportedWall, LAMP_INTENSITY, LINE_INTENSITY, WallKind, edges, invalid, linear,
 };
 
 /// What an element's `id` (or its group's) makes of it.
@@ -393,15 +393,4 @@ impl Reader<'_> {
             Mark::Skip => {}
         }
     }
-}
-
-/// The edges of a polyline, and its closing edge when closed; none of
-/// zero length.
-fn edges(points: &[DVec2], closed: bool) -> Vec<(DVec2, DVec2)> {
-    let mut out: Vec<(DVec2, DVec2)> = points.windows(2).map(|w| (w[0], w[1])).collect();
-    if closed && points.len() > 2 {
-        out.push((points[points.len() - 1], points[0]));
-    }
-    out.retain(|(a, b)| a != b);
-    out
 }

@@ -10,7 +10,7 @@ use serde_json::Value;
 
 use super::{
     ImportError, ImportOptions, Imported, ImportedFloor, ImportedGlass, ImportedLight,
-    ImportedWall, LAMP_INTENSITY, LINE_INTENSITY, WallKind, invalid, parse_hex_color,
+    ImportedWall, LAMP_INTENSITY, LINE_INTENSITY, WallKind, edges, invalid, parse_hex_color,
 };
 
 /// The shape of a Tiled object.
@@ -438,7 +438,7 @@ fn build(
                         source: object.label(),
                     });
                 } else {
-                    for (a, b) in segments(&points, false) {
+                    for (a, b) in edges(&points, false) {
                         lights.push(ImportedLight::Line {
                             a,
                             b,
@@ -489,7 +489,7 @@ fn build(
                 .number("emit")
                 .filter(|&i| i > 0.0)
                 .map(|i| (colour.unwrap_or([1.0; 3]), i));
-            for (a, b) in segments(&points, closed) {
+            for (a, b) in edges(&points, closed) {
                 walls.push(ImportedWall {
                     a,
                     b,
@@ -526,13 +526,4 @@ fn build(
         warnings,
         floor_file: None,
     })
-}
-
-fn segments(points: &[DVec2], closed: bool) -> Vec<(DVec2, DVec2)> {
-    let mut out: Vec<(DVec2, DVec2)> = points.windows(2).map(|w| (w[0], w[1])).collect();
-    if closed && points.len() > 2 {
-        out.push((points[points.len() - 1], points[0]));
-    }
-    out.retain(|(a, b)| a != b);
-    out
 }
