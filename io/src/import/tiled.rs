@@ -426,6 +426,10 @@ fn build(
                 continue;
             };
             let points: Vec<DVec2> = points.into_iter().map(world).collect();
+            if points.is_empty() {
+                warnings.push(format!("{}: a shape without points", object.label()));
+                continue;
+            }
             let colour = object.color();
             if is_lights {
                 let intensity = object.number("intensity");
