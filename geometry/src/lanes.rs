@@ -24,14 +24,26 @@ pub enum Kernel {
 }
 
 impl Kernel {
-    /// The fastest kernel this processor runs.
+    /// The fastest kernel this processor runs: the scalar one when the
+    /// portable code is forced ([`portable_forced`]).
     pub fn detect() -> Kernel {
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx") {
+        if !portable_forced() && std::is_x86_feature_detected!("avx") {
             return Kernel::Avx;
         }
         Kernel::Scalar
     }
+}
+
+/// Whether the environment variable `FLATRAY_PORTABLE` is set (to
+/// anything but empty or `0`): then only the code that runs on every
+/// processor is used, as on a processor without AVX. The answers are the
+/// same either way; tests run both (`.ci/run`). Read once per process.
+pub fn portable_forced() -> bool {
+    static FORCED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *FORCED.get_or_init(|| {
+        std::env::var_os("FLATRAY_PORTABLE").is_some_and(|v| !v.is_empty() && v != "0")
+    })
 }
 
 /// Endpoints, edges and original indices, padded to whole blocks.

@@ -33,8 +33,8 @@ mod cull;
 mod lanes;
 mod segment_set;
 pub use cull::{ArcCandidates, HitLanes, MAX_HULL_POINTS, RayLanes, hull_candidates};
-pub use lanes::Kernel;
-pub use segment_set::{BVH_THRESHOLD, BVH_THRESHOLD_AVX, SegmentSet, Skip, Strategy};
+pub use lanes::{Kernel, portable_forced};
+pub use segment_set::{BVH_THRESHOLD, SegmentSet, Skip, Strategy};
 
 /// The 2D cross product (perp dot product) `a.x * b.y - a.y * b.x`.
 ///

@@ -38,14 +38,15 @@ pub enum Strategy {
     Bvh,
 }
 
-/// Sets with more segments than this use a BVH by default, when brute
-/// force runs the scalar kernel (measured: see `docs/performance.md`).
-pub const BVH_THRESHOLD: usize = 8;
-/// The same with the AVX kernel, which tests four segments for little more
-/// than the price of one: brute force beats the BVH on a room's 13 walls
-/// by a quarter, and on 32 walls spread over a room by a third (`cargo
-/// bench -p flatray-benches --bench render -- bvh_threshold`).
-pub const BVH_THRESHOLD_AVX: usize = 32;
+/// Sets with more segments than this use a BVH by default, on every
+/// processor, so that a render's plan (and with it which rays are culled)
+/// does not depend on the processor. Brute force with the AVX kernel,
+/// which tests four segments for little more than the price of one, beats
+/// the BVH on a room's 13 walls by a quarter, and on 32 walls spread over
+/// a room by a third (`cargo bench -p flatray-benches --bench render --
+/// bvh_threshold`); the scalar kernel is slower there, but culled queries
+/// test only a few walls each.
+pub const BVH_THRESHOLD: usize = 32;
 
 /// The segments of a scene, stored once, queried by brute force or through
 /// a BVH.
@@ -85,14 +86,10 @@ const MAX_SAH_DEPTH: usize = 64;
 const STACK: usize = MAX_SAH_DEPTH + 40;
 
 impl SegmentSet {
-    /// A set that picks its strategy by size, and the fastest kernel the
-    /// processor runs.
+    /// A set that picks its strategy by size alone ([`BVH_THRESHOLD`]),
+    /// and the fastest kernel the processor runs.
     pub fn new(segments: Vec<Segment>) -> SegmentSet {
-        let threshold = match detected() {
-            Kernel::Scalar => BVH_THRESHOLD,
-            Kernel::Avx => BVH_THRESHOLD_AVX,
-        };
-        let strategy = if segments.len() > threshold {
+        let strategy = if segments.len() > BVH_THRESHOLD {
             Strategy::Bvh
         } else {
             Strategy::BruteForce

@@ -264,7 +264,7 @@ fn render_pixel_avx2(
 /// The fastest [`render_pixel`] this processor runs.
 fn pixel_fn() -> PixelFn {
     #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx2") {
+    if !flatray_geometry::portable_forced() && is_x86_feature_detected!("avx2") {
         return |context, x, y, culled, batch, stats| {
             // SAFETY: the processor has AVX2, checked just above.
             unsafe { render_pixel_avx2(context, x, y, culled, batch, stats) }
