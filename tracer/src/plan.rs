@@ -423,7 +423,7 @@ impl Plan {
 
 impl Plan {
     /// The plan for a user: the effects simulated and skipped, without how
-    /// the work is done (`{:#}` of the plan, or [`Plan::verbose`], has it all).
+    /// the work is done ([`Plan::verbose`], and `Display`, have it all).
     pub fn summary(&self) -> impl fmt::Display + '_ {
         PlanText {
             plan: self,
@@ -465,16 +465,9 @@ impl fmt::Display for PlanText<'_> {
     }
 }
 
+/// Every effect, as [`Plan::verbose`].
 impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let width = self.effects.iter().map(|e| e.name.len()).max().unwrap_or(0);
-        for (k, e) in self.effects.iter().enumerate() {
-            if k > 0 {
-                writeln!(f)?;
-            }
-            let mark = if e.runs { "runs   " } else { "skipped" };
-            write!(f, "{mark}  {:<width$}  {}", e.name, e.why)?;
-        }
-        Ok(())
+        self.verbose().fmt(f)
     }
 }

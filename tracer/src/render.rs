@@ -329,8 +329,8 @@ fn render_pixel(
     let step = pixel.step;
     let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
     let mut direct = Rgb::ZERO;
+    let grid = floor_grid(&options.memo, options.samples);
     if floor_memo {
-        let grid = floor_grid(&options.memo, options.samples);
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
         let visibility = &mut batch.visibility;
@@ -407,7 +407,7 @@ fn render_pixel(
     let (n, first) = (options.samples, sums.half);
     if first > 0 {
         let (direct_first, direct_second) = if floor_memo {
-            strata_halves(&batch.floor.values, floor_grid(&options.memo, n))
+            strata_halves(&batch.floor.values, grid)
         } else {
             (Rgb::ZERO, Rgb::ZERO)
         };

@@ -183,20 +183,44 @@ impl Stats {
     /// events, the cache's size, samples left out. `Display` adds the work
     /// counters (culling, cache hits and reuses).
     pub fn summary(&self) -> impl fmt::Display + '_ {
-        StatsSummary(self)
+        StatsText {
+            stats: self,
+            verbose: false,
+        }
     }
 }
 
-struct StatsSummary<'a>(&'a Stats);
-
-impl fmt::Display for StatsSummary<'_> {
+/// Every count, the work counters too.
+impl fmt::Display for Stats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = self.0;
+        StatsText {
+            stats: self,
+            verbose: true,
+        }
+        .fmt(f)
+    }
+}
+
+/// The counts as text; the work counters only when `verbose`.
+struct StatsText<'a> {
+    stats: &'a Stats,
+    verbose: bool,
+}
+
+impl fmt::Display for StatsText<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (s, verbose) = (self.stats, self.verbose);
         writeln!(f, "rays")?;
         writeln!(f, "  camera samples   {:>14}", s.camera_samples)?;
         writeln!(f, "  shadow rays      {:>14}", s.shadow_rays)?;
         writeln!(f, "  bounce rays      {:>14}", s.bounce_rays)?;
         writeln!(f, "  light paths      {:>14}", s.light_paths)?;
+        if verbose {
+            writeln!(f, "  culled rays      {:>14}", s.culled_rays)?;
+            writeln!(f, "  walls tested     {:>14}", s.culled_walls_tested)?;
+            writeln!(f, "  arc has no wall  {:>14}", s.culled_empty)?;
+            writeln!(f, "  culled off mirrors {:>12}", s.culled_mirror_rays)?;
+        }
         writeln!(f, "paths ended by")?;
         writeln!(f, "  escaping         {:>14}", s.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", s.paths_bounce_limit)?;
@@ -205,49 +229,25 @@ impl fmt::Display for StatsSummary<'_> {
         writeln!(f, "  mirror bounces   {:>14}", s.mirror_reflections)?;
         writeln!(f, "  transparent      {:>14}", s.transparent_passes)?;
         writeln!(f, "  glass            {:>14}", s.glass_events)?;
+        if verbose {
+            writeln!(f, "  floor albedo     {:>14}", s.floor_albedo_reads)?;
+            writeln!(f, "  emission tests   {:>14}", s.emission_tests)?;
+        }
         writeln!(f, "cache")?;
+        if verbose {
+            writeln!(f, "  wall entries     {:>14}", s.memo_entries)?;
+        }
         writeln!(f, "  wall bytes       {:>14}", s.memo_bytes)?;
+        if verbose {
+            writeln!(f, "  fill rays        {:>14}", s.memo_fill_rays)?;
+            writeln!(f, "  wall hits        {:>14}", s.memo_lookups)?;
+            writeln!(f, "  floor reuses     {:>14}", s.floor_memo_reuses)?;
+            writeln!(f, "  floor shared     {:>14}", s.floor_shared_visibility)?;
+        }
         write_noise(f, &s.noise)?;
         write!(f, "non-finite samples {:>14}", s.nonfinite_samples)?;
         if let Some((x, y, k)) = s.first_nonfinite {
             write!(f, " (first: pixel ({x}, {y}), sample {k})")?;
-        }
-        Ok(())
-    }
-}
-
-impl fmt::Display for Stats {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "rays")?;
-        writeln!(f, "  camera samples   {:>14}", self.camera_samples)?;
-        writeln!(f, "  shadow rays      {:>14}", self.shadow_rays)?;
-        writeln!(f, "  bounce rays      {:>14}", self.bounce_rays)?;
-        writeln!(f, "  light paths      {:>14}", self.light_paths)?;
-        writeln!(f, "  culled rays      {:>14}", self.culled_rays)?;
-        writeln!(f, "  walls tested     {:>14}", self.culled_walls_tested)?;
-        writeln!(f, "  arc has no wall  {:>14}", self.culled_empty)?;
-        writeln!(f, "  culled off mirrors {:>12}", self.culled_mirror_rays)?;
-        writeln!(f, "paths ended by")?;
-        writeln!(f, "  escaping         {:>14}", self.paths_escaped)?;
-        writeln!(f, "  bounce limit     {:>14}", self.paths_bounce_limit)?;
-        writeln!(f, "  absorption       {:>14}", self.paths_absorbed)?;
-        writeln!(f, "events")?;
-        writeln!(f, "  mirror bounces   {:>14}", self.mirror_reflections)?;
-        writeln!(f, "  transparent      {:>14}", self.transparent_passes)?;
-        writeln!(f, "  glass            {:>14}", self.glass_events)?;
-        writeln!(f, "  floor albedo     {:>14}", self.floor_albedo_reads)?;
-        writeln!(f, "  emission tests   {:>14}", self.emission_tests)?;
-        writeln!(f, "cache")?;
-        writeln!(f, "  wall entries     {:>14}", self.memo_entries)?;
-        writeln!(f, "  wall bytes       {:>14}", self.memo_bytes)?;
-        writeln!(f, "  fill rays        {:>14}", self.memo_fill_rays)?;
-        writeln!(f, "  wall hits        {:>14}", self.memo_lookups)?;
-        writeln!(f, "  floor reuses     {:>14}", self.floor_memo_reuses)?;
-        writeln!(f, "  floor shared     {:>14}", self.floor_shared_visibility)?;
-        write_noise(f, &self.noise)?;
-        write!(f, "non-finite samples {:>14}", self.nonfinite_samples)?;
-        if let Some((x, y, s)) = self.first_nonfinite {
-            write!(f, " (first: pixel ({x}, {y}), sample {s})")?;
         }
         Ok(())
     }
