@@ -491,30 +491,51 @@ fn falloff(f: FalloffSpec) -> Falloff {
 /// 24 bytes: 384 MiB), checked from its header before it is decoded.
 pub const MAX_FLOOR_TEXELS: u64 = 1 << 24;
 
-fn load_floor_image(path: &PathBuf) -> Result<Floor, String> {
-    let cannot =
-        |e: &dyn std::fmt::Display| format!("cannot load the floor image {}: {e}", path.display());
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| cannot(&e))?
-        .with_guessed_format()
-        .map_err(|e| cannot(&e))?;
-    let (width, height) = reader.into_dimensions().map_err(|e| cannot(&e))?;
-    if width as u64 * height as u64 > MAX_FLOOR_TEXELS {
-        return Err(format!(
-            "the floor image {} is {width} x {height} pixels, more than the {MAX_FLOOR_TEXELS} flatray reads: scale it down (one texel per pixel of the canvas is plenty)",
-            path.display()
-        ));
+/// Why an image could not be decoded.
+pub(crate) enum ImageFailure {
+    /// Its header gives more pixels than allowed: width, height.
+    TooLarge(u32, u32),
+    /// Not an image, or not one the decoders read.
+    Unreadable(String),
+}
+
+/// Decodes the image in `bytes`, refusing from its header, before
+/// anything is decoded, one of more than `max_pixels`, and decoding under
+/// an allocation limit to match.
+pub(crate) fn decode_within(
+    bytes: &[u8],
+    max_pixels: u64,
+) -> Result<image::DynamicImage, ImageFailure> {
+    let unreadable = |e: image::ImageError| ImageFailure::Unreadable(e.to_string());
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| ImageFailure::Unreadable(e.to_string()))
+    };
+    let (width, height) = reader()?.into_dimensions().map_err(unreadable)?;
+    if width as u64 * height as u64 > max_pixels {
+        return Err(ImageFailure::TooLarge(width, height));
     }
-    let mut reader = image::ImageReader::open(path)
-        .map_err(|e| cannot(&e))?
-        .with_guessed_format()
-        .map_err(|e| cannot(&e))?;
+    let mut reader = reader()?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(width);
     limits.max_image_height = Some(height);
-    limits.max_alloc = Some(MAX_FLOOR_TEXELS * 16);
+    limits.max_alloc = Some(max_pixels * 16);
     reader.limits(limits);
-    let decoded = reader.decode().map_err(|e| cannot(&e))?;
+    reader.decode().map_err(unreadable)
+}
+
+fn load_floor_image(path: &PathBuf) -> Result<Floor, String> {
+    let cannot =
+        |e: &dyn std::fmt::Display| format!("cannot load the floor image {}: {e}", path.display());
+    let bytes = std::fs::read(path).map_err(|e| cannot(&e))?;
+    let decoded = decode_within(&bytes, MAX_FLOOR_TEXELS).map_err(|failure| match failure {
+        ImageFailure::TooLarge(width, height) => format!(
+            "the floor image {} is {width} x {height} pixels, more than the {MAX_FLOOR_TEXELS} flatray reads: scale it down (one texel per pixel of the canvas is plenty)",
+            path.display()
+        ),
+        ImageFailure::Unreadable(e) => cannot(&e),
+    })?;
     let rgb8 = decoded.to_rgb8();
     let (width, height) = rgb8.dimensions();
     if width == 0 || height == 0 {

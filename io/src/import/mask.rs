@@ -8,6 +8,8 @@ use std::path::Path;
 
 use flatray_geometry::DVec2;
 
+use crate::load::ImageFailure;
+
 use super::{
     ImportError, ImportOptions, Imported, ImportedFloor, ImportedLight, ImportedWall,
     LAMP_INTENSITY, WallKind, invalid, simplify_loop,
@@ -22,27 +24,18 @@ pub(super) fn read(
     bytes: &[u8],
     options: &ImportOptions,
 ) -> Result<Imported, ImportError> {
-    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| invalid(path, None, format!("not an image: {e}")))?;
-    let (width, height) = reader
-        .into_dimensions()
-        .map_err(|e| invalid(path, None, format!("not a readable image: {e}")))?;
-    if width as u64 * height as u64 > MAX_MASK_PIXELS {
-        return Err(invalid(
-            path,
-            None,
-            format!(
-                "the mask is {width} x {height} pixels, more than the {MAX_MASK_PIXELS} flatray reads"
-            ),
-        ));
-    }
-    let decoded = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| invalid(path, None, format!("not an image: {e}")))?
-        .decode()
-        .map_err(|e| invalid(path, None, format!("not a readable image: {e}")))?
+    let decoded = crate::load::decode_within(bytes, MAX_MASK_PIXELS)
+        .map_err(|failure| {
+            let message = match failure {
+                ImageFailure::TooLarge(width, height) => format!(
+                    "the mask is {width} x {height} pixels, more than the {MAX_MASK_PIXELS} flatray reads"
+                ),
+                ImageFailure::Unreadable(e) => format!("not a readable image: {e}"),
+            };
+            invalid(path, None, message)
+        })?
         .to_rgba8();
+    let (width, height) = decoded.dimensions();
     let (w, h) = (width as usize, height as usize);
     let pixel = |x: usize, y: usize| decoded.get_pixel(x as u32, y as u32).0;
     let lamp = |[r, g, b, a]: [u8; 4]| a > 127 && r > 200 && g > 200 && b < 80;
