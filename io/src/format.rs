@@ -481,6 +481,18 @@ pub enum LightSpec {
         #[serde(default = "one")]
         intensity: Intensity,
     },
+    /// A disk whose rim emits outward; not a wall.
+    Circle {
+        at: Point,
+        radius: Positive,
+        #[serde(default = "white")]
+        color: Color,
+        /// The rim's radiance.
+        #[serde(default = "one")]
+        intensity: Intensity,
+        #[serde(default)]
+        falloff: Option<FalloffSpec>,
+    },
 }
 
 #[derive(Debug, Deserialize)]

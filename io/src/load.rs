@@ -10,6 +10,7 @@ use flatray_tracer::{Integrator, MemoOptions, RenderOptions, Rgb};
 use ron::extensions::Extensions;
 
 use crate::error::SceneError;
+use crate::format::MAX_COORDINATE;
 use crate::format::{
     Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LightSpec, MAX_CANVAS_PIXELS,
     MAX_CANVAS_SIDE, MaterialSpec, SceneFile, ToneMap,
@@ -259,6 +260,32 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                         segment,
                         one_sided,
                         wall,
+                    },
+                    color: rgb(color),
+                    intensity: intensity.0,
+                    falloff: f.map_or(default_falloff, falloff),
+                }
+            }
+            LightSpec::Circle {
+                at,
+                radius,
+                color,
+                intensity,
+                falloff: f,
+            } => {
+                if radius.0 > MAX_COORDINATE {
+                    return Err(error_at(
+                        light_at(k),
+                        format!(
+                            "expected a circle light's radius of at most {MAX_COORDINATE:e}, found {}",
+                            radius.0
+                        ),
+                    ));
+                }
+                Light {
+                    shape: LightShape::Circle {
+                        at: DVec2::new(at.0, at.1),
+                        radius: radius.0,
                     },
                     color: rgb(color),
                     intensity: intensity.0,

@@ -52,6 +52,19 @@ pub(crate) enum Coherence {
     Clear,
 }
 
+/// The kinds of light whose boundaries [`FloorCoherence::build`] knows how
+/// to draw: points, spots, suns and lines. For any other kind every pixel
+/// traces its strata, as without the masks.
+pub(crate) fn supports(shape: &LightShape) -> bool {
+    match shape {
+        LightShape::Point { .. }
+        | LightShape::Spot { .. }
+        | LightShape::Directional { .. }
+        | LightShape::Line { .. } => true,
+        LightShape::Circle { .. } => false,
+    }
+}
+
 /// Per pixel and light, a [`Coherence`].
 pub(crate) struct FloorCoherence {
     width: usize,
@@ -78,6 +91,10 @@ impl FloorCoherence {
         let to_pixels = |p: DVec2| (p - scene.canvas.origin) / step;
         let mut cells = vec![Coherence::Varies; width * height * lights];
         for (index, light) in scene.lights.iter().enumerate() {
+            if !supports(&light.shape) {
+                // Every pixel traces its strata for this light.
+                continue;
+            }
             let mut mask = Mask::new(width, height);
             let own = scene.light_wall[index];
             let walls = || {
@@ -104,6 +121,7 @@ impl FloorCoherence {
                         LightShape::Directional { direction } => {
                             mask.mark(e, direction / step, 0.0, f64::INFINITY);
                         }
+                        LightShape::Circle { .. } => {}
                         LightShape::Line { segment, .. } => {
                             // A wall that touches an end of the light cuts
                             // every triangle: the centre test below says
@@ -157,7 +175,13 @@ impl FloorCoherence {
                                 line_coherence(walls, centre, &segment)
                             }
                             (LightShape::Line { .. }, None) => Coherence::Varies,
-                            _ => Coherence::Same,
+                            (
+                                LightShape::Point { .. }
+                                | LightShape::Spot { .. }
+                                | LightShape::Directional { .. },
+                                _,
+                            ) => Coherence::Same,
+                            (LightShape::Circle { .. }, _) => Coherence::Varies,
                         }
                     })
                 })
@@ -355,6 +379,15 @@ pub(crate) fn centre_transmittance(
         LightShape::Line { segment, .. } => crate::light::transmittance(
             scene,
             &Ray::new(centre, segment.point_at(0.5) - centre),
+            1.0,
+            skip,
+            None,
+            stats,
+        ),
+        // Not supported (`supports`): no pixel of it is `Same`.
+        LightShape::Circle { at, .. } => crate::light::transmittance(
+            scene,
+            &Ray::new(centre, at - centre),
             1.0,
             skip,
             None,

@@ -17,6 +17,7 @@ mod coherence;
 mod glass;
 mod light;
 mod light_tracer;
+mod lights;
 mod memo;
 pub mod metrics;
 mod mirror;

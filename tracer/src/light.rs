@@ -1,9 +1,10 @@
 //! Direct light: shadow rays from a receiver point to every light.
 
-use flatray_geometry::{DVec2, Ray, Segment, Skip};
+use flatray_geometry::{DVec2, Ray, Skip};
 
-use crate::sampling::{Stream, angle_sample_lanes, sample_subtended_angle};
-use crate::scene::{EMITTING_SIDE, LightShape, Material, Scene, lies_on_line};
+use crate::lights::arriving;
+use crate::sampling::{Stream, angle_sample_lanes};
+use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
 /// Who receives the light: the floor (no cosine, every direction) or one
@@ -38,14 +39,6 @@ impl<'a> Receiver<'a> {
     }
 
     #[inline]
-    fn cosine(&self, to_light: DVec2) -> f64 {
-        match self.normal {
-            None => 1.0,
-            Some(n) => n.dot(to_light).max(0.0),
-        }
-    }
-
-    #[inline]
     fn skip(&self, light_wall: Option<u32>) -> Skip {
         Skip(
             self.wall.unwrap_or(u32::MAX),
@@ -77,8 +70,8 @@ impl Visibility {
 }
 
 /// The light that reaches `x` directly from every light: fluence for the
-/// floor, irradiance for a wall side. One shadow ray per light; line
-/// lights draw one number from `stream`.
+/// floor, irradiance for a wall side. One shadow ray per light; each light
+/// draws its numbers from `stream` (`LightShape::numbers`).
 pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
@@ -104,21 +97,30 @@ pub(crate) fn direct_light_with(
 ) -> Rgb {
     let mut sum = Rgb::ZERO;
     for index in 0..scene.lights.len() {
-        let u = match scene.lights[index].shape {
-            LightShape::Line { .. } => stream.uniform(),
-            _ => 0.0,
-        };
+        let u = light_number(&scene.lights[index], stream);
         sum += light_contribution(scene, index, x, receiver, u, vis(index), stats);
     }
     sum
 }
 
-/// The floor memo's points in one pixel, with what their line lights draw.
+/// The number a light's sample takes from `stream`, or 0 for a light that
+/// takes none.
+#[inline]
+pub(crate) fn light_number(light: &Light, stream: &mut Stream) -> f64 {
+    if light.shape.numbers() > 0 {
+        stream.uniform()
+    } else {
+        0.0
+    }
+}
+
+/// The floor memo's points in one pixel, with the numbers their lights
+/// draw.
 #[derive(Default)]
 pub(crate) struct Strata {
     pub points: Vec<DVec2>,
-    /// For point `k`, the number that each line light draws (in the
-    /// lights' order): `lines` numbers per point.
+    /// For point `k`, the number each light that takes one draws (in the
+    /// lights' order): that many numbers per point.
     pub numbers: Vec<f64>,
     /// The direct light at each point.
     pub values: Vec<Rgb>,
@@ -130,13 +132,16 @@ const ANGLE_LANES: usize = 4;
 /// [`direct_light_with`] at every point of `strata`, on the floor, each
 /// value computed exactly as it would be there (the same operations in
 /// the same order), but light by light over all points, so that work on
-/// one light runs without the branches of the others, and the floor's
-/// most common case, a point light whose visibility is known, runs in a
-/// loop of its own.
+/// one light runs without the branches of the others.
+///
+/// Two kinds have loops of their own, named here: a point light whose
+/// visibility is known (the floor's most common case), and line lights,
+/// whose angle samples are drawn in lanes of points. Every other light
+/// goes through [`light_contribution`], point by point.
 /// With `shadow_walls` (per light: the walls its shadow rays from these
 /// points can cross, or `None` for every wall), shadow rays test only
-/// those. Inlined always, with the line lights' angle samples: into the
-/// pixel loop compiled with AVX2, it runs 3 % fewer instructions there.
+/// those. Inlined always, with the line lights' angle samples, into the
+/// pixel loop compiled with AVX2.
 #[inline(always)]
 pub(crate) fn direct_light_strata(
     scene: &Scene,
@@ -152,35 +157,36 @@ pub(crate) fn direct_light_strata(
     } = strata;
     values.clear();
     values.resize(points.len(), Rgb::ZERO);
-    let lines = scene
-        .lights
-        .iter()
-        .filter(|l| matches!(l.shape, LightShape::Line { .. }))
-        .count();
-    let mut line = 0;
+    let per_point: usize = scene.lights.iter().map(|l| l.shape.numbers()).sum();
+    let mut number = 0;
+    let receiver = Receiver {
+        shadow_walls,
+        ..Receiver::FLOOR
+    };
+    let r0 = scene.small_radius;
     for (index, light) in scene.lights.iter().enumerate() {
         let vis = visibility[index];
+        let taken = number;
+        number += light.shape.numbers();
         if vis == Visibility::Known(Rgb::ZERO) {
             // A pixel in the light's full shadow (the coherence masks
             // keep out the pixel of a point light itself, the one point
             // that ignores its transmittance): every stratum would add
             // exactly +0, a zero transmittance times a finite value.
-            // The numbers were drawn all the same: no other light's change.
-            if let LightShape::Line { .. } = light.shape {
-                line += 1;
-            }
             continue;
         }
         match (light.shape, vis) {
             (LightShape::Point { at }, Visibility::Known(known)) => {
-                let (intensity, falloff, r0) = (light.intensity, light.falloff, scene.small_radius);
                 for (value, &x) in values.iter_mut().zip(points.iter()) {
                     // As `light_contribution` computes it for the floor.
-                    let r = (at - x).length();
-                    let v = if r == 0.0 {
-                        Rgb::splat(intensity * falloff.g(0.0, r0))
+                    let Some(s) = (LightShape::Point { at }).incident(light, x, 0.0, r0) else {
+                        continue;
+                    };
+                    let v = arriving(light.intensity, s.value, 1.0, s.pdf);
+                    let v = if s.at_the_light() {
+                        Rgb::splat(v)
                     } else {
-                        Rgb::splat(intensity * falloff.g(r, r0) * 1.0) * known
+                        Rgb::splat(v) * known
                     };
                     *value += v * light.color;
                 }
@@ -192,14 +198,8 @@ pub(crate) fn direct_light_strata(
                 _,
             ) => {
                 // As `light_contribution` computes it for the floor, with
-                // the angle samples drawn in lanes of points, and what
-                // every point shares taken out of the loop (one helper for
-                // both measured 6 % slower here); a test holds the two to
-                // the same bits.
-                let receiver = Receiver {
-                    shadow_walls,
-                    ..Receiver::FLOOR
-                };
+                // the angle samples drawn in lanes of points; a test holds
+                // the two to the same bits.
                 let skip = receiver.skip(scene.light_wall[index]);
                 let count = points.len();
                 for first in (0..count).step_by(ANGLE_LANES) {
@@ -207,13 +207,22 @@ pub(crate) fn direct_light_strata(
                     let at = |k: usize| (first + k).min(count - 1);
                     let px = std::array::from_fn(|k| points[at(k)].x);
                     let py = std::array::from_fn(|k| points[at(k)].y);
-                    let us = std::array::from_fn(|k| numbers[at(k) * lines + line]);
+                    let us = std::array::from_fn(|k| numbers[at(k) * per_point + taken]);
                     let lanes = angle_sample_lanes::<ANGLE_LANES>(&px, &py, &us, &segment);
                     for k in 0..ANGLE_LANES.min(count - first) {
                         let (x, value) = (points[first + k], &mut values[first + k]);
                         let lit = !one_sided || segment.side_of(x) == Some(EMITTING_SIDE);
                         if !(lit && lanes.valid[k]) {
-                            *value += Rgb::ZERO;
+                            continue;
+                        }
+                        let distance = lanes.distance[k];
+                        let v = arriving(
+                            light.intensity,
+                            light.falloff.per_radian(distance, r0),
+                            1.0,
+                            1.0 / lanes.subtended[k],
+                        );
+                        if v == 0.0 {
                             continue;
                         }
                         let vis = match vis {
@@ -227,37 +236,30 @@ pub(crate) fn direct_light_strata(
                                 stats,
                             ),
                         };
-                        let per_angle = light.intensity
-                            * light
-                                .falloff
-                                .per_radian(lanes.distance[k], scene.small_radius);
-                        *value +=
-                            Rgb::splat(per_angle * lanes.subtended[k] * 1.0) * vis * light.color;
+                        *value += Rgb::splat(v) * vis * light.color;
                     }
                 }
             }
-            // Spots, suns, and point lights behind shadow rays: no number.
             _ => {
-                let receiver = Receiver {
-                    shadow_walls,
-                    ..Receiver::FLOOR
-                };
-                for (value, &x) in values.iter_mut().zip(points.iter()) {
-                    *value += light_contribution(scene, index, x, receiver, 0.0, vis, stats);
+                let takes = light.shape.numbers() > 0;
+                for (k, (value, &x)) in values.iter_mut().zip(points.iter()).enumerate() {
+                    let u = if takes {
+                        numbers[k * per_point + taken]
+                    } else {
+                        0.0
+                    };
+                    *value += light_contribution(scene, index, x, receiver, u, vis, stats);
                 }
             }
-        }
-        if let LightShape::Line { .. } = light.shape {
-            line += 1;
         }
     }
 }
 
-/// The light that reaches `x` from one light, coloured, with one shadow
-/// ray (none when `vis` is known: the plan found nothing that occludes, or
-/// the floor's coherence masks know the answer).
-/// `u` in `[0, 1)` picks the point on a line light (uniform in the angle
-/// it subtends); other lights ignore it.
+/// The light that reaches `x` from one light, coloured: the light's
+/// [`Incident`] sample, times the receiver's cosine over its pdf, times
+/// the transmittance of one shadow ray (none when `vis` is known: the plan
+/// found nothing that occludes, or the floor's coherence masks know the
+/// answer). `u` in `[0, 1)` is the light's number, if it takes one.
 pub(crate) fn light_contribution(
     scene: &Scene,
     index: usize,
@@ -267,129 +269,45 @@ pub(crate) fn light_contribution(
     vis: Visibility,
     stats: &mut Stats,
 ) -> Rgb {
-    let transmittance = |ray: &Ray, t_max: f64, skip: Skip, stats: &mut Stats| match vis {
+    let light = &scene.lights[index];
+    if let Some(w) = receiver.wall
+        && light.shape.grazes(w, &scene.walls[w as usize].segment)
+    {
+        return Rgb::ZERO;
+    }
+    let Some(s) = light.shape.incident(light, x, u, scene.small_radius) else {
+        return Rgb::ZERO;
+    };
+    if s.at_the_light() {
+        // The receiver sits on the light: no direction to test, nothing
+        // in between. A wall gets no cosine from it.
+        if receiver.normal.is_some() {
+            return Rgb::ZERO;
+        }
+        return Rgb::splat(arriving(light.intensity, s.value, 1.0, s.pdf)) * light.color;
+    }
+    let cosine = match receiver.normal {
+        None => 1.0,
+        Some(n) => n.dot(s.dir()).max(0.0),
+    };
+    let v = arriving(light.intensity, s.value, cosine, s.pdf);
+    if v == 0.0 {
+        return Rgb::ZERO;
+    }
+    // A light that sits on a wall shines past it: its shadow rays ignore
+    // that wall (for a solid line light, its own wall).
+    let vis = match vis {
         Visibility::Trace => transmittance(
             scene,
-            ray,
-            t_max,
-            skip,
+            &Ray::new(x, s.to),
+            s.t_max,
+            receiver.skip(scene.light_wall[index]),
             receiver.walls_towards(index),
             stats,
         ),
         Visibility::Known(known) => known,
     };
-    let light = &scene.lights[index];
-    // A light that sits on a wall shines past it: its shadow rays ignore
-    // that wall (for a solid line light, its own wall).
-    let light_wall = scene.light_wall[index];
-    let r0 = scene.small_radius;
-    let value = match light.shape {
-        LightShape::Point { at } | LightShape::Spot { at, .. } => {
-            if receiver
-                .wall
-                .is_some_and(|w| lies_on_line(at, &scene.walls[w as usize].segment))
-            {
-                // A light on the receiving wall's line reaches it only at
-                // grazing incidence, cosine zero. Computed, its shadow ray
-                // runs along the wall through the corner, where rounding
-                // decides whether it crosses the next wall.
-                return Rgb::ZERO;
-            }
-            let to = at - x;
-            let r = to.length();
-            if r == 0.0 {
-                // The receiver sits on the light: no direction to test,
-                // nothing in between. A wall gets no cosine from it.
-                if receiver.normal.is_some() {
-                    return Rgb::ZERO;
-                }
-                Rgb::splat(light.intensity * light.falloff.g(0.0, r0))
-            } else {
-                // The floor under a point light needs no direction (its
-                // weight is exactly 1): spare the divisions.
-                let weight = if receiver.normal.is_none()
-                    && matches!(light.shape, LightShape::Point { .. })
-                {
-                    1.0
-                } else {
-                    let dir = to / r;
-                    receiver.cosine(dir) * light.spot_window(-dir)
-                };
-                if weight == 0.0 {
-                    return Rgb::ZERO;
-                }
-                let vis = transmittance(&Ray::new(x, to), 1.0, receiver.skip(light_wall), stats);
-                Rgb::splat(light.intensity * light.falloff.g(r, r0) * weight) * vis
-            }
-        }
-        LightShape::Line {
-            segment,
-            one_sided,
-            wall,
-        } => {
-            if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
-                return Rgb::ZERO;
-            }
-            if let Some(receiving) = receiver.wall
-                && (wall == Some(receiving)
-                    || collinear(&segment, &scene.walls[receiving as usize].segment))
-            {
-                // A wall never receives its own light, nor a line light
-                // along its own line: all of it arrives at grazing
-                // incidence, cosine zero. Computed, the receiver point
-                // is rounded off the line and the light would subtend
-                // about pi at a cosine that is not zero.
-                return Rgb::ZERO;
-            }
-            let Some(s) = sample_subtended_angle(x, &segment, u) else {
-                return Rgb::ZERO;
-            };
-            let weight = receiver.cosine(s.dir);
-            if weight == 0.0 {
-                return Rgb::ZERO;
-            }
-            let vis = transmittance(
-                &Ray::new(x, s.point - x),
-                1.0,
-                receiver.skip(light_wall),
-                stats,
-            );
-            let per_angle = light.intensity * light.falloff.per_radian(s.distance, r0);
-            Rgb::splat(per_angle * s.subtended * weight) * vis
-        }
-        LightShape::Directional { direction } => {
-            let to_light = -direction;
-            let weight = receiver.cosine(to_light);
-            if weight == 0.0
-                || receiver
-                    .wall
-                    .is_some_and(|w| parallel(direction, &scene.walls[w as usize].segment))
-            {
-                // Sunlight along the receiving wall: grazing, as above.
-                return Rgb::ZERO;
-            }
-            let vis = transmittance(
-                &Ray::new(x, to_light),
-                f64::INFINITY,
-                receiver.skip(None),
-                stats,
-            );
-            Rgb::splat(light.intensity * weight) * vis
-        }
-    };
-    value * light.color
-}
-
-/// Whether the unit `direction` runs along `wall`, to within the rounding
-/// of computing their cross product.
-fn parallel(direction: DVec2, wall: &Segment) -> bool {
-    let e = wall.edge();
-    e.perp_dot(direction).abs() <= 16.0 * f64::EPSILON * e.length()
-}
-
-/// Whether both ends of `light` lie on the line through `wall`.
-fn collinear(light: &Segment, wall: &Segment) -> bool {
-    lies_on_line(light.a, wall) && lies_on_line(light.b, wall)
+    Rgb::splat(v) * vis * light.color
 }
 
 /// What fraction of light gets along `ray` for `0 < t < t_max`: zero when
@@ -500,6 +418,13 @@ mod tests {
                 },
                 Falloff::Flatland,
             ),
+            light(
+                LightShape::Circle {
+                    at: DVec2::new(30.0, 30.0),
+                    radius: 3.0,
+                },
+                Falloff::InverseSquare,
+            ),
         ];
         let canvas = Canvas {
             width: 40,
@@ -507,7 +432,7 @@ mod tests {
             origin: DVec2::ZERO,
         };
         let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights);
-        let lines = 2;
+        let lines = 3;
         let mut stream = Stream::new(1, 2, 3);
         let mut strata = Strata::default();
         // Not a whole number of lanes: the last part lane too.
@@ -523,11 +448,11 @@ mod tests {
         let all: Vec<Option<Vec<u32>>> = scene
             .lights
             .iter()
-            .map(|l| (!matches!(l.shape, LightShape::Directional { .. })).then(|| vec![0, 1, 2]))
+            .map(|l| l.shape.hull().map(|_| vec![0, 1, 2]))
             .collect();
         for visibility in [
-            vec![Visibility::Trace; 6],
-            vec![Visibility::Known(Rgb::new(0.5, 1.0, 0.25)); 6],
+            vec![Visibility::Trace; 7],
+            vec![Visibility::Known(Rgb::new(0.5, 1.0, 0.25)); 7],
         ] {
             for shadow_walls in [None, Some(&all[..])] {
                 let (mut a, mut b) = (Stats::default(), Stats::default());
@@ -537,9 +462,10 @@ mod tests {
                     let numbers = strata.numbers[k * lines..(k + 1) * lines].to_vec();
                     let mut next = numbers.into_iter();
                     let one = (0..scene.lights.len()).fold(Rgb::ZERO, |sum, light| {
-                        let u = match scene.lights[light].shape {
-                            LightShape::Line { .. } => next.next().unwrap_or(0.0),
-                            _ => 0.0,
+                        let u = if scene.lights[light].shape.numbers() > 0 {
+                            next.next().unwrap_or(0.0)
+                        } else {
+                            0.0
                         };
                         sum + light_contribution(
                             &scene,

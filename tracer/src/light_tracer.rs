@@ -3,8 +3,6 @@
 //! every free flight adds its exact track length in each pixel it crosses
 //! to that pixel's fluence.
 
-use std::f64::consts::TAU;
-
 use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box, reflect};
 use rayon::prelude::*;
 
@@ -12,8 +10,8 @@ use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::path::diffuse_albedo;
 use crate::plan::Plan;
 use crate::render::{Image, RenderOptions, Rendered, image_size};
-use crate::sampling::{Stream, cosine_half_circle, uniform_circle};
-use crate::scene::{Falloff, Light, LightShape, Material, Scene, smooth_window};
+use crate::sampling::{Stream, cosine_half_circle};
+use crate::scene::{Falloff, Light, Material, Scene};
 use crate::{Rgb, Stats};
 
 /// The number of fixed work chunks: each sums its paths in order into its
@@ -22,47 +20,6 @@ use crate::{Rgb, Stats};
 const MAX_CHUNKS: usize = 16;
 /// Bytes the chunk buffers may take together.
 const CHUNK_BUDGET: usize = 256 << 20;
-
-/// The power of each light (2D: per unit time, integrated over the
-/// circle of directions), before colour.
-pub(crate) fn light_power(light: &Light, beam_width: f64) -> f64 {
-    match light.shape {
-        LightShape::Point { .. } => TAU * light.intensity,
-        LightShape::Spot { cone, softness, .. } => light.intensity * spot_integral(cone, softness),
-        LightShape::Line {
-            segment, one_sided, ..
-        } => {
-            // A Lambertian emitter of radiance I: 2 I per unit length and side.
-            let sides = if one_sided { 1.0 } else { 2.0 };
-            2.0 * light.intensity * segment.length() * sides
-        }
-        LightShape::Directional { .. } => light.intensity * beam_width,
-    }
-}
-
-/// The integral of a spot's window over all directions.
-fn spot_integral(cone: f64, softness: f64) -> f64 {
-    // Full intensity over 2 (cone - softness), and the smoothstep averages
-    // one half over each soft edge of width `softness`.
-    2.0 * (cone - softness) + softness
-}
-
-/// Where sunlight enters: a line across the beam, upstream of everything,
-/// and its width.
-fn sun_line(scene: &Scene, direction: DVec2) -> (DVec2, DVec2, f64) {
-    let mut min = scene.canvas.origin;
-    let mut max =
-        scene.canvas.origin + DVec2::new(scene.canvas.width as f64, scene.canvas.height as f64);
-    for wall in &scene.walls {
-        min = min.min(wall.segment.a).min(wall.segment.b);
-        max = max.max(wall.segment.a).max(wall.segment.b);
-    }
-    let centre = (min + max) * 0.5;
-    let radius = (max - min).length() * 0.5 + 1.0;
-    let across = direction.perp();
-    let start = centre - direction * radius - across * radius;
-    (start, across, 2.0 * radius)
-}
 
 /// Renders `scene` by light tracing with `options.samples` x pixels paths.
 pub fn render_light(
@@ -76,14 +33,10 @@ pub fn render_light(
     let bounces = if plan.indirect { options.bounces } else { 0 };
     let paths = options.samples as u64 * pixels as u64;
 
-    let beam_width = |light: &Light| match light.shape {
-        LightShape::Directional { direction } => sun_line(scene, direction).2,
-        _ => 0.0,
-    };
     let powers: Vec<f64> = scene
         .lights
         .iter()
-        .map(|l| light_power(l, beam_width(l)))
+        .map(|l| l.intensity * l.shape.power(scene))
         .collect();
     let total: f64 = powers.iter().sum();
     let mut cumulative = Vec::with_capacity(powers.len());
@@ -201,54 +154,10 @@ fn trace_photon(
 ) {
     stats.light_paths += 1;
     let mut power = light.color * weight;
-    // The first flight reproduces the kernel: `shape` says how.
-    let (origin, dir, skip, first) = match light.shape {
-        LightShape::Point { at } => (
-            at,
-            uniform_circle(stream),
-            Skip::NONE,
-            Kernel::Point(light.falloff),
-        ),
-        LightShape::Spot {
-            at,
-            direction,
-            cone,
-            softness,
-        } => {
-            // Uniform in the cone's angle, weighted by the window so that
-            // the mean weight is one.
-            let theta = cone * (2.0 * stream.uniform() - 1.0);
-            let (s, c) = theta.sin_cos();
-            let dir = direction * c + direction.perp() * s;
-            power *= smooth_window(theta.abs(), cone, softness) * 2.0 * cone
-                / spot_integral(cone, softness);
-            (at, dir, Skip::NONE, Kernel::Point(light.falloff))
-        }
-        LightShape::Line {
-            segment,
-            one_sided,
-            wall,
-        } => {
-            let at = segment.point_at(stream.uniform());
-            let side = if one_sided || stream.uniform() < 0.5 {
-                Side::Positive
-            } else {
-                Side::Negative
-            };
-            let dir = cosine_half_circle(segment.normal_on(side), stream.uniform());
-            let skip = wall.map_or(Skip::NONE, Skip::one);
-            (at, dir, skip, Kernel::Line(light.falloff))
-        }
-        LightShape::Directional { direction } => {
-            let (start, across, width) = sun_line(scene, direction);
-            (
-                start + across * (width * stream.uniform()),
-                direction,
-                Skip::NONE,
-                Kernel::None,
-            )
-        }
-    };
+    // The first flight reproduces the kernel: the photon says how.
+    let photon = light.shape.emit(light, scene, stream);
+    power *= photon.scale;
+    let (origin, dir, skip, first) = (photon.origin, photon.dir, photon.skip, photon.kernel);
     let r0 = scene.small_radius;
     let mut ray = Ray::new(origin, dir);
     let mut skip = skip;
@@ -356,7 +265,7 @@ fn trace_photon(
 /// per-radian term of `Falloff::per_radian`. Both are 1 for `Flatland`
 /// beyond `r0`.
 #[derive(Clone, Copy, Debug)]
-enum Kernel {
+pub(crate) enum Kernel {
     None,
     Point(Falloff),
     Line(Falloff),

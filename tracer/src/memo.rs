@@ -8,7 +8,7 @@ use flatray_cache::{Value, WallMemo};
 use flatray_geometry::{Ray, Side, Skip};
 
 use crate::light::{Receiver, Visibility, light_contribution};
-use crate::scene::{LightShape, Material, Scene};
+use crate::scene::{Material, Scene};
 use crate::{Rgb, Stats};
 
 /// How the memo is used.
@@ -160,8 +160,10 @@ pub(crate) fn build_wall_memo(
             };
             let light = &scene.lights[light_index];
             let mut local = Stats::default();
-            let value = match light.shape {
-                LightShape::Line { .. } => {
+            // A light that takes a number gets `line_samples` of them,
+            // stratified; the others one sample.
+            let value = match light.shape.numbers() {
+                1.. => {
                     let mut sum = Rgb::ZERO;
                     for k in 0..line_samples {
                         let v = (k as f64 + 0.5) / line_samples as f64;

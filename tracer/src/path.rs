@@ -4,13 +4,14 @@
 use std::f64::consts::{PI, TAU};
 
 use flatray_cache::{Key, WallMemo};
-use flatray_geometry::{DVec2, Hit, Ray, Side, Skip, intersect, reflect};
+use flatray_geometry::{DVec2, Hit, Ray, Side, Skip, reflect};
 
 use crate::glass::{GlassState, absorption, interact, transmit};
 use crate::light::{Receiver, direct_light};
+use crate::lights::line_emitted;
 use crate::mirror::MirrorArcs;
 use crate::sampling::{Stream, circle_in_arc, cosine_half_circle, uniform_half_circle};
-use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
+use crate::scene::{Light, LightShape, Material, Scene};
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
@@ -403,35 +404,28 @@ fn memo_irradiance(memo: &WallMemo, index: u32, side: Side, u: f64) -> Rgb {
     Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64)
 }
 
-/// Radiance-like emission of non-solid line lights that `ray` crosses
-/// before `t_max`, seen from `unfolded` further back.
+/// What the lights that are not walls emit towards `ray` where it meets
+/// them before `t_max`, seen from `unfolded` further back: per radian,
+/// `I G(r') r'` at the total distance `r` (`Falloff::per_radian`).
 fn emission_crossed(scene: &Scene, ray: &Ray, t_max: f64, unfolded: f64) -> Rgb {
     let mut sum = Rgb::ZERO;
     for light in &scene.lights {
-        if let LightShape::Line {
-            segment,
-            wall: None,
-            ..
-        } = light.shape
-            && let Some(h) = intersect(ray, &segment)
-            && h.t < t_max
-            && let Some(side) = segment.arrival_side(ray.dir)
-        {
-            sum += line_emission(light, side, unfolded + h.t, scene.small_radius);
+        if let Some(t) = light.shape.met_by(ray, t_max) {
+            let r = unfolded + t;
+            sum +=
+                light.color * (light.intensity * light.falloff.per_radian(r, scene.small_radius));
         }
     }
     sum
 }
 
-/// What a path ray meeting line light `light` from `side` at total distance
-/// `r` carries back: `I G(r) r` per radian (see `Falloff::per_radian`) (the radiance `I` for
-/// `Flatland`), zero on the dark side of a one-sided light.
-fn line_emission(light: &Light, side: flatray_geometry::Side, r: f64, r0: f64) -> Rgb {
-    let LightShape::Line { one_sided, .. } = light.shape else {
-        return Rgb::ZERO;
-    };
-    if one_sided && side != EMITTING_SIDE {
-        return Rgb::ZERO;
+/// What a path ray meeting solid line light `light` from `side` at total
+/// distance `r` carries back (see [`crate::lights::line_emitted`]).
+fn line_emission(light: &Light, side: Side, r: f64, r0: f64) -> Rgb {
+    match light.shape {
+        LightShape::Line { one_sided, .. } => {
+            light.color * line_emitted(light, one_sided, side, r, r0)
+        }
+        _ => Rgb::ZERO,
     }
-    light.color * (light.intensity * light.falloff.per_radian(r, r0))
 }

@@ -69,6 +69,9 @@ impl Plan {
         let points = count(&|s| matches!(s, LightShape::Point { .. }));
         let spots = count(&|s| matches!(s, LightShape::Spot { .. }));
         let lines = count(&|s| matches!(s, LightShape::Line { .. }));
+        let circles = count(&|s| matches!(s, LightShape::Circle { .. }));
+        // Lights a path ray can meet: seen in mirrors by path tracing.
+        let areas = count(&|s| s.has_area());
         let suns = count(&|s| matches!(s, LightShape::Directional { .. }));
         let mirrors = scene
             .walls
@@ -122,7 +125,7 @@ impl Plan {
         let indirect_possible = options.bounces > 0 && !no_lights;
         let indirect = indirect_possible && (force || reflectors > 0);
         let specular = mirrors + glass_edges;
-        let mirror_emission = indirect && (force || (specular > 0 && lines > 0));
+        let mirror_emission = indirect && (force || (specular > 0 && areas > 0));
         let wall_memo_wanted = !tracing_light
             && indirect
             && options.memo.enabled
@@ -171,12 +174,13 @@ impl Plan {
             },
         );
         add(
-            "direct light: line lights",
-            lines > 0,
-            if lines > 0 {
-                n(lines, "line light")
-            } else {
-                "no line light in the scene".into()
+            "direct light: lines and circles",
+            lines + circles > 0,
+            match (lines, circles) {
+                (0, 0) => "no line or circle light in the scene".into(),
+                (_, 0) => n(lines, "line light"),
+                (0, _) => n(circles, "circle light"),
+                _ => format!("{}, {}", n(lines, "line light"), n(circles, "circle light")),
             },
         );
         add(
@@ -232,18 +236,18 @@ impl Plan {
             },
         );
         add(
-            "line lights seen in mirrors or glass",
+            "lines and circles seen in mirrors or glass",
             mirror_emission,
-            if mirror_emission && !(specular > 0 && lines > 0) {
+            if mirror_emission && !(specular > 0 && areas > 0) {
                 "forced on".into()
             } else if mirror_emission {
-                "mirrors or glass, and line lights, in the scene".into()
+                "mirrors or glass, and line or circle lights, in the scene".into()
             } else if !indirect {
                 "no indirect light is traced".into()
             } else if specular == 0 {
                 "no mirror or glass in the scene".into()
             } else {
-                "no line light in the scene".into()
+                "no line or circle light in the scene".into()
             },
         );
         add(

@@ -16,7 +16,7 @@ use crate::mirror::MirrorArcs;
 use crate::path::{Trace, memo_bounce, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
 use crate::sampling::{ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc};
-use crate::scene::{LightShape, Scene};
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Which estimator a render uses.
@@ -366,7 +366,7 @@ fn render_pixel(
             let jitter = (cell + DVec2::new(jx, jy)) / grid as f64;
             floor.points.push(corner + jitter * step);
             for light in &scene.lights {
-                if let LightShape::Line { .. } = light.shape {
+                for _ in 0..light.shape.numbers() {
                     floor.numbers.push(stream.uniform());
                 }
             }
@@ -755,16 +755,12 @@ impl BlockCulling {
         }
         let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
         for (light, list) in scene.lights.iter().zip(&mut self.shadows) {
-            let ends = match light.shape {
-                LightShape::Point { at } | LightShape::Spot { at, .. } => [at, at],
-                LightShape::Line { segment, .. } => [segment.a, segment.b],
-                LightShape::Directional { .. } => {
-                    *list = None;
-                    continue;
-                }
+            let Some(hull) = light.shape.hull() else {
+                *list = None;
+                continue;
             };
             let points = [
-                corners[0], corners[1], corners[2], corners[3], ends[0], ends[1],
+                corners[0], corners[1], corners[2], corners[3], hull[0], hull[1], hull[2], hull[3],
             ];
             hull_candidates(&scene.segments, &points, list.get_or_insert_with(Vec::new));
         }

@@ -395,6 +395,9 @@ pub enum LightShape {
     /// Parallel rays travelling in `direction` (unit) from outside the
     /// scene; `intensity` is the irradiance across the beam.
     Directional { direction: DVec2 },
+    /// A disk whose rim emits outward as a Lambertian emitter of radiance
+    /// `intensity`. Not a wall: it blocks no light.
+    Circle { at: DVec2, radius: f64 },
 }
 
 /// A light: its shape, colour, intensity and falloff.
@@ -521,7 +524,7 @@ impl Scene {
                     .iter()
                     .position(|w| lies_on(at, &w.segment))
                     .map(|i| i as u32),
-                LightShape::Directional { .. } => None,
+                LightShape::Directional { .. } | LightShape::Circle { .. } => None,
             })
             .collect();
         let segments = SegmentSet::new(walls.iter().map(|w| w.segment).collect());

@@ -1,0 +1,212 @@
+//! The light interface: what every kind of light tells the integrators.
+//!
+//! Each kind of light lives in a module of its own (`point.rs`,
+//! `spot.rs`, `line.rs`, `sun.rs`, `circle.rs`) with the same functions:
+//!
+//! - `incident`: a sample of the light arriving at a receiver point, as a
+//!   shadow ray to test, the value it carries per radian (or, for a light
+//!   of one direction, in total) and the probability density of the
+//!   direction it came from;
+//! - `grazes`: whether a wall can receive it only at grazing incidence
+//!   (robustness rule 4b), so receives nothing;
+//! - `power` and `emit`: its total power and a photon leaving it, for the
+//!   light tracer;
+//! - `met_by`: where a path ray meets light it emits, for lights that are
+//!   not walls and can be seen (after a mirror);
+//! - `hull`: points whose convex hull holds every point that shadow rays
+//!   aim at, for culled shadow rays.
+//!
+//! The methods on [`LightShape`] below dispatch to them; each `match` is
+//! exhaustive, so a new kind of light is a compiler error in this file
+//! until every function is given, and nowhere else in the model.
+//! Fast paths that treat a kind specially name the kinds they support
+//! (`coherence::supports`, `light::direct_light_strata`) and fall back to
+//! these functions for every other.
+
+mod circle;
+mod line;
+mod point;
+mod spot;
+mod sun;
+
+use flatray_geometry::{DVec2, Ray, Segment, Skip};
+
+use crate::light_tracer::Kernel;
+use crate::sampling::Stream;
+use crate::scene::{Light, LightShape, Scene};
+
+pub(crate) use line::emitted as line_emitted;
+
+/// A sample of the light that reaches a receiver point from one light,
+/// before occlusion, the receiver's cosine, the light's colour and its
+/// intensity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Incident {
+    /// The shadow ray's direction vector from the receiver: `t` runs over
+    /// `0 < t < t_max`. Zero when the receiver sits on the light itself
+    /// (no direction, nothing in between).
+    pub to: DVec2,
+    pub t_max: f64,
+    /// `|to|` for a ray to a point (1 for a direction): `to / length` is
+    /// the unit direction towards the light.
+    pub length: f64,
+    /// What arrives per unit intensity: per radian of direction for a
+    /// light with an area (a line, a circle), in total for a point, a
+    /// spot or the sun. Kernel and spot window included.
+    pub value: f64,
+    /// The probability density of the sampled direction, per radian; 1
+    /// for a light of one direction (a point, a spot, the sun), whose
+    /// value is then already the whole.
+    pub pdf: f64,
+}
+
+impl Incident {
+    /// Whether the receiver sits on the light: no direction to it.
+    #[inline]
+    pub fn at_the_light(&self) -> bool {
+        self.length == 0.0
+    }
+
+    /// The unit direction towards the light.
+    #[inline]
+    pub fn dir(&self) -> DVec2 {
+        self.to / self.length
+    }
+}
+
+/// What arrives from a light of `intensity`, given an [`Incident`]'s
+/// value and pdf and the receiver's cosine: one expression, so that every
+/// path through the code that estimates it gives the same bits.
+#[inline(always)]
+pub(crate) fn arriving(intensity: f64, value: f64, cosine: f64, pdf: f64) -> f64 {
+    intensity * value * (cosine / pdf)
+}
+
+/// A photon leaving a light: where, which way, its power relative to the
+/// light's mean photon, the kernel its first flight reproduces, and the
+/// wall it leaves (if the light is solid).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Photon {
+    pub origin: DVec2,
+    pub dir: DVec2,
+    pub scale: f64,
+    pub kernel: Kernel,
+    pub skip: Skip,
+}
+
+impl LightShape {
+    /// How many numbers [`LightShape::incident`] takes from the stream.
+    #[inline]
+    pub(crate) fn numbers(&self) -> usize {
+        match self {
+            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
+                0
+            }
+            LightShape::Line { .. } | LightShape::Circle { .. } => 1,
+        }
+    }
+
+    /// A sample of light `light` (of this shape) arriving at `x`, with `u`
+    /// in `[0, 1)` where the shape takes a number; `None` where none
+    /// arrives (the dark side of a one-sided line, inside a circle).
+    #[inline]
+    pub(crate) fn incident(&self, light: &Light, x: DVec2, u: f64, r0: f64) -> Option<Incident> {
+        match *self {
+            LightShape::Point { at } => Some(point::incident(at, light, x, r0)),
+            LightShape::Spot { at, .. } => Some(spot::incident(at, light, x, r0)),
+            LightShape::Line {
+                segment, one_sided, ..
+            } => line::incident(&segment, one_sided, light, x, u, r0),
+            LightShape::Directional { direction } => Some(sun::incident(direction)),
+            LightShape::Circle { at, radius } => circle::incident(at, radius, light, x, u, r0),
+        }
+    }
+
+    /// Whether wall `index` (of segment `wall`) can receive this light
+    /// only at grazing incidence, so receives nothing from it.
+    pub(crate) fn grazes(&self, index: u32, wall: &Segment) -> bool {
+        match *self {
+            LightShape::Point { at } | LightShape::Spot { at, .. } => point::grazes(at, wall),
+            LightShape::Line {
+                segment, wall: own, ..
+            } => line::grazes(&segment, own, index, wall),
+            LightShape::Directional { direction } => sun::grazes(direction, wall),
+            LightShape::Circle { .. } => false,
+        }
+    }
+
+    /// The light's power per unit intensity (per unit time, integrated
+    /// over the circle of directions), before colour.
+    pub(crate) fn power(&self, scene: &Scene) -> f64 {
+        match *self {
+            LightShape::Point { .. } => point::power(),
+            LightShape::Spot { cone, softness, .. } => spot::power(cone, softness),
+            LightShape::Line {
+                segment, one_sided, ..
+            } => line::power(&segment, one_sided),
+            LightShape::Directional { direction } => sun::power(scene, direction),
+            LightShape::Circle { radius, .. } => circle::power(radius),
+        }
+    }
+
+    /// A photon leaving light `light` (of this shape), drawn from `stream`.
+    pub(crate) fn emit(&self, light: &Light, scene: &Scene, stream: &mut Stream) -> Photon {
+        match *self {
+            LightShape::Point { at } => point::emit(at, light, stream),
+            LightShape::Spot {
+                at,
+                direction,
+                cone,
+                softness,
+            } => spot::emit(at, direction, cone, softness, light, stream),
+            LightShape::Line {
+                segment,
+                one_sided,
+                wall,
+            } => line::emit(&segment, one_sided, wall, light, stream),
+            LightShape::Directional { direction } => sun::emit(scene, direction, stream),
+            LightShape::Circle { at, radius } => circle::emit(at, radius, light, stream),
+        }
+    }
+
+    /// Where `ray` first meets light this shape emits towards it, before
+    /// `t_max`, for a light a path ray can see that is not a wall (a
+    /// solid line light is found as its wall): the distance along the ray.
+    #[inline]
+    pub(crate) fn met_by(&self, ray: &Ray, t_max: f64) -> Option<f64> {
+        match *self {
+            LightShape::Line {
+                segment,
+                one_sided,
+                wall: None,
+            } => line::met_by(&segment, one_sided, ray, t_max),
+            LightShape::Circle { at, radius } => circle::met_by(at, radius, ray, t_max),
+            LightShape::Line { wall: Some(_), .. }
+            | LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. } => None,
+        }
+    }
+
+    /// Whether a path ray can meet the light (it has an area): what the
+    /// plan's "lights seen in mirrors" needs.
+    pub(crate) fn has_area(&self) -> bool {
+        match self {
+            LightShape::Line { .. } | LightShape::Circle { .. } => true,
+            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
+                false
+            }
+        }
+    }
+
+    /// Points whose convex hull holds every point a shadow ray towards the
+    /// light aims at; `None` for light from a direction.
+    pub(crate) fn hull(&self) -> Option<[DVec2; 4]> {
+        match *self {
+            LightShape::Point { at } | LightShape::Spot { at, .. } => Some([at; 4]),
+            LightShape::Line { segment, .. } => Some([segment.a, segment.b, segment.a, segment.b]),
+            LightShape::Directional { .. } => None,
+            LightShape::Circle { at, radius } => Some(circle::hull(at, radius)),
+        }
+    }
+}
