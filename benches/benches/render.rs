@@ -71,27 +71,7 @@ fn closest_hit(c: &mut Criterion) {
         let set = SegmentSet::with_strategy(segments, Strategy::Bvh);
         bench_set(&mut group, BenchmarkId::new("Bvh", &name), &set, &rays);
     }
-    // Four rays per query, as the render loop asks for the floor's rays.
     let set = SegmentSet::new(room_walls());
-    group.bench_function(
-        BenchmarkId::new(format!("four-rays-{:?}", set.strategy()), "room-13"),
-        |b| {
-            b.iter(|| {
-                let mut found = 0u32;
-                for quad in rays.chunks_exact(4) {
-                    let quad = [quad[0], quad[1], quad[2], quad[3]];
-                    for (i, _) in set
-                        .closest_hits(black_box(&quad), f64::INFINITY, [Skip::NONE; 4])
-                        .into_iter()
-                        .flatten()
-                    {
-                        found = found.wrapping_add(i);
-                    }
-                }
-                found
-            })
-        },
-    );
     // The floor's rays as the render loop casts them: each tests only the
     // walls its 4x4-pixel block and its 1/64 turn of directions can meet.
     let mut inputs = Inputs::new(3);

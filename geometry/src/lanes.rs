@@ -132,28 +132,6 @@ impl Lanes {
         }
     }
 
-    /// `closest` for four rays at once over all slots, each from a fresh
-    /// `Best` with bound `t_max`: what four calls of `closest` return.
-    #[inline(always)]
-    pub fn closest4(
-        &self,
-        kernel: Kernel,
-        rays: &[Ray; 4],
-        t_max: f64,
-        skips: [Skip; 4],
-    ) -> [Best; 4] {
-        match kernel {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: as in `closest`.
-            Kernel::Avx => unsafe { avx::closest4(self, rays, t_max, skips) },
-            _ => std::array::from_fn(|k| {
-                let mut best = Best::new(t_max);
-                self.closest_scalar(&rays[k], 0..self.len, t_max, skips[k], &mut best);
-                best
-            }),
-        }
-    }
-
     #[inline(always)]
     fn closest_scalar(
         &self,
@@ -490,94 +468,6 @@ mod avx {
                 };
             }
         }
-    }
-
-    /// Four rays against every slot, one segment at a time: each lane is
-    /// one ray, so no lane ever waits for another and nothing is reduced
-    /// across lanes.
-    ///
-    /// # Safety
-    /// The processor must have AVX.
-    #[target_feature(enable = "avx")]
-    pub(super) unsafe fn closest4(
-        l: &Lanes,
-        rays: &[Ray; 4],
-        t_max: f64,
-        skips: [Skip; 4],
-    ) -> [Best; 4] {
-        if skips == [Skip::NONE; 4] {
-            closest4_with::<false>(l, rays, t_max, skips)
-        } else {
-            closest4_with::<true>(l, rays, t_max, skips)
-        }
-    }
-
-    /// `closest4`, testing the skips only when `SKIPS`. The slots are in
-    /// index order (brute force), so a later segment at the same `t` never
-    /// wins a tie: `t < best` alone keeps the lower index, and `best`
-    /// starts at `t_max`, so it also bounds `t`.
-    #[inline]
-    #[target_feature(enable = "avx")]
-    fn closest4_with<const SKIPS: bool>(
-        l: &Lanes,
-        rays: &[Ray; 4],
-        t_max: f64,
-        skips: [Skip; 4],
-    ) -> [Best; 4] {
-        let lane = |f: &dyn Fn(usize) -> f64| _mm256_set_pd(f(3), f(2), f(1), f(0));
-        let ox = lane(&|k| rays[k].origin.x);
-        let oy = lane(&|k| rays[k].origin.y);
-        let dx = lane(&|k| rays[k].dir.x);
-        let dy = lane(&|k| rays[k].dir.y);
-        let skip0 = lane(&|k| skips[k].0 as f64);
-        let skip1 = lane(&|k| skips[k].1 as f64);
-        let zero = _mm256_setzero_pd();
-        let mut bt = _mm256_set1_pd(t_max);
-        let mut bi = _mm256_set1_pd(u32::MAX as f64);
-        let (mut bsa, mut bsb) = (zero, zero);
-        // The real segments only: padding would cost a division per lane.
-        let n = l.len;
-        let (ax, ay, bx, by) = (&l.ax[..n], &l.ay[..n], &l.bx[..n], &l.by[..n]);
-        let (ex, ey, ids) = (&l.ex[..n], &l.ey[..n], &l.id[..n]);
-        let splat = |v: f64| _mm256_set1_pd(v);
-        for slot in 0..n {
-            let Crossing { sa, sb, crosses, t } = crossing(
-                (ox, oy),
-                (dx, dy),
-                (splat(ax[slot]), splat(ay[slot])),
-                (splat(bx[slot]), splat(by[slot])),
-                (splat(ex[slot]), splat(ey[slot])),
-            );
-            let mut take = _mm256_and_pd(
-                crosses,
-                _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(t, zero),
-                    _mm256_cmp_pd::<_CMP_LT_OQ>(t, bt),
-                ),
-            );
-            let id = _mm256_set1_pd(ids[slot]);
-            if SKIPS {
-                take = _mm256_and_pd(
-                    take,
-                    _mm256_and_pd(
-                        _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, skip0),
-                        _mm256_cmp_pd::<_CMP_NEQ_OQ>(id, skip1),
-                    ),
-                );
-            }
-            bt = _mm256_blendv_pd(bt, t, take);
-            bi = _mm256_blendv_pd(bi, id, take);
-            bsa = _mm256_blendv_pd(bsa, sa, take);
-            bsb = _mm256_blendv_pd(bsb, sb, take);
-        }
-        let u = _mm256_div_pd(bsa, _mm256_sub_pd(bsa, bsb));
-        let (t, i, u) = (lanes(bt), lanes(bi), lanes(u));
-        std::array::from_fn(|k| Best {
-            t: t[k],
-            // Every lane holds u32::MAX or a segment index.
-            index: i[k] as u32,
-            u: u[k],
-        })
     }
 
     /// # Safety

@@ -1,6 +1,6 @@
 //! A set of segments with closest-hit and all-crossings queries: brute
-//! force over a structure-of-arrays copy for small sets (four segments, or
-//! four rays, at a time where the processor has AVX), a bounding volume
+//! force over a structure-of-arrays copy for small sets (four segments at
+//! a time where the processor has AVX), a bounding volume
 //! hierarchy for large ones. All give exactly the same answers.
 
 use crate::lanes::{Best, Kernel, Lanes};
@@ -247,23 +247,6 @@ impl SegmentSet {
                 }
             }
         }
-    }
-
-    /// `closest_hit` for four rays at once: exactly what four calls return.
-    /// A brute-force set with the AVX kernel tests each segment against
-    /// the four rays together (one ray per lane, nothing to reduce across
-    /// lanes); otherwise it makes the four calls.
-    pub fn closest_hits(
-        &self,
-        rays: &[Ray; 4],
-        t_max: f64,
-        skips: [Skip; 4],
-    ) -> [Option<(u32, Hit)>; 4] {
-        if self.nodes.is_empty() {
-            let best = self.lanes.closest4(self.kernel(), rays, t_max, skips);
-            return best.map(Best::found);
-        }
-        std::array::from_fn(|k| self.closest_hit(&rays[k], t_max, skips[k]))
     }
 
     /// Calls `visit(index, hit)` for every crossing with `0 < t < t_max`

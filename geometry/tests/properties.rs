@@ -93,15 +93,6 @@ proptest! {
         // against the scalar one.
         let scalar = SegmentSet::with_strategy(segments.clone(), Accel::BruteForce).with_kernel(Kernel::Scalar);
         prop_assert_eq!(scalar.kernel(), Kernel::Scalar);
-        // Four rays at a time: the same answers as one at a time.
-        for quad in rays.chunks_exact(4) {
-            let skips: [Skip; 4] = std::array::from_fn(|k| if k % 2 == 0 { Skip::NONE } else { Skip::one(skip) });
-            let quad: [Ray; 4] = std::array::from_fn(|k| Ray::new(quad[k].0, quad[k].1));
-            let one_by_one: [_; 4] = std::array::from_fn(|k| scalar.closest_hit(&quad[k], f64::INFINITY, skips[k]));
-            for set in [&brute, &scalar, &bvh] {
-                prop_assert_eq!(set.closest_hits(&quad, f64::INFINITY, skips), one_by_one);
-            }
-        }
         for (origin, dir, t_max) in rays {
             let ray = Ray::new(origin, dir);
             for (t_max, skip) in [(f64::INFINITY, Skip::NONE), (t_max, Skip::one(skip))] {
@@ -206,8 +197,6 @@ fn ties_at_a_shared_corner_go_to_the_lower_index_in_every_set() {
                 "{:?}",
                 set.kernel()
             );
-            let quad = set.closest_hits(&[ray; 4], f64::INFINITY, [skip; 4]);
-            assert_eq!(quad, [hit; 4]);
             // In lanes, over the list of the walls not skipped.
             let candidates: Vec<u32> = (0..set.len() as u32)
                 .filter(|&i| !skip.contains(i))
