@@ -13,6 +13,7 @@
 //! block calls the pixel loop compiled with AVX2, after checking that the
 //! processor has it (`render.rs::pixel_fn`).
 
+mod bsdf;
 mod coherence;
 mod glass;
 mod light;

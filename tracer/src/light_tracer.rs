@@ -3,15 +3,15 @@
 //! every free flight adds its exact track length in each pixel it crosses
 //! to that pixel's fluence.
 
-use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box, reflect};
+use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 use rayon::prelude::*;
 
-use crate::glass::{GlassState, absorption, interact, transmit};
-use crate::path::diffuse_albedo;
+use crate::bsdf::{Bsdf, Sampling, Transport};
+use crate::glass::{GlassState, absorption, transmit};
 use crate::plan::Plan;
 use crate::render::{Image, RenderOptions, Rendered, image_size};
-use crate::sampling::{Stream, cosine_half_circle};
-use crate::scene::{Falloff, Light, Material, Scene};
+use crate::sampling::Stream;
+use crate::scene::{Falloff, Light, Scene};
 use crate::{Rgb, Stats};
 
 /// The number of fixed work chunks: each sums its paths in order into its
@@ -203,53 +203,38 @@ fn trace_photon(
             stats.paths_escaped += 1;
             return;
         };
-        match wall.material {
-            Material::Transparent { tint } => {
-                stats.transparent_passes += 1;
-                power *= tint;
-                ray = Ray::new(x, ray.dir);
-            }
-            Material::Glass { body, inside } => {
-                bounce += 1;
-                if bounce > bounces {
-                    stats.paths_bounce_limit += 1;
-                    return;
-                }
-                let normal = wall.segment.normal_on(side);
-                // Photons carry power, which refraction conserves: no
-                // radiance scale here.
-                let event = interact(
-                    scene, body, inside, side, ray.dir, normal, &mut glass, stream, stats,
-                );
-                power *= event.colour;
-                ray = Ray::new(x, event.dir);
-            }
-            Material::Mirror { tint } => {
-                stats.mirror_reflections += 1;
-                bounce += 1;
-                if bounce > bounces {
-                    stats.paths_bounce_limit += 1;
-                    return;
-                }
-                power *= tint;
-                ray = Ray::new(x, reflect(ray.dir, wall.segment.normal_on(side)));
-            }
-            Material::Diffuse { albedo } => {
-                bounce += 1;
-                if bounce > bounces {
-                    stats.paths_bounce_limit += 1;
-                    return;
-                }
-                let rho = diffuse_albedo(scene, albedo, (index, h.u, x), stats);
-                // Power arriving at the wall, with the kernel's share.
-                power *= kernel.factor(travelled, r0) * rho;
-                kernel = Kernel::None;
-                ray = Ray::new(
-                    x,
-                    cosine_half_circle(wall.segment.normal_on(side), stream.uniform()),
-                );
+        let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), stats);
+        if let Bsdf::Transparent { .. } = bsdf {
+            stats.transparent_passes += 1;
+        } else {
+            bounce += 1;
+            if bounce > bounces {
+                stats.paths_bounce_limit += 1;
+                return;
             }
         }
+        if let Bsdf::Mirror { .. } = bsdf {
+            stats.mirror_reflections += 1;
+        }
+        // Photons carry power, which refraction conserves.
+        let scattered = bsdf.sample(
+            scene,
+            (ray.dir, wall.segment.normal_on(side), side),
+            Sampling::Cosine,
+            Transport::Power,
+            &mut glass,
+            stream,
+            stats,
+        );
+        if bsdf.is_specular() {
+            power *= scattered.weight;
+        } else {
+            // Power arriving at the wall, with the kernel's share: the
+            // kernel applies up to the first diffuse reflection.
+            power *= kernel.factor(travelled, r0) * scattered.weight;
+            kernel = Kernel::None;
+        }
+        ray = Ray::new(x, scattered.dir);
         if power == Rgb::ZERO {
             stats.paths_absorbed += 1;
             return;

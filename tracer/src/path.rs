@@ -1,16 +1,17 @@
 //! Path tracing from the pixel: the estimator of `model.md`, written as an
 //! iterative loop so that no scene can grow the stack.
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 
 use flatray_cache::{Key, WallMemo};
-use flatray_geometry::{DVec2, Hit, Ray, Side, Skip, reflect};
+use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
 
-use crate::glass::{GlassState, absorption, interact, transmit};
+use crate::bsdf::{Bsdf, Sampling, Transport};
+use crate::glass::{GlassState, absorption, transmit};
 use crate::light::{Receiver, direct_light};
 use crate::lights::line_emitted;
 use crate::mirror::MirrorArcs;
-use crate::sampling::{Stream, circle_in_arc, cosine_half_circle, uniform_half_circle};
+use crate::sampling::{Stream, circle_in_arc};
 use crate::scene::{Light, LightShape, Material, Scene};
 use crate::{Integrator, Rgb, Stats};
 
@@ -194,118 +195,90 @@ pub(crate) fn path_finish(
             fluence += throughput * line_emission(light, side, unfolded, scene.small_radius);
         }
 
+        let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), stats);
+        // A transparent wall is no scattering event: the path goes on
+        // straight, and no bounce is counted.
+        let straight = matches!(bsdf, Bsdf::Transparent { .. });
+        if straight {
+            stats.transparent_passes += 1;
+        } else {
+            bounce += 1;
+            if bounce > bounces {
+                stats.paths_bounce_limit += 1;
+                break;
+            }
+        }
         // Computed where a branch needs it: a memo read does not.
         let normal = || wall.segment.normal_on(side);
-        match wall.material {
-            Material::Transparent { tint } => {
-                stats.transparent_passes += 1;
-                throughput *= tint;
-                if throughput == Rgb::ZERO {
-                    stats.paths_absorbed += 1;
-                    break;
+        if let Some(rho) = bsdf.lambertian() {
+            // Next-event estimation, at the one non-specular BSDF: f E,
+            // with f = rho / 2 and 2pi already in the throughput. The memo
+            // holds E on each side of a diffuse wall.
+            let irradiance = match memo {
+                Some(memo) => {
+                    stats.memo_lookups += 1;
+                    memo_irradiance(memo, index, side, h.u)
                 }
-                ray = Ray::new(x, ray.dir);
-                skip = Skip::one(index);
-                continue;
+                None => {
+                    let receiver = Receiver {
+                        normal: Some(normal()),
+                        wall: Some(index),
+                        shadow_walls: None,
+                    };
+                    direct_light(scene, x, receiver, shadows, stream, stats)
+                }
+            };
+            fluence += throughput * rho * 0.5 * irradiance;
+            if bounce == bounces {
+                stats.paths_bounce_limit += 1;
+                break;
             }
-            Material::Glass { body, inside } => {
-                bounce += 1;
-                if bounce > bounces {
-                    stats.paths_bounce_limit += 1;
-                    break;
-                }
-                let event = interact(
-                    scene,
-                    body,
-                    inside,
-                    side,
-                    ray.dir,
-                    normal(),
-                    &mut glass,
-                    stream,
-                    stats,
-                );
-                throughput *= event.colour * event.radiance_scale;
-                ray = Ray::new(x, event.dir);
-                line_walls = None;
-                skip = Skip::one(index);
-                // Like a mirror, glass is specular: no shadow ray, and a
-                // line light met next counts.
-                after_mirror = true;
-            }
-            Material::Mirror { tint } => {
-                stats.mirror_reflections += 1;
-                bounce += 1;
-                if bounce > bounces {
-                    stats.paths_bounce_limit += 1;
-                    break;
-                }
-                throughput *= tint;
-                if throughput == Rgb::ZERO {
-                    stats.paths_absorbed += 1;
-                    break;
-                }
-                ray = Ray::new(x, reflect(ray.dir, normal()));
-                skip = Skip::one(index);
-                after_mirror = true;
-                line_walls = trace
+        }
+        if let Bsdf::Mirror { .. } = bsdf {
+            stats.mirror_reflections += 1;
+        }
+        let sampling = match integrator {
+            // The light tracer never calls this function.
+            Integrator::Path | Integrator::Light => Sampling::Cosine,
+            Integrator::Original => Sampling::Uniform,
+        };
+        let scattered = bsdf.sample(
+            scene,
+            (ray.dir, normal(), side),
+            sampling,
+            Transport::Radiance,
+            &mut glass,
+            stream,
+            stats,
+        );
+        throughput *= scattered.weight;
+        if throughput == Rgb::ZERO {
+            stats.paths_absorbed += 1;
+            break;
+        }
+        ray = Ray::new(x, scattered.dir);
+        skip = Skip::one(index);
+        if straight {
+            // Still on the first ray's line: its walls still hold.
+            continue;
+        }
+        if bsdf.is_specular() {
+            // After a specular event, light met by the ray counts: no
+            // next-event estimation could have found it.
+            after_mirror = true;
+            line_walls = match bsdf {
+                Bsdf::Mirror { .. } => trace
                     .mirror_arcs
-                    .and_then(|arcs| arcs.walls(index, h.u, ray.dir));
-                if line_walls.is_some() {
-                    stats.culled_mirror_rays += 1;
-                }
+                    .and_then(|arcs| arcs.walls(index, h.u, ray.dir)),
+                _ => None,
+            };
+            if line_walls.is_some() {
+                stats.culled_mirror_rays += 1;
             }
-            Material::Diffuse { albedo } => {
-                bounce += 1;
-                if bounce > bounces {
-                    stats.paths_bounce_limit += 1;
-                    break;
-                }
-                let rho = diffuse_albedo(scene, albedo, (index, h.u, x), stats);
-                // 2pi L_o = 2pi (rho / 2) E, with 2pi already in throughput.
-                let irradiance = match memo {
-                    Some(memo) => {
-                        stats.memo_lookups += 1;
-                        memo_irradiance(memo, index, side, h.u)
-                    }
-                    None => {
-                        let receiver = Receiver {
-                            normal: Some(normal()),
-                            wall: Some(index),
-                            shadow_walls: None,
-                        };
-                        direct_light(scene, x, receiver, shadows, stream, stats)
-                    }
-                };
-                fluence += throughput * rho * 0.5 * irradiance;
-                if bounce == bounces {
-                    stats.paths_bounce_limit += 1;
-                    break;
-                }
-                if rho == Rgb::ZERO {
-                    stats.paths_absorbed += 1;
-                    break;
-                }
-                let dir = match integrator {
-                    // The light tracer never calls this function.
-                    Integrator::Path | Integrator::Light => {
-                        // BRDF rho/2 times cos over pdf cos/2: exactly rho.
-                        throughput *= rho;
-                        cosine_half_circle(normal(), stream.uniform())
-                    }
-                    Integrator::Original => {
-                        // BRDF rho/2 times cos over pdf 1/pi.
-                        let (dir, cos) = uniform_half_circle(normal(), stream.uniform());
-                        throughput *= rho * (0.5 * PI * cos);
-                        dir
-                    }
-                };
-                ray = Ray::new(x, dir);
-                skip = Skip::one(index);
-                after_mirror = false;
-                unfolded = 0.0;
-                line_walls = None;
-            }
+        } else {
+            after_mirror = false;
+            unfolded = 0.0;
+            line_walls = None;
         }
     }
     fluence
