@@ -168,7 +168,9 @@ fn room_render(c: &mut Criterion) {
         // Throughput in rays (shadow, bounce and memo-filling rays), so that
         // criterion reports rays per second of a whole render.
         let stats = flatray_tracer::render(&loaded.scene, &options, &|_| {}).stats;
-        group.throughput(Throughput::Elements(stats.rays() + stats.memo_fill_rays));
+        group.throughput(Throughput::Elements(
+            stats.rays() + stats.work.memo_fill_rays,
+        ));
         group.bench_function(
             BenchmarkId::new("memo", if memo { "on" } else { "off" }),
             |b| b.iter(|| flatray_tracer::render(&loaded.scene, &options, &|_| {})),
@@ -199,10 +201,10 @@ fn plan(c: &mut Criterion) {
         for force in [false, true] {
             let options = RenderOptions {
                 samples: 16,
-                force_all_effects: force,
+                reference: force,
                 ..loaded.options
             };
-            let label = if force { "forced" } else { "planned" };
+            let label = if force { "reference" } else { "planned" };
             group.bench_function(BenchmarkId::new(name, label), |b| {
                 b.iter(|| flatray_tracer::render(&loaded.scene, &options, &|_| {}))
             });

@@ -181,10 +181,10 @@ struct RenderArgs {
     /// their tint, glass pale cyan, emitting walls yellow.
     #[arg(long)]
     draw_walls: bool,
-    /// Debugging and benchmarking: run every effect even where the plan
-    /// would skip it (only where that cannot change the image).
+    /// Debugging and benchmarking: render with the plain model, every
+    /// effect on and no fast path (the same image, more slowly).
     #[arg(long, hide = true)]
-    force_all_effects: bool,
+    reference: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -502,8 +502,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             },
             ..loaded.options.memo
         },
-        force_all_effects: args.force_all_effects,
-        cull_floor_rays: true,
+        reference: args.reference,
     };
     let (width, height) = checked_size(&loaded, options.scale)?;
     let pixels = width as u64 * height as u64;
@@ -566,11 +565,11 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         (written_at - started).as_secs_f64(),
         rendered.stats.noise
     );
-    if rendered.stats.nonfinite_samples > 0 {
+    if rendered.stats.physics.nonfinite_samples > 0 {
         let _ = writeln!(
             err,
             "warning: {} samples were not finite and were left out",
-            rendered.stats.nonfinite_samples
+            rendered.stats.physics.nonfinite_samples
         );
     }
     if args.stats {

@@ -385,8 +385,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             floor_samples: file.render.cache_floor_samples.0,
             ..MemoOptions::default()
         },
-        force_all_effects: false,
-        cull_floor_rays: true,
+        reference: false,
     };
     Ok(Loaded {
         scene,

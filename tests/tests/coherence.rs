@@ -1,10 +1,11 @@
 //! The floor memo's coherence masks (`tracer/src/coherence.rs`) let the
 //! strata of a pixel share one shadow ray per light where no wall or shadow
 //! edge passes near it. They must change nothing but the ray count: every
-//! image here is bit-identical with them on and off.
+//! image here is bit-identical with the reference model's
+//! (`RenderOptions::reference`: no masks, and no other fast path).
 
 use flatray_tests::{render, scene, workspace_root};
-use flatray_tracer::{MemoOptions, RenderOptions, Scene, Stats};
+use flatray_tracer::{RenderOptions, Scene, Stats};
 
 fn image_and_stats(
     scene: &Scene,
@@ -12,10 +13,7 @@ fn image_and_stats(
     coherence: bool,
 ) -> (flatray_tracer::Image, Stats) {
     let options = RenderOptions {
-        memo: MemoOptions {
-            floor_coherence: coherence,
-            ..options.memo
-        },
+        reference: !coherence,
         ..*options
     };
     let rendered = render(scene, &options);
@@ -28,12 +26,12 @@ fn assert_same_image(name: &str, scene: &Scene, options: &RenderOptions) -> u64 
     let (with, with_stats) = image_and_stats(scene, options, true);
     let (without, without_stats) = image_and_stats(scene, options, false);
     assert!(with == without, "{name}: the masks changed the image");
-    assert_eq!(without_stats.floor_shared_visibility, 0);
+    assert_eq!(without_stats.work.floor_shared_visibility, 0);
     assert!(
-        with_stats.shadow_rays <= without_stats.shadow_rays,
+        with_stats.work.shadow_rays <= without_stats.work.shadow_rays,
         "{name}"
     );
-    with_stats.floor_shared_visibility
+    with_stats.work.floor_shared_visibility
 }
 
 #[test]
@@ -143,10 +141,10 @@ fn a_line_light_shares_one_ray_where_walls_cut_it_off_whole() {
     // the other walls and the light's line); with them, only the pixels
     // near an edge or in the soft shadow do (two fifths).
     assert!(
-        with_stats.shadow_rays * 2 < without_stats.shadow_rays,
+        with_stats.work.shadow_rays * 2 < without_stats.work.shadow_rays,
         "{} shadow rays with the masks, {} without",
-        with_stats.shadow_rays,
-        without_stats.shadow_rays
+        with_stats.work.shadow_rays,
+        without_stats.work.shadow_rays
     );
     // The pane lets light through, tinted; the umbra is dark.
     let behind_pane = with.get(54, 70)[0];

@@ -3,46 +3,42 @@
 //! can meet; the floor memo's shadow rays test only the walls between the
 //! block and the light (the floor memo's, or every sample's without the
 //! memo); a ray off a mirror, only the walls that rays from its piece of
-//! the mirror (4 pixels long) in its 1/64 turn can meet. That must change nothing but the work: every image
-//! here is bit-identical with culling on and off, and the counts show it
-//! ran.
+//! the mirror (4 pixels long) in its 1/64 turn can meet. That must change
+//! nothing but the work: every image here is bit-identical with the
+//! reference model's (`RenderOptions::reference`: no fast path at all),
+//! the physics statistics are the same, and the counts show culling ran.
 
 use flatray_tests::{render, scene, workspace_root};
 use flatray_tracer::{Image, MemoOptions, RenderOptions, Scene, Stats};
 
 fn image_and_stats(scene: &Scene, options: &RenderOptions, cull: bool) -> (Image, Stats) {
     let options = RenderOptions {
-        cull_floor_rays: cull,
+        reference: !cull,
         ..*options
     };
     let rendered = render(scene, &options);
     (rendered.image, rendered.stats)
 }
 
-/// Renders with and without culling; returns the culled render's stats.
+/// Renders with culling and with the reference model; returns the culled
+/// render's stats.
 fn assert_same_image(name: &str, scene: &Scene, options: &RenderOptions) -> Stats {
     let (with, with_stats) = image_and_stats(scene, options, true);
     let (without, without_stats) = image_and_stats(scene, options, false);
     assert!(with == without, "{name}: culling changed the image");
-    assert_eq!(without_stats.culled_rays, 0, "{name}");
+    assert_eq!(without_stats.work.culled_rays, 0, "{name}");
     // The same paths: only the walls tested differ, and the rays of arcs
     // that meet no wall, which culling does not trace (their paths escape).
     // Rays off mirrors are culled too (a reflection at the bounce limit
     // casts none).
     assert!(
-        with_stats.culled_mirror_rays <= with_stats.mirror_reflections,
+        with_stats.work.culled_mirror_rays <= with_stats.physics.mirror_reflections,
         "{name}"
     );
+    assert_eq!(with_stats.physics, without_stats.physics, "{name}");
     assert_eq!(
-        Stats {
-            culled_rays: 0,
-            culled_walls_tested: 0,
-            culled_empty: 0,
-            culled_mirror_rays: 0,
-            bounce_rays: with_stats.bounce_rays + with_stats.culled_empty,
-            ..with_stats
-        },
-        without_stats,
+        with_stats.work.bounce_rays + with_stats.work.culled_empty,
+        without_stats.work.bounce_rays,
         "{name}"
     );
     with_stats
@@ -59,23 +55,29 @@ fn the_example_rooms_render_the_same_testing_an_eighth_of_the_walls() {
             ..loaded.options
         };
         let stats = assert_same_image(name, &loaded.scene, &options);
-        assert_eq!(stats.culled_rays, stats.camera_samples, "{name}");
+        assert_eq!(
+            stats.work.culled_rays, stats.physics.camera_samples,
+            "{name}"
+        );
         // One flat mirror, one bounce: every reflection casts a ray.
-        assert_eq!(stats.culled_mirror_rays, stats.mirror_reflections);
+        assert_eq!(
+            stats.work.culled_mirror_rays,
+            stats.physics.mirror_reflections
+        );
         // Half the room's floor rays meet no wall (at full size, 61 M of
         // 125 M): they are not traced.
         assert!(
-            stats.culled_empty * 3 > stats.culled_rays,
+            stats.work.culled_empty * 3 > stats.work.culled_rays,
             "{name}: {stats:?}"
         );
         // 13 walls, 1.18 tested per ray here (1.0 at full size, where the
         // blocks are smaller in world units).
         let walls = loaded.scene.walls.len() as u64;
         assert!(
-            stats.culled_walls_tested * 8 < stats.culled_rays * walls,
+            stats.work.culled_walls_tested * 8 < stats.work.culled_rays * walls,
             "{name}: {} walls tested for {} rays",
-            stats.culled_walls_tested,
-            stats.culled_rays
+            stats.work.culled_walls_tested,
+            stats.work.culled_rays
         );
     }
 }
@@ -137,11 +139,11 @@ fn hard_configurations_render_the_same() {
                 &loaded.scene,
                 &options,
             );
-            assert!(stats.culled_rays > 0);
+            assert!(stats.work.culled_rays > 0);
             // Without the memo a path holds the floor's direct light: an
             // escaping ray does not make it zero, so every ray is traced.
             if !memo {
-                assert_eq!(stats.culled_empty, 0);
+                assert_eq!(stats.work.culled_empty, 0);
             }
         }
     }
@@ -163,7 +165,7 @@ fn scenes_queried_through_a_bvh_are_not_culled() {
         ..loaded.options
     };
     let stats = assert_same_image("bvh", &loaded.scene, &options);
-    assert_eq!(stats.culled_rays, 0);
+    assert_eq!(stats.work.culled_rays, 0);
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
     assert!(!plan.floor_ray_culling);
 }
@@ -184,11 +186,11 @@ fn samples_that_are_not_finite_are_left_out_as_without_culling() {
     loaded.scene.lights[0].intensity = 1e200;
     loaded.options.exposure = 1e-200;
     let stats = assert_same_image("overflow", &loaded.scene, &loaded.options);
-    assert!(stats.culled_rays > 0);
+    assert!(stats.work.culled_rays > 0);
     // Many samples meet a wall: all dropped and counted, the first of them
     // the same (compared above).
     assert!(
-        stats.nonfinite_samples > stats.camera_samples / 10,
+        stats.physics.nonfinite_samples > stats.physics.camera_samples / 10,
         "{stats:?}"
     );
     let (image, _) = image_and_stats(&loaded.scene, &loaded.options, true);

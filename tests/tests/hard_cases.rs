@@ -377,7 +377,7 @@ fn facing_mirrors_end_at_the_bounce_limit() {
     let rendered = render(&loaded.scene, &options(2, 1000));
     assert!(all_finite(&rendered.image));
     assert!(
-        rendered.stats.mirror_reflections > 10_000,
+        rendered.stats.physics.mirror_reflections > 10_000,
         "{}",
         rendered.stats
     );
@@ -385,7 +385,7 @@ fn facing_mirrors_end_at_the_bounce_limit() {
     // ray leaves within 79 degrees of the normal: 58 % of the 3,600 (2,121
     // with these numbers; the binomial's deviation is 30).
     assert!(
-        rendered.stats.paths_bounce_limit > 1_800,
+        rendered.stats.physics.paths_bounce_limit > 1_800,
         "{}",
         rendered.stats
     );
@@ -469,7 +469,7 @@ fn point_light_on_a_wall_endpoint_and_at_a_pixel_centre_stays_finite() {
                 },
             );
             assert!(all_finite(&rendered.image), "{at}");
-            assert_eq!(rendered.stats.nonfinite_samples, 0, "{at}");
+            assert_eq!(rendered.stats.physics.nonfinite_samples, 0, "{at}");
         }
     }
     // At a pixel centre the small-radius clamp bounds the pixel: its value
@@ -759,10 +759,10 @@ fn a_non_finite_sample_is_reported_not_written() {
     for r in [&rendered, &rendered2] {
         assert!(r.image.pixels.iter().flatten().all(|v| !v.is_nan()));
     }
-    assert!(rendered2.stats.nonfinite_samples > 0);
+    assert!(rendered2.stats.physics.nonfinite_samples > 0);
     // The first pixel's first sample taken (samples go arc by arc: either
     // of its two).
-    let first = rendered2.stats.first_nonfinite;
+    let first = rendered2.stats.physics.first_nonfinite;
     assert!(matches!(first, Some((0, 0, 0 | 1))), "{first:?}");
 }
 
@@ -781,8 +781,11 @@ fn glass_case(text: &str) -> Vec<Image> {
                 },
             );
             assert!(all_finite(&rendered.image), "{integrator:?}");
-            assert_eq!(rendered.stats.nonfinite_samples, 0, "{integrator:?}");
-            assert!(rendered.stats.glass_events > 0, "{integrator:?}");
+            assert_eq!(
+                rendered.stats.physics.nonfinite_samples, 0,
+                "{integrator:?}"
+            );
+            assert!(rendered.stats.physics.glass_events > 0, "{integrator:?}");
             rendered.image
         })
         .collect()

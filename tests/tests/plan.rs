@@ -72,7 +72,7 @@ fn stats_of(text: &str, force: bool) -> (flatray_tracer::Image, Stats) {
         &loaded.scene,
         &RenderOptions {
             samples: 4,
-            force_all_effects: force,
+            reference: force,
             ..loaded.options
         },
     );
@@ -85,57 +85,61 @@ fn skipped_effects_cast_no_rays_and_count_no_events() {
     let (_, s) = stats_of(DIRECT_ONLY, false);
     assert_eq!(
         (
-            s.shadow_rays,
-            s.bounce_rays,
-            s.memo_entries,
-            s.memo_lookups,
-            s.floor_memo_reuses
+            s.work.shadow_rays,
+            s.work.bounce_rays,
+            s.work.memo_entries,
+            s.work.memo_lookups,
+            s.work.floor_memo_reuses
         ),
         (0, 0, 0, 0, 0)
     );
-    assert!(s.camera_samples > 0);
+    assert!(s.physics.camera_samples > 0);
     // Clear panes occlude nothing and reflect nothing.
     let (_, s) = stats_of(CLEAR_PANES, false);
     assert_eq!(
         (
-            s.shadow_rays,
-            s.bounce_rays,
-            s.transparent_passes,
-            s.memo_entries
+            s.work.shadow_rays,
+            s.work.bounce_rays,
+            s.physics.transparent_passes,
+            s.work.memo_entries
         ),
         (0, 0, 0, 0)
     );
     // Black walls occlude but reflect nothing: shadows, no paths.
     let (_, s) = stats_of(BLACK_WALLS, false);
-    assert!(s.shadow_rays > 0);
+    assert!(s.work.shadow_rays > 0);
     assert_eq!(
         (
-            s.bounce_rays,
-            s.mirror_reflections,
-            s.emission_tests,
-            s.memo_lookups
+            s.work.bounce_rays,
+            s.physics.mirror_reflections,
+            s.work.emission_tests,
+            s.work.memo_lookups
         ),
         (0, 0, 0, 0)
     );
     // No mirror: paths run, but nothing looks for line lights in mirrors.
     let (_, s) = stats_of(NO_MIRROR, false);
-    assert!(s.bounce_rays > 0 && s.memo_lookups > 0);
+    assert!(s.work.bounce_rays > 0 && s.work.memo_lookups > 0);
     assert_eq!(
-        (s.mirror_reflections, s.emission_tests, s.transparent_passes),
+        (
+            s.physics.mirror_reflections,
+            s.work.emission_tests,
+            s.physics.transparent_passes
+        ),
         (0, 0, 0)
     );
     // Its second wall takes the floor's albedo: colour bleeding runs.
-    assert!(s.floor_albedo_reads > 0);
+    assert!(s.work.floor_albedo_reads > 0);
     // The same scenes forced: the skipped work is there to be skipped.
     for text in [DIRECT_ONLY, CLEAR_PANES, BLACK_WALLS] {
         let (_, forced) = stats_of(text, true);
         assert!(
-            forced.shadow_rays > 0 && forced.bounce_rays > 0,
+            forced.work.shadow_rays > 0 && forced.work.bounce_rays > 0,
             "{forced:?}"
         );
     }
     let (_, forced) = stats_of(NO_MIRROR, true);
-    assert!(forced.emission_tests > 0);
+    assert!(forced.work.emission_tests > 0);
 }
 
 #[test]
@@ -152,14 +156,14 @@ fn the_light_tracer_casts_no_shadow_ray_and_reads_no_memo() {
     let stats = render(&loaded.scene, &options).stats;
     assert_eq!(
         (
-            stats.shadow_rays,
-            stats.memo_entries,
-            stats.memo_lookups,
-            stats.floor_memo_reuses
+            stats.work.shadow_rays,
+            stats.work.memo_entries,
+            stats.work.memo_lookups,
+            stats.work.floor_memo_reuses
         ),
         (0, 0, 0, 0)
     );
-    assert!(stats.light_paths > 0 && stats.mirror_reflections > 0);
+    assert!(stats.physics.light_paths > 0 && stats.physics.mirror_reflections > 0);
 }
 
 #[test]
@@ -179,13 +183,13 @@ fn images_are_bit_identical_with_and_without_the_plan() {
                 samples: 8,
                 scale: 0.2,
                 bounces: 1,
-                force_all_effects: force,
+                reference: force,
                 ..loaded.options
             };
             render(&loaded.scene, &options)
         };
         let (planned, forced) = (render_with(false), render_with(true));
-        assert!(planned.stats.memo_lookups > 0, "{name}");
+        assert!(planned.stats.work.memo_lookups > 0, "{name}");
         assert!(
             planned.image == forced.image,
             "the plan changed the image of {name}"

@@ -69,17 +69,18 @@ pub(crate) struct Scattered {
 impl Bsdf {
     /// The BSDF of wall `index` at `x`, the point at `u` of it. A diffuse
     /// wall without an albedo of its own takes the floor's there (counted
-    /// in `stats`).
+    /// in `stats`; with `tables`, from the table along the walls).
     #[inline]
     pub fn at(
         scene: &Scene,
         material: Material,
         (index, u, x): (u32, f64, DVec2),
+        tables: bool,
         stats: &mut Stats,
     ) -> Bsdf {
         match material {
             Material::Diffuse { albedo } => Bsdf::Lambertian {
-                rho: diffuse_albedo(scene, albedo, (index, u, x), stats),
+                rho: diffuse_albedo(scene, albedo, (index, u, x), tables, stats),
             },
             Material::Mirror { tint } => Bsdf::Mirror { tint },
             Material::Transparent { tint } => Bsdf::Transparent { tint },

@@ -80,7 +80,7 @@ pub(crate) fn interact(
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Event {
-    stats.glass_events += 1;
+    stats.physics.glass_events += 1;
     let glass = scene.glass[body as usize];
     let mut colour = Rgb::ONE;
     let n = if glass.dispersion != 0.0 {

@@ -39,4 +39,4 @@ pub use render::{
     Image, Integrator, RenderOptions, Rendered, TILE, image_size, pixel_sample, render,
 };
 pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
-pub use stats::{Noise, Stats};
+pub use stats::{Noise, Physics, Stats, Work};

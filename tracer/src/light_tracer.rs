@@ -152,7 +152,7 @@ fn trace_photon(
     stream: &mut Stream,
     stats: &mut Stats,
 ) {
-    stats.light_paths += 1;
+    stats.physics.light_paths += 1;
     let mut power = light.color * weight;
     // The first flight reproduces the kernel: the photon says how.
     let photon = light.shape.emit(light, scene, stream);
@@ -169,7 +169,7 @@ fn trace_photon(
     let mut bounce = 0;
     let mut glass = GlassState::default();
     loop {
-        stats.bounce_rays += 1;
+        stats.work.bounce_rays += 1;
         let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
         let t_end = hit.map_or(f64::INFINITY, |(_, h)| h.t);
         // The medium of this flight: known exactly when it ends at a glass
@@ -187,34 +187,34 @@ fn trace_photon(
             &ray, t_end, power, kernel, travelled, absorb, r0, buffer, stream,
         );
         let Some((index, h)) = hit else {
-            stats.paths_escaped += 1;
+            stats.physics.paths_escaped += 1;
             return;
         };
         travelled += h.t;
         power *= transmit(absorb, h.t);
         if h.u == 0.0 || h.u == 1.0 {
             // The corner rule (see the path tracer).
-            stats.paths_absorbed += 1;
+            stats.physics.paths_absorbed += 1;
             return;
         }
         let wall = &scene.walls[index as usize];
         let x = wall.segment.point_at(h.u);
         let Some(side) = wall.segment.arrival_side(ray.dir) else {
-            stats.paths_escaped += 1;
+            stats.physics.paths_escaped += 1;
             return;
         };
-        let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), stats);
+        let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), true, stats);
         if let Bsdf::Transparent { .. } = bsdf {
-            stats.transparent_passes += 1;
+            stats.physics.transparent_passes += 1;
         } else {
             bounce += 1;
             if bounce > bounces {
-                stats.paths_bounce_limit += 1;
+                stats.physics.paths_bounce_limit += 1;
                 return;
             }
         }
         if let Bsdf::Mirror { .. } = bsdf {
-            stats.mirror_reflections += 1;
+            stats.physics.mirror_reflections += 1;
         }
         // Photons carry power, which refraction conserves.
         let scattered = bsdf.sample(
@@ -236,7 +236,7 @@ fn trace_photon(
         }
         ray = Ray::new(x, scattered.dir);
         if power == Rgb::ZERO {
-            stats.paths_absorbed += 1;
+            stats.physics.paths_absorbed += 1;
             return;
         }
         skip = Skip::one(index);

@@ -23,12 +23,9 @@ pub struct MemoOptions {
     /// its error keeps falling as the samples grow: the larger of the two,
     /// rounded up to a square.
     pub floor_samples: u32,
-    /// Stratified points per line light for a wall bin's irradiance.
+    /// Stratified points per line or circle light for a wall bin's
+    /// irradiance.
     pub line_samples: u32,
-    /// Whether the floor's strata share one shadow ray per light where no
-    /// shadow edge crosses their pixel (`coherence.rs`): the same image,
-    /// fewer rays.
-    pub floor_coherence: bool,
 }
 
 impl Default for MemoOptions {
@@ -38,7 +35,6 @@ impl Default for MemoOptions {
             bin_length: 1.0,
             floor_samples: 1,
             line_samples: 64,
-            floor_coherence: true,
         }
     }
 }
@@ -189,13 +185,13 @@ pub(crate) fn build_wall_memo(
                     &mut local,
                 ),
             };
-            rays.fetch_add(local.shadow_rays, Ordering::Relaxed);
+            rays.fetch_add(local.work.shadow_rays, Ordering::Relaxed);
             to_value(value)
         },
     );
-    stats.memo_entries += memo.entries() as u64;
-    stats.memo_bytes += memo.memory_bytes() as u64;
-    stats.memo_fill_rays += rays.load(Ordering::Relaxed);
+    stats.work.memo_entries += memo.entries() as u64;
+    stats.work.memo_bytes += memo.memory_bytes() as u64;
+    stats.work.memo_fill_rays += rays.load(Ordering::Relaxed);
     memo
 }
 

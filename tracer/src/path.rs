@@ -125,8 +125,8 @@ pub(crate) fn path_finish(
     if first_hit.is_none() && !force {
         // Escaped at once, as the loop below would find, with nothing met
         // on the way (emission is looked for only after a mirror).
-        stats.bounce_rays += 1;
-        stats.paths_escaped += 1;
+        stats.work.bounce_rays += 1;
+        stats.physics.paths_escaped += 1;
         return fluence;
     }
     let mut fluence = fluence;
@@ -146,7 +146,7 @@ pub(crate) fn path_finish(
     let mut line_walls = line_walls;
 
     loop {
-        stats.bounce_rays += 1;
+        stats.work.bounce_rays += 1;
         let hit = match first_hit.take() {
             Some(hit) => hit,
             None => match line_walls {
@@ -158,27 +158,27 @@ pub(crate) fn path_finish(
         };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
         if mirror_emission && (after_mirror || force) {
-            stats.emission_tests += 1;
+            stats.work.emission_tests += 1;
             let emitted = emission_crossed(scene, &ray, hit_t, unfolded);
             if after_mirror {
                 fluence += throughput * emitted;
             }
         }
         let Some((index, h)) = hit else {
-            stats.paths_escaped += 1;
+            stats.physics.paths_escaped += 1;
             break;
         };
         let wall = &scene.walls[index as usize];
         let Some(side) = wall.segment.arrival_side(ray.dir) else {
             // A crossing implies the ray is not parallel to the wall.
-            stats.paths_escaped += 1;
+            stats.physics.paths_escaped += 1;
             break;
         };
         if h.u == 0.0 || h.u == 1.0 {
             // The corner rule: a path that meets a wall exactly at an end
             // ends there. Leaving from a corner point, no side test could
             // tell the room's inside from its outside.
-            stats.paths_absorbed += 1;
+            stats.physics.paths_absorbed += 1;
             break;
         }
         let x = wall.segment.point_at(h.u);
@@ -195,16 +195,16 @@ pub(crate) fn path_finish(
             fluence += throughput * line_emission(light, side, unfolded, scene.small_radius);
         }
 
-        let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), stats);
+        let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), trace.tables, stats);
         // A transparent wall is no scattering event: the path goes on
         // straight, and no bounce is counted.
         let straight = matches!(bsdf, Bsdf::Transparent { .. });
         if straight {
-            stats.transparent_passes += 1;
+            stats.physics.transparent_passes += 1;
         } else {
             bounce += 1;
             if bounce > bounces {
-                stats.paths_bounce_limit += 1;
+                stats.physics.paths_bounce_limit += 1;
                 break;
             }
         }
@@ -216,7 +216,7 @@ pub(crate) fn path_finish(
             // holds E on each side of a diffuse wall.
             let irradiance = match memo {
                 Some(memo) => {
-                    stats.memo_lookups += 1;
+                    stats.work.memo_lookups += 1;
                     memo_irradiance(memo, index, side, h.u)
                 }
                 None => {
@@ -230,12 +230,12 @@ pub(crate) fn path_finish(
             };
             fluence += throughput * rho * 0.5 * irradiance;
             if bounce == bounces {
-                stats.paths_bounce_limit += 1;
+                stats.physics.paths_bounce_limit += 1;
                 break;
             }
         }
         if let Bsdf::Mirror { .. } = bsdf {
-            stats.mirror_reflections += 1;
+            stats.physics.mirror_reflections += 1;
         }
         let sampling = match integrator {
             // The light tracer never calls this function.
@@ -253,7 +253,7 @@ pub(crate) fn path_finish(
         );
         throughput *= scattered.weight;
         if throughput == Rgb::ZERO {
-            stats.paths_absorbed += 1;
+            stats.physics.paths_absorbed += 1;
             break;
         }
         ray = Ray::new(x, scattered.dir);
@@ -273,7 +273,7 @@ pub(crate) fn path_finish(
                 _ => None,
             };
             if line_walls.is_some() {
-                stats.culled_mirror_rays += 1;
+                stats.work.culled_mirror_rays += 1;
             }
         } else {
             after_mirror = false;
@@ -286,21 +286,26 @@ pub(crate) fn path_finish(
 
 /// A diffuse wall's albedo at `x`, the point at `u` on wall `wall`: its
 /// own, or the floor's there (colour bleeding from the floor), counted in
-/// `stats`.
+/// `stats`; with `tables`, read from the table along the walls.
 #[inline]
 pub(crate) fn diffuse_albedo(
     scene: &Scene,
     albedo: Option<Rgb>,
     (wall, u, x): (u32, f64, DVec2),
+    tables: bool,
     stats: &mut Stats,
 ) -> Rgb {
     match albedo {
         Some(rho) => rho,
         None => {
-            stats.floor_albedo_reads += 1;
-            scene
-                .albedo_along
-                .at(&scene.floor, &scene.canvas, wall, u, x)
+            stats.work.floor_albedo_reads += 1;
+            if tables {
+                scene
+                    .albedo_along
+                    .at(&scene.floor, &scene.canvas, wall, u, x)
+            } else {
+                scene.floor.albedo_at(&scene.canvas, x)
+            }
         }
     }
 }
@@ -321,8 +326,13 @@ pub(crate) struct Trace<'a> {
     pub shadows: bool,
     /// Whether path rays look for line lights after a mirror.
     pub mirror_emission: bool,
-    /// Forced mode: look for them after every bounce (adding nothing).
+    /// The reference model: look for them after every bounce (adding
+    /// nothing).
     pub force: bool,
+    /// Whether a diffuse wall that takes the floor's albedo reads it from
+    /// the scene's table along the walls (the same values) rather than
+    /// from the floor.
+    pub tables: bool,
     /// The wall memo when paths take the one-bounce shortcut of
     /// [`path_finish`] (one bounce, not forced): one test per path.
     pub one_bounce_memo: Option<&'a WallMemo>,
@@ -357,11 +367,11 @@ pub(crate) fn memo_bounce(
         return None;
     }
     let side = wall.segment.arrival_side(dir)?;
-    stats.bounce_rays += 1;
-    stats.memo_lookups += 1;
-    stats.paths_bounce_limit += 1;
+    stats.work.bounce_rays += 1;
+    stats.work.memo_lookups += 1;
+    stats.physics.paths_bounce_limit += 1;
     let x = wall.segment.point_at(u);
-    let rho = diffuse_albedo(scene, albedo, (index, u, x), stats);
+    let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
     let irradiance = memo_irradiance(memo, index, side, u);
     Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
 }

@@ -61,7 +61,7 @@ pub struct Plan {
 
 impl Plan {
     /// The plan for `scene` rendered with `options`. With
-    /// `options.force_all_effects`, every switch is on wherever it cannot
+    /// `options.reference`, every effect is on wherever it cannot
     /// change the image (a debugging and benchmarking aid).
     pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
         let count =
@@ -116,7 +116,7 @@ impl Plan {
                 Material::Glass { .. } => true,
             })
             .count();
-        let force = options.force_all_effects;
+        let force = options.reference;
         let no_lights = scene.lights.is_empty();
 
         // The light tracer casts no shadow ray and reads no memo.
@@ -150,7 +150,7 @@ impl Plan {
         let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
         let floor_coherence = floor_memo
             && shadows
-            && options.memo.floor_coherence
+            && !options.reference
             && pairs <= crate::coherence::MAX_PAIRS
             && mask_cells <= crate::coherence::MAX_CELLS;
         let brute_force = scene.segments().strategy() == Strategy::BruteForce;
@@ -158,7 +158,7 @@ impl Plan {
             && indirect
             && !scene.walls.is_empty()
             && brute_force
-            && options.cull_floor_rays;
+            && !options.reference;
 
         let mut effects = Vec::new();
         let mut add =
@@ -318,8 +318,8 @@ impl Plan {
                 "no floor cache".into()
             } else if !shadows {
                 "no shadow rays".into()
-            } else if !options.memo.floor_coherence {
-                "switched off".into()
+            } else if options.reference {
+                "the reference model runs no fast path".into()
             } else if pairs > crate::coherence::MAX_PAIRS {
                 format!(
                     "{pairs} wall-light pairs, over {}: drawing the shadow edges would cost more than it saves",
@@ -386,8 +386,8 @@ impl Plan {
                 "no walls".into()
             } else if !brute_force {
                 "the BVH culls walls for every ray".into()
-            } else if !options.cull_floor_rays {
-                "switched off".into()
+            } else if options.reference {
+                "the reference model runs no fast path".into()
             } else {
                 let off_mirrors = if mirrors > 0 {
                     format!(", and so for rays off mirrors per {MIRROR_PIECE} pixels of mirror")

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use flatray_cache::WallMemo;
 
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
-use crate::light::{Strata, Visibility, direct_light_strata};
+use crate::light::{Strata, Visibility, direct_light_points, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::mirror::MirrorArcs;
 use crate::path::{Trace, memo_bounce, path_begin, path_finish, path_sample};
@@ -51,13 +51,13 @@ pub struct RenderOptions {
     pub integrator: Integrator,
     /// The direct-light memo.
     pub memo: MemoOptions,
-    /// Run every effect wherever doing so cannot change the image, even
-    /// when the plan would skip it: a debugging and benchmarking aid.
-    pub force_all_effects: bool,
-    /// Let the plan cull the floor's rays by direction (the default). Off,
-    /// every floor ray tests every wall: the same image, for tests and
-    /// benchmarks.
-    pub cull_floor_rays: bool,
+    /// The plain model: every effect computed wherever it could add
+    /// light, even where the plan would skip it, and no fast path (no
+    /// culling, lanes, shared shadow rays, tables or shortcuts, and the
+    /// pixel loop compiled for any processor). The same image, bit for
+    /// bit (`tests/tests/identity.rs`), more slowly: for tests, debugging
+    /// and benchmarks.
+    pub reference: bool,
 }
 
 impl Default for RenderOptions {
@@ -70,8 +70,7 @@ impl Default for RenderOptions {
             scale: 1.0,
             integrator: Integrator::Path,
             memo: MemoOptions::default(),
-            force_all_effects: false,
-            cull_floor_rays: true,
+            reference: false,
         }
     }
 }
@@ -154,7 +153,11 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         coherence: coherence.as_ref(),
         culling: plan.floor_ray_culling,
         trace: trace_for(scene, options, &plan, memo.as_ref(), mirror_arcs.as_ref()),
-        render_pixel: pixel_fn(),
+        render_pixel: if options.reference {
+            render_pixel
+        } else {
+            pixel_fn()
+        },
     };
     let step = pixel_size(scene, (width, height));
     let tiles_x = width.div_ceil(TILE);
@@ -283,7 +286,7 @@ fn trace_for<'a>(
     mirror_arcs: Option<&'a MirrorArcs>,
 ) -> Trace<'a> {
     let bounces = if plan.indirect { options.bounces } else { 0 };
-    let force = options.force_all_effects;
+    let force = options.reference;
     Trace {
         scene,
         bounces,
@@ -293,6 +296,7 @@ fn trace_for<'a>(
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
         force,
+        tables: !force,
         one_bounce_memo: memo.filter(|_| bounces == 1 && !force),
         mirror_arcs,
     }
@@ -340,11 +344,11 @@ fn render_pixel(
                 |(light, state)| match state {
                     Coherence::Varies => Visibility::Trace,
                     Coherence::Same => {
-                        stats.floor_shared_visibility += 1;
+                        stats.work.floor_shared_visibility += 1;
                         Visibility::Known(centre_transmittance(scene, light, centre, stats))
                     }
                     Coherence::Clear => {
-                        stats.floor_shared_visibility += 1;
+                        stats.work.floor_shared_visibility += 1;
                         Visibility::Known(Rgb::ONE)
                     }
                 },
@@ -372,9 +376,13 @@ fn render_pixel(
             }
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
-        direct_light_strata(scene, floor, visibility, shadow_walls, stats);
+        if options.reference {
+            direct_light_points(scene, floor, visibility, stats);
+        } else {
+            direct_light_strata(scene, floor, visibility, shadow_walls, stats);
+        }
         direct = strata_sum(&floor.values, (x, y), stats) / (grid * grid) as f64;
-        stats.floor_memo_reuses += options.samples as u64;
+        stats.work.floor_memo_reuses += options.samples as u64;
     }
     let mut sums = Sums::new(options.samples);
     match culled {
@@ -510,7 +518,7 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
     let scene = trace.scene;
     let mut stream = pixel.key.stream(sample as u64);
     let p = pixel.receiver(scene, &mut stream);
-    stats.camera_samples += 1;
+    stats.physics.camera_samples += 1;
     let arc = sample_arc(pixel.arc_offset, sample);
     path_sample(trace, p, arc, &mut stream, stats)
 }
@@ -552,16 +560,16 @@ fn culled_samples<const CHECKED: bool>(
     let samples = context.options.samples;
     let (arcs, shadow_walls) = (&culled.arcs, Some(&culled.shadows[..]));
     let empty_arcs_add_nothing = !trace.floor_direct && !trace.force;
-    stats.camera_samples += samples as u64;
+    stats.physics.camera_samples += samples as u64;
     let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
     for (arc, of_arc) in sample_order(pixel.arc_offset, samples) {
         let walls = arcs.arc(arc);
-        stats.culled_rays += of_arc.len() as u64;
+        stats.work.culled_rays += of_arc.len() as u64;
         if empty_arcs_add_nothing {
             // Paths start with nothing and leave the floor at once.
             if walls.is_empty() {
-                stats.culled_empty += of_arc.len() as u64;
-                stats.paths_escaped += of_arc.len() as u64;
+                stats.work.culled_empty += of_arc.len() as u64;
+                stats.physics.paths_escaped += of_arc.len() as u64;
                 continue;
             }
             // As many lanes as the arc has samples, rounded up to a power
@@ -583,7 +591,7 @@ fn culled_samples<const CHECKED: bool>(
             // The plan culls only when paths bounce: every sample has a ray.
             let value = match begun.ray {
                 Some(ray) => {
-                    stats.culled_walls_tested += walls.len() as u64;
+                    stats.work.culled_walls_tested += walls.len() as u64;
                     let hit =
                         scene
                             .segments
@@ -705,7 +713,7 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
     }
     (rays.dx, rays.dy) = arc_points(arc, &fractions);
     let hits = scene.segments.closest_hits_among(&rays, walls);
-    stats.culled_walls_tested += (walls.len() * count) as u64;
+    stats.work.culled_walls_tested += (walls.len() * count) as u64;
     let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
     for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
         // `path_finish`'s common case first, from the lanes as they are.
@@ -827,7 +835,7 @@ mod tests {
             strata_sum(&finite, (4, 5), &mut stats),
             Rgb::new(6.0, 3.0, 6.0)
         );
-        assert_eq!(stats.nonfinite_samples, 0);
+        assert_eq!(stats.physics.nonfinite_samples, 0);
         // An infinity, a NaN, and finite values whose sum overflows (all
         // finite: kept, as before the check moved).
         let mixed = [v(1.0), v(f64::INFINITY), v(2.0), v(f64::NAN), v(3.0)];
@@ -835,10 +843,10 @@ mod tests {
             strata_sum(&mixed, (4, 5), &mut stats),
             Rgb::new(6.0, 3.0, 6.0)
         );
-        assert_eq!(stats.nonfinite_samples, 2);
-        assert_eq!(stats.first_nonfinite, Some((4, 5, u32::MAX)));
+        assert_eq!(stats.physics.nonfinite_samples, 2);
+        assert_eq!(stats.physics.first_nonfinite, Some((4, 5, u32::MAX)));
         let huge = [v(f64::MAX), v(f64::MAX)];
         assert_eq!(strata_sum(&huge, (4, 5), &mut stats).x, f64::INFINITY);
-        assert_eq!(stats.nonfinite_samples, 2);
+        assert_eq!(stats.physics.nonfinite_samples, 2);
     }
 }

@@ -2,16 +2,51 @@
 
 use std::fmt;
 
-/// What a render did: rays by kind, paths by how they ended, and samples
-/// whose estimate was not finite.
+/// What a render did, in two parts: the physics (samples, paths by how
+/// they ended, scattering events, samples left out), which depends only
+/// on the scene, the options and the estimator; and the work (rays cast,
+/// walls tested, cache reads), which the fast paths change. Snapshots pin
+/// the physics; the work shows what a fast path saved.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Stats {
+    pub physics: Physics,
+    pub work: Work,
+    /// The render's estimate of its own noise.
+    pub noise: Noise,
+}
+
+/// What happened to light: the same for the reference model and the fast
+/// paths wherever the plan skips nothing.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Physics {
     /// Receiver points drawn on the floor (one per pixel sample).
     pub camera_samples: u64,
-    /// Visibility tests towards a light.
-    pub shadow_rays: u64,
     /// Photon paths emitted by the light tracer.
     pub light_paths: u64,
+    /// Paths whose last ray hit nothing.
+    pub paths_escaped: u64,
+    /// Paths stopped by the bounce limit.
+    pub paths_bounce_limit: u64,
+    /// Paths whose throughput became exactly zero.
+    pub paths_absorbed: u64,
+    /// Reflections off mirrors.
+    pub mirror_reflections: u64,
+    /// Passes of a path through a transparent wall.
+    pub transparent_passes: u64,
+    /// Reflections and refractions at glass edges.
+    pub glass_events: u64,
+    /// Samples whose estimate was NaN or infinite, left out of the image.
+    pub nonfinite_samples: u64,
+    /// The first such sample taken, in tile order, then in the pixel's
+    /// order of samples: (x, y, sample index).
+    pub first_nonfinite: Option<(u32, u32, u32)>,
+}
+
+/// How the work was done: rays, culling, the caches.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Work {
+    /// Visibility tests towards a light.
+    pub shadow_rays: u64,
     /// Closest-hit rays of indirect paths (the first from the floor, then
     /// one after every reflection or pass through a transparent wall).
     pub bounce_rays: u64,
@@ -26,12 +61,6 @@ pub struct Stats {
     /// Rays off mirrors tested only against the walls of their mirror
     /// piece's arc of directions (a part of `bounce_rays`).
     pub culled_mirror_rays: u64,
-    /// Paths whose last ray hit nothing.
-    pub paths_escaped: u64,
-    /// Paths stopped by the bounce limit.
-    pub paths_bounce_limit: u64,
-    /// Paths whose throughput became exactly zero.
-    pub paths_absorbed: u64,
     /// Entries of the wall memo: (wall, side, bin, light) keys.
     pub memo_entries: u64,
     /// Bytes held by the wall memo.
@@ -45,23 +74,10 @@ pub struct Stats {
     /// (pixel, light) pairs of the floor memo whose strata shared one
     /// visibility (one shadow ray, or none for a clear line light).
     pub floor_shared_visibility: u64,
-    /// Reflections off mirrors.
-    pub mirror_reflections: u64,
-    /// Passes of a path through a transparent wall.
-    pub transparent_passes: u64,
-    /// Reflections and refractions at glass edges.
-    pub glass_events: u64,
     /// Diffuse hits whose albedo was read from the floor.
     pub floor_albedo_reads: u64,
-    /// Path rays tested against line lights (after a mirror).
+    /// Path rays tested against lights they can meet (after a mirror).
     pub emission_tests: u64,
-    /// Samples whose estimate was NaN or infinite, left out of the image.
-    pub nonfinite_samples: u64,
-    /// The first such sample taken, in tile order, then in the pixel's
-    /// order of samples: (x, y, sample index).
-    pub first_nonfinite: Option<(u32, u32, u32)>,
-    /// The render's estimate of its own noise.
-    pub noise: Noise,
 }
 
 /// A render's estimate of its own error, from the samples themselves: each
@@ -135,58 +151,70 @@ impl fmt::Display for Noise {
 
 impl Stats {
     pub(crate) fn record_nonfinite(&mut self, x: u32, y: u32, sample: u32) {
-        self.nonfinite_samples += 1;
-        if self.first_nonfinite.is_none() {
-            self.first_nonfinite = Some((x, y, sample));
+        let p = &mut self.physics;
+        p.nonfinite_samples += 1;
+        if p.first_nonfinite.is_none() {
+            p.first_nonfinite = Some((x, y, sample));
         }
     }
 
     /// Adds `other`'s counts; keeps the earlier first non-finite sample.
     pub fn merge(&mut self, other: &Stats) {
+        self.physics.merge(&other.physics);
+        self.work.merge(&other.work);
+        self.noise.merge(&other.noise);
+    }
+
+    /// All rays cast.
+    pub fn rays(&self) -> u64 {
+        self.work.shadow_rays + self.work.bounce_rays
+    }
+
+    /// The counts a user can act on: the physics, the rays cast, the
+    /// cache's size and the noise. `Display` adds every work counter
+    /// (culling, cache hits and reuses).
+    pub fn summary(&self) -> impl fmt::Display + '_ {
+        StatsText {
+            stats: self,
+            verbose: false,
+        }
+    }
+}
+
+impl Physics {
+    /// Adds `other`'s counts; keeps the earlier first non-finite sample.
+    pub fn merge(&mut self, other: &Physics) {
         self.camera_samples += other.camera_samples;
-        self.shadow_rays += other.shadow_rays;
         self.light_paths += other.light_paths;
+        self.paths_escaped += other.paths_escaped;
+        self.paths_bounce_limit += other.paths_bounce_limit;
+        self.paths_absorbed += other.paths_absorbed;
+        self.mirror_reflections += other.mirror_reflections;
+        self.transparent_passes += other.transparent_passes;
+        self.glass_events += other.glass_events;
+        self.nonfinite_samples += other.nonfinite_samples;
+        if self.first_nonfinite.is_none() {
+            self.first_nonfinite = other.first_nonfinite;
+        }
+    }
+}
+
+impl Work {
+    pub fn merge(&mut self, other: &Work) {
+        self.shadow_rays += other.shadow_rays;
         self.bounce_rays += other.bounce_rays;
         self.culled_rays += other.culled_rays;
         self.culled_walls_tested += other.culled_walls_tested;
         self.culled_empty += other.culled_empty;
         self.culled_mirror_rays += other.culled_mirror_rays;
-        self.paths_escaped += other.paths_escaped;
-        self.paths_bounce_limit += other.paths_bounce_limit;
-        self.paths_absorbed += other.paths_absorbed;
         self.memo_entries += other.memo_entries;
         self.memo_bytes += other.memo_bytes;
         self.memo_fill_rays += other.memo_fill_rays;
         self.memo_lookups += other.memo_lookups;
         self.floor_memo_reuses += other.floor_memo_reuses;
         self.floor_shared_visibility += other.floor_shared_visibility;
-        self.mirror_reflections += other.mirror_reflections;
-        self.transparent_passes += other.transparent_passes;
         self.floor_albedo_reads += other.floor_albedo_reads;
-        self.glass_events += other.glass_events;
         self.emission_tests += other.emission_tests;
-        self.nonfinite_samples += other.nonfinite_samples;
-        if self.first_nonfinite.is_none() {
-            self.first_nonfinite = other.first_nonfinite;
-        }
-        self.noise.merge(&other.noise);
-    }
-
-    /// All rays cast.
-    pub fn rays(&self) -> u64 {
-        self.shadow_rays + self.bounce_rays
-    }
-}
-
-impl Stats {
-    /// The counts a user can act on: rays and paths by how they ended,
-    /// events, the cache's size, samples left out. `Display` adds the work
-    /// counters (culling, cache hits and reuses).
-    pub fn summary(&self) -> impl fmt::Display + '_ {
-        StatsText {
-            stats: self,
-            verbose: false,
-        }
     }
 }
 
@@ -201,6 +229,29 @@ impl fmt::Display for Stats {
     }
 }
 
+/// The physics alone: what snapshots pin.
+impl fmt::Display for Physics {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self;
+        writeln!(f, "samples")?;
+        writeln!(f, "  camera samples   {:>14}", p.camera_samples)?;
+        writeln!(f, "  light paths      {:>14}", p.light_paths)?;
+        writeln!(f, "paths ended by")?;
+        writeln!(f, "  escaping         {:>14}", p.paths_escaped)?;
+        writeln!(f, "  bounce limit     {:>14}", p.paths_bounce_limit)?;
+        writeln!(f, "  absorption       {:>14}", p.paths_absorbed)?;
+        writeln!(f, "events")?;
+        writeln!(f, "  mirror bounces   {:>14}", p.mirror_reflections)?;
+        writeln!(f, "  transparent      {:>14}", p.transparent_passes)?;
+        writeln!(f, "  glass            {:>14}", p.glass_events)?;
+        write!(f, "non-finite samples {:>14}", p.nonfinite_samples)?;
+        if let Some((x, y, k)) = p.first_nonfinite {
+            write!(f, " (first: pixel ({x}, {y}), sample {k})")?;
+        }
+        Ok(())
+    }
+}
+
 /// The counts as text; the work counters only when `verbose`.
 struct StatsText<'a> {
     stats: &'a Stats,
@@ -210,44 +261,28 @@ struct StatsText<'a> {
 impl fmt::Display for StatsText<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (s, verbose) = (self.stats, self.verbose);
-        writeln!(f, "rays")?;
-        writeln!(f, "  camera samples   {:>14}", s.camera_samples)?;
-        writeln!(f, "  shadow rays      {:>14}", s.shadow_rays)?;
-        writeln!(f, "  bounce rays      {:>14}", s.bounce_rays)?;
-        writeln!(f, "  light paths      {:>14}", s.light_paths)?;
-        if verbose {
-            writeln!(f, "  culled rays      {:>14}", s.culled_rays)?;
-            writeln!(f, "  walls tested     {:>14}", s.culled_walls_tested)?;
-            writeln!(f, "  arc has no wall  {:>14}", s.culled_empty)?;
-            writeln!(f, "  culled off mirrors {:>12}", s.culled_mirror_rays)?;
-        }
-        writeln!(f, "paths ended by")?;
-        writeln!(f, "  escaping         {:>14}", s.paths_escaped)?;
-        writeln!(f, "  bounce limit     {:>14}", s.paths_bounce_limit)?;
-        writeln!(f, "  absorption       {:>14}", s.paths_absorbed)?;
-        writeln!(f, "events")?;
-        writeln!(f, "  mirror bounces   {:>14}", s.mirror_reflections)?;
-        writeln!(f, "  transparent      {:>14}", s.transparent_passes)?;
-        writeln!(f, "  glass            {:>14}", s.glass_events)?;
-        if verbose {
-            writeln!(f, "  floor albedo     {:>14}", s.floor_albedo_reads)?;
-            writeln!(f, "  emission tests   {:>14}", s.emission_tests)?;
-        }
-        writeln!(f, "cache")?;
-        if verbose {
-            writeln!(f, "  wall entries     {:>14}", s.memo_entries)?;
-        }
-        writeln!(f, "  wall bytes       {:>14}", s.memo_bytes)?;
-        if verbose {
-            writeln!(f, "  fill rays        {:>14}", s.memo_fill_rays)?;
-            writeln!(f, "  wall hits        {:>14}", s.memo_lookups)?;
-            writeln!(f, "  floor reuses     {:>14}", s.floor_memo_reuses)?;
-            writeln!(f, "  floor shared     {:>14}", s.floor_shared_visibility)?;
-        }
+        writeln!(f, "{}", s.physics)?;
         write_noise(f, &s.noise)?;
-        write!(f, "non-finite samples {:>14}", s.nonfinite_samples)?;
-        if let Some((x, y, k)) = s.first_nonfinite {
-            write!(f, " (first: pixel ({x}, {y}), sample {k})")?;
+        let w = &s.work;
+        writeln!(f, "work")?;
+        writeln!(f, "  shadow rays      {:>14}", w.shadow_rays)?;
+        writeln!(f, "  bounce rays      {:>14}", w.bounce_rays)?;
+        if verbose {
+            writeln!(f, "  culled rays      {:>14}", w.culled_rays)?;
+            writeln!(f, "  walls tested     {:>14}", w.culled_walls_tested)?;
+            writeln!(f, "  arc has no wall  {:>14}", w.culled_empty)?;
+            writeln!(f, "  culled off mirrors {:>12}", w.culled_mirror_rays)?;
+            writeln!(f, "  floor albedo     {:>14}", w.floor_albedo_reads)?;
+            writeln!(f, "  emission tests   {:>14}", w.emission_tests)?;
+            writeln!(f, "  wall entries     {:>14}", w.memo_entries)?;
+        }
+        write!(f, "  wall cache bytes {:>14}", w.memo_bytes)?;
+        if verbose {
+            writeln!(f)?;
+            writeln!(f, "  wall fill rays   {:>14}", w.memo_fill_rays)?;
+            writeln!(f, "  wall cache hits  {:>14}", w.memo_lookups)?;
+            writeln!(f, "  floor reuses     {:>14}", w.floor_memo_reuses)?;
+            write!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
         }
         Ok(())
     }

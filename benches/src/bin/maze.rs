@@ -72,7 +72,7 @@ fn main() {
     println!(
         "{count} walls, {} lights, {samples} spp, 500 x 500: scene built in {build_seconds:.2} s, rendered in {seconds:.2} s ({:.1} M rays/s)",
         scene.lights.len(),
-        (rendered.stats.rays() + rendered.stats.memo_fill_rays) as f64 / seconds / 1e6
+        (rendered.stats.rays() + rendered.stats.work.memo_fill_rays) as f64 / seconds / 1e6
     );
     if let Some(path) = args.get(3) {
         let tonemap = flatray_io::ToneMap::Reinhard {
