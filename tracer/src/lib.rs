@@ -15,6 +15,7 @@
 
 mod bsdf;
 mod coherence;
+mod film;
 mod glass;
 mod light;
 mod light_tracer;

@@ -4,9 +4,9 @@
 //! to that pixel's fluence.
 
 use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
-use rayon::prelude::*;
 
 use crate::bsdf::{Bsdf, Sampling, Transport};
+use crate::film::{Estimator, Film, Part, run};
 use crate::glass::{GlassState, absorption, transmit};
 use crate::plan::Plan;
 use crate::render::{Image, RenderOptions, Rendered, image_size};
@@ -45,99 +45,133 @@ pub fn render_light(
         acc += p / total.max(f64::MIN_POSITIVE);
         cumulative.push(acc);
     }
-    let mut image = Image::new(width, height);
-    let mut stats = Stats::default();
     if total <= 0.0 || paths == 0 {
-        return Rendered { image, stats };
+        return Rendered {
+            image: Image::new(width, height),
+            stats: Stats::default(),
+        };
     }
-    let weight = total / paths as f64;
-
     let chunks = (CHUNK_BUDGET / (pixels.max(1) * 24)).clamp(1, MAX_CHUNKS);
-    let per_chunk = paths.div_ceil(chunks as u64);
-    let grid = Grid::new(scene, options.scale, width, height);
-    let results: Vec<(Vec<Rgb>, Stats)> = (0..chunks)
-        .into_par_iter()
-        .map(|chunk| {
-            let mut buffer = vec![Rgb::ZERO; pixels];
-            let mut stats = Stats::default();
-            let first = chunk as u64 * per_chunk;
-            let last = ((chunk as u64 + 1) * per_chunk).min(paths);
-            let mut done = 0u64;
-            for index in first..last {
-                let mut stream = Stream::new(options.seed, index, 0);
-                let u = stream.uniform();
-                let pick = cumulative
-                    .iter()
-                    .position(|&c| u < c)
-                    .unwrap_or(powers.len() - 1);
-                let light = &scene.lights[pick];
-                trace_photon(
-                    scene,
-                    light,
-                    weight,
-                    bounces,
-                    &grid,
-                    &mut buffer,
-                    &mut stream,
-                    &mut stats,
-                );
-                done += 1;
-                if done.is_multiple_of(4096) {
-                    progress(4096);
+    let estimator = Photons {
+        scene,
+        options,
+        size: (width, height),
+        bounces,
+        paths,
+        weight: total / paths as f64,
+        cumulative,
+        chunks,
+        per_chunk: paths.div_ceil(chunks as u64),
+        grid: Grid::new(scene, options.scale, width, height),
+    };
+    run(&estimator, Stats::default(), progress)
+}
+
+/// Light tracing as units of the render loop: fixed chunks of photon
+/// paths, each summed in order into a buffer of the whole image.
+struct Photons<'a> {
+    scene: &'a Scene,
+    options: &'a RenderOptions,
+    size: (u32, u32),
+    bounces: u32,
+    /// Photon paths in all, and each one's share of the total power.
+    paths: u64,
+    weight: f64,
+    /// The lights' cumulative shares of the power: a light is chosen in
+    /// proportion to its power.
+    cumulative: Vec<f64>,
+    chunks: usize,
+    per_chunk: u64,
+    grid: Grid,
+}
+
+impl Estimator for Photons<'_> {
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn units(&self) -> usize {
+        self.chunks
+    }
+
+    fn render_unit(
+        &self,
+        chunk: usize,
+        stats: &mut Stats,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Part {
+        let scene = self.scene;
+        let mut buffer = vec![Rgb::ZERO; self.size.0 as usize * self.size.1 as usize];
+        let first = chunk as u64 * self.per_chunk;
+        let last = ((chunk as u64 + 1) * self.per_chunk).min(self.paths);
+        let mut done = 0u64;
+        for index in first..last {
+            let mut stream = Stream::new(self.options.seed, index, 0);
+            let u = stream.uniform();
+            let pick = self
+                .cumulative
+                .iter()
+                .position(|&c| u < c)
+                .unwrap_or(self.cumulative.len() - 1);
+            let light = &scene.lights[pick];
+            trace_photon(
+                scene,
+                light,
+                self.weight,
+                self.bounces,
+                &self.grid,
+                &mut buffer,
+                &mut stream,
+                stats,
+            );
+            done += 1;
+            if done.is_multiple_of(4096) {
+                progress(4096);
+            }
+        }
+        progress(done % 4096);
+        Part::Splats {
+            fluence: buffer,
+            first_half: chunk < self.chunks / 2,
+        }
+    }
+
+    fn finish(&self, film: Film, stats: &mut Stats) -> Image {
+        let (scene, (width, height)) = (self.scene, self.size);
+        let mut image = Image::new(width, height);
+        // The first half of the chunks' paths, for the noise estimate.
+        let first_paths = ((self.chunks / 2) as u64 * self.per_chunk).min(self.paths);
+        let paths = self.paths;
+        let step = DVec2::new(
+            scene.canvas.width as f64 / width as f64,
+            scene.canvas.height as f64 / height as f64,
+        );
+        for y in 0..height {
+            for x in 0..width {
+                let k = y as usize * width as usize + x as usize;
+                let centre = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
+                let scale = scene.floor.albedo_at(&scene.canvas, centre) * self.options.exposure;
+                let fluence = film.fluence.get(k).copied().unwrap_or(Rgb::ZERO);
+                let value = fluence * scale;
+                if first_paths > 0 && first_paths < paths {
+                    // Each half's estimate of the pixel, from its own paths.
+                    let (p, p1) = (paths as f64, first_paths as f64);
+                    let first = film.first.get(k).copied().unwrap_or(Rgb::ZERO);
+                    let a = first * (p / p1);
+                    let b = (fluence - first) * (p / (p - p1));
+                    stats
+                        .noise
+                        .add((a - b) * scale, value, p1 * (p - p1) / (p * p));
+                }
+                if value.is_finite() {
+                    image.pixels[k] = [value.x as f32, value.y as f32, value.z as f32];
+                } else {
+                    stats.record_nonfinite(x, y, 0);
                 }
             }
-            progress(done % 4096);
-            (buffer, stats)
-        })
-        .collect();
-
-    let mut fluence = vec![Rgb::ZERO; pixels];
-    // The first half of the chunks' paths apart, for the noise estimate.
-    let first_chunks = chunks / 2;
-    let first_paths = (first_chunks as u64 * per_chunk).min(paths);
-    let mut first = if first_chunks > 0 {
-        vec![Rgb::ZERO; pixels]
-    } else {
-        Vec::new()
-    };
-    for (chunk, (buffer, chunk_stats)) in results.iter().enumerate() {
-        stats.merge(chunk_stats);
-        for (f, b) in fluence.iter_mut().zip(buffer) {
-            *f += *b;
         }
-        if chunk < first_chunks {
-            for (f, b) in first.iter_mut().zip(buffer) {
-                *f += *b;
-            }
-        }
+        image
     }
-    let step = DVec2::new(
-        scene.canvas.width as f64 / width as f64,
-        scene.canvas.height as f64 / height as f64,
-    );
-    for y in 0..height {
-        for x in 0..width {
-            let k = y as usize * width as usize + x as usize;
-            let centre = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-            let scale = scene.floor.albedo_at(&scene.canvas, centre) * options.exposure;
-            let value = fluence[k] * scale;
-            if first_paths > 0 && first_paths < paths {
-                // Each half's estimate of the pixel, from its own paths.
-                let (p, p1) = (paths as f64, first_paths as f64);
-                let a = first[k] * (p / p1);
-                let b = (fluence[k] - first[k]) * (p / (p - p1));
-                stats
-                    .noise
-                    .add((a - b) * scale, value, p1 * (p - p1) / (p * p));
-            }
-            if value.is_finite() {
-                image.pixels[k] = [value.x as f32, value.y as f32, value.z as f32];
-            } else {
-                stats.record_nonfinite(x, y, 0);
-            }
-        }
-    }
-    Rendered { image, stats }
 }
 
 /// Emits one photon from `light` and follows it, depositing into `buffer`.

@@ -5,11 +5,11 @@ use std::iter::StepBy;
 use std::ops::Range;
 
 use flatray_geometry::{ArcCandidates, DVec2, RayLanes, Skip, hull_candidates};
-use rayon::prelude::*;
 
 use flatray_cache::WallMemo;
 
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
+use crate::film::{Estimator, Film, Part, run};
 use crate::light::{Strata, Visibility, direct_light_points, direct_light_strata};
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::mirror::MirrorArcs;
@@ -159,69 +159,84 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             pixel_fn()
         },
     };
-    let step = pixel_size(scene, (width, height));
     let tiles_x = width.div_ceil(TILE);
     let tiles_y = height.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> = (0..tiles_y)
         .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
         .collect();
-    let results: Vec<(Vec<[f32; 3]>, Stats)> = tiles
-        .par_iter()
-        .map(|&(tx, ty)| {
-            let x0 = tx * TILE;
-            let y0 = ty * TILE;
-            let x1 = (x0 + TILE).min(width);
-            let y1 = (y0 + TILE).min(height);
-            let mut stats = Stats::default();
-            let tile_width = x1 - x0;
-            let mut pixels = vec![[0.0; 3]; (tile_width * (y1 - y0)) as usize];
-            // The walls each arc of directions can meet, for the tile and
-            // then for each block of it (tested against the tile's lists).
-            let mut tile_arcs = ArcCandidates::default();
-            let mut block = BlockCulling::default();
-            let mut batch = Batch::default();
-            let corner =
-                |x: u32, y: u32| scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
-            if context.culling {
-                tile_arcs.fill(&scene.segments, corner(x0, y0), corner(x1, y1), ARCS, None);
-            }
-            for by in (y0..y1).step_by(CULL_BLOCK as usize) {
-                for bx in (x0..x1).step_by(CULL_BLOCK as usize) {
-                    let (bx1, by1) = ((bx + CULL_BLOCK).min(x1), (by + CULL_BLOCK).min(y1));
-                    let culled = context.culling.then(|| {
-                        let (lo, hi) = (corner(bx, by), corner(bx1, by1));
-                        block.fill(scene, lo, hi, &tile_arcs, context.trace.shadows);
-                        &block
-                    });
-                    for y in by..by1 {
-                        for x in bx..bx1 {
-                            pixels[((y - y0) * tile_width + x - x0) as usize] = (context
-                                .render_pixel)(
-                                &context, x, y, culled, &mut batch, &mut stats,
-                            );
-                        }
+    run(&PixelEstimator { context, tiles }, memo_stats, progress)
+}
+
+/// The path estimators (`Path`, `Original`) as units of the render loop:
+/// a tile of pixels each, in blocks of [`CULL_BLOCK`] pixels (which share
+/// their culling lists), then pixel by pixel.
+struct PixelEstimator<'a> {
+    context: Context<'a>,
+    tiles: Vec<(u32, u32)>,
+}
+
+impl Estimator for PixelEstimator<'_> {
+    fn size(&self) -> (u32, u32) {
+        self.context.size
+    }
+
+    fn units(&self) -> usize {
+        self.tiles.len()
+    }
+
+    fn render_unit(&self, unit: usize, stats: &mut Stats, progress: &(dyn Fn(u64) + Sync)) -> Part {
+        let context = &self.context;
+        let scene = context.trace.scene;
+        let (width, height) = context.size;
+        let step = pixel_size(scene, (width, height));
+        let (tx, ty) = self.tiles[unit];
+        let x0 = tx * TILE;
+        let y0 = ty * TILE;
+        let x1 = (x0 + TILE).min(width);
+        let y1 = (y0 + TILE).min(height);
+        let tile_width = x1 - x0;
+        let mut values = vec![[0.0; 3]; (tile_width * (y1 - y0)) as usize];
+        // The walls each arc of directions can meet, for the tile and
+        // then for each block of it (tested against the tile's lists).
+        let mut tile_arcs = ArcCandidates::default();
+        let mut block = BlockCulling::default();
+        let mut batch = Batch::default();
+        let corner = |x: u32, y: u32| scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
+        if context.culling {
+            tile_arcs.fill(&scene.segments, corner(x0, y0), corner(x1, y1), ARCS, None);
+        }
+        for by in (y0..y1).step_by(CULL_BLOCK as usize) {
+            for bx in (x0..x1).step_by(CULL_BLOCK as usize) {
+                let (bx1, by1) = ((bx + CULL_BLOCK).min(x1), (by + CULL_BLOCK).min(y1));
+                let culled = context.culling.then(|| {
+                    let (lo, hi) = (corner(bx, by), corner(bx1, by1));
+                    block.fill(scene, lo, hi, &tile_arcs, context.trace.shadows);
+                    &block
+                });
+                for y in by..by1 {
+                    for x in bx..bx1 {
+                        values[((y - y0) * tile_width + x - x0) as usize] =
+                            (context.render_pixel)(context, x, y, culled, &mut batch, stats);
                     }
                 }
             }
-            progress(pixels.len() as u64 * options.samples as u64);
-            (pixels, stats)
-        })
-        .collect();
-
-    let mut image = Image::new(width, height);
-    let mut stats = memo_stats;
-    for (&(tx, ty), (pixels, tile_stats)) in tiles.iter().zip(&results) {
-        stats.merge(tile_stats);
-        let x0 = tx * TILE;
-        let y0 = ty * TILE;
-        let tile_width = (x0 + TILE).min(width) - x0;
-        for (k, value) in pixels.iter().enumerate() {
-            let x = x0 + k as u32 % tile_width;
-            let y = y0 + k as u32 / tile_width;
-            image.pixels[(y * width + x) as usize] = *value;
+        }
+        progress(values.len() as u64 * context.options.samples as u64);
+        Part::Tile {
+            x0,
+            y0,
+            width: tile_width,
+            values,
         }
     }
-    Rendered { image, stats }
+
+    fn finish(&self, film: Film, _stats: &mut Stats) -> Image {
+        Image {
+            width: film.width,
+            height: film.height,
+            pixels: film.values,
+        }
+    }
 }
 
 /// The size of one pixel in world units, in x and y.

@@ -1,0 +1,128 @@
+//! The film and the render loop: where estimators put what they measure,
+//! and the one loop that runs them.
+//!
+//! An [`Estimator`] splits its work into units (a tile of pixels, a chunk
+//! of photons), renders each unit alone into a [`Part`] of the film, and
+//! finishes the merged film into an image. [`run`] renders the units in
+//! parallel and merges them in unit order, so the image and the
+//! statistics are the same for any number of threads. It knows nothing of
+//! lights, materials or paths.
+
+use rayon::prelude::*;
+
+use crate::render::{Image, Rendered};
+use crate::{Rgb, Stats};
+
+/// What one unit of work measured.
+pub(crate) enum Part {
+    /// The finished values of a tile's pixels, row by row.
+    Tile {
+        x0: u32,
+        y0: u32,
+        width: u32,
+        values: Vec<[f32; 3]>,
+    },
+    /// Fluence deposited anywhere on the image (a light tracer's track
+    /// lengths), summed in the unit's own order. `first_half` says whether
+    /// the unit belongs to the first half of the estimator's work, which
+    /// is kept apart for the noise estimate.
+    Splats { fluence: Vec<Rgb>, first_half: bool },
+}
+
+/// The merged parts of a render.
+pub(crate) struct Film {
+    pub width: u32,
+    pub height: u32,
+    /// Finished pixel values, from tiles.
+    pub values: Vec<[f32; 3]>,
+    /// Summed deposits (empty when no unit splatted).
+    pub fluence: Vec<Rgb>,
+    /// Summed deposits of the units of the first half.
+    pub first: Vec<Rgb>,
+}
+
+impl Film {
+    fn new(width: u32, height: u32) -> Film {
+        Film {
+            width,
+            height,
+            values: vec![[0.0; 3]; width as usize * height as usize],
+            fluence: Vec::new(),
+            first: Vec::new(),
+        }
+    }
+
+    /// Adds a part; parts must come in unit order.
+    fn add(&mut self, part: Part) {
+        let pixels = self.values.len();
+        match part {
+            Part::Tile {
+                x0,
+                y0,
+                width,
+                values,
+            } => {
+                for (k, value) in values.into_iter().enumerate() {
+                    let x = x0 + k as u32 % width;
+                    let y = y0 + k as u32 / width;
+                    self.values[(y * self.width + x) as usize] = value;
+                }
+            }
+            Part::Splats {
+                fluence,
+                first_half,
+            } => {
+                let add = |sums: &mut Vec<Rgb>| {
+                    sums.resize(pixels, Rgb::ZERO);
+                    for (s, f) in sums.iter_mut().zip(&fluence) {
+                        *s += *f;
+                    }
+                };
+                add(&mut self.fluence);
+                if first_half {
+                    add(&mut self.first);
+                }
+            }
+        }
+    }
+}
+
+/// A way of estimating the image, unit of work by unit of work.
+pub(crate) trait Estimator: Sync {
+    /// The image's size in pixels.
+    fn size(&self) -> (u32, u32);
+    /// How many units of work; [`run`] merges them in this order.
+    fn units(&self) -> usize;
+    /// Renders unit `unit` alone, counting into `stats` and reporting
+    /// finished samples (or paths) to `progress`.
+    fn render_unit(&self, unit: usize, stats: &mut Stats, progress: &(dyn Fn(u64) + Sync)) -> Part;
+    /// Turns the merged film into the image (scaling deposits by the floor
+    /// albedo and exposure, estimating their noise).
+    fn finish(&self, film: Film, stats: &mut Stats) -> Image;
+}
+
+/// The render loop: every unit in parallel, then the parts merged in unit
+/// order into one film, after `stats` (what was counted before the loop,
+/// such as filling a cache).
+pub(crate) fn run(
+    estimator: &impl Estimator,
+    mut stats: Stats,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Rendered {
+    let parts: Vec<(Part, Stats)> = (0..estimator.units())
+        .into_par_iter()
+        .map(|unit| {
+            let mut stats = Stats::default();
+            let part = estimator.render_unit(unit, &mut stats, progress);
+            (part, stats)
+        })
+        .collect();
+    let (width, height) = estimator.size();
+    let mut film = Film::new(width, height);
+    for (part, unit_stats) in parts {
+        stats.merge(&unit_stats);
+        film.add(part);
+    }
+    let image = estimator.finish(film, &mut stats);
+    Rendered { image, stats }
+}
