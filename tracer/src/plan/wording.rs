@@ -1,16 +1,12 @@
-//! The render plan: which effects a scene and its settings call for, which
-//! are skipped and why. The integrators read the plan's switches, so a
-//! skipped effect costs no rays; `Stats` counts prove it.
+//! What the plan says to a user: each effect, whether it runs, and why,
+//! in plain words, from the plan's inventory and decisions.
 
 use std::fmt;
 
-use flatray_geometry::Strategy;
-
+use super::{Inventory, Plan};
 use crate::mirror::MIRROR_PIECE;
-use crate::render::{CULL_BLOCK, Integrator, RenderOptions};
+use crate::render::CULL_BLOCK;
 use crate::sampling::ARCS;
-use crate::scene::{LightShape, Material, Scene};
-use crate::{Floor, Rgb};
 
 /// One effect: whether it runs, and a reason in plain words.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -36,130 +32,52 @@ impl Effect {
     }
 }
 
-/// What a render of a scene does.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Plan {
-    /// Shadow rays towards lights (otherwise every light is visible).
-    pub shadows: bool,
-    /// Indirect paths from the floor.
-    pub indirect: bool,
-    /// Line lights met by a path ray after a mirror.
-    pub mirror_emission: bool,
-    /// The wall half of the memo.
-    pub wall_memo: bool,
-    /// The floor half of the memo: direct light once per pixel.
-    pub floor_memo: bool,
-    /// The floor memo's strata share one shadow ray per light where no
-    /// shadow edge crosses their pixel (`coherence.rs`).
-    pub floor_coherence: bool,
-    /// The floor's rays test only the walls that rays from their block of
-    /// pixels, in their arc of directions, can meet (`ArcCandidates`).
-    pub floor_ray_culling: bool,
-    /// Every effect with its reason, in a fixed order, for printing.
-    pub effects: Vec<Effect>,
-}
-
 impl Plan {
-    /// The plan for `scene` rendered with `options`. With
-    /// `options.reference`, every effect is on wherever it cannot
-    /// change the image (a debugging and benchmarking aid).
-    pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
-        let count =
-            |f: &dyn Fn(&LightShape) -> bool| scene.lights.iter().filter(|l| f(&l.shape)).count();
-        let points = count(&|s| matches!(s, LightShape::Point { .. }));
-        let spots = count(&|s| matches!(s, LightShape::Spot { .. }));
-        let lines = count(&|s| matches!(s, LightShape::Line { .. }));
-        let circles = count(&|s| matches!(s, LightShape::Circle { .. }));
-        // Lights a path ray can meet: seen in mirrors by path tracing.
-        let areas = count(&|s| s.has_area());
-        let suns = count(&|s| matches!(s, LightShape::Directional { .. }));
-        let mirrors = scene
-            .walls
-            .iter()
-            .filter(|w| matches!(w.material, Material::Mirror { .. }))
-            .count();
-        let panes = scene
-            .walls
-            .iter()
-            .filter(|w| matches!(w.material, Material::Transparent { .. }))
-            .count();
-        let glass_edges = scene
-            .walls
-            .iter()
-            .filter(|w| matches!(w.material, Material::Glass { .. }))
-            .count();
-        let dispersive = scene.glass.iter().filter(|g| g.dispersion != 0.0).count();
-        let diffuse = scene
-            .walls
-            .iter()
-            .filter(|w| matches!(w.material, Material::Diffuse { .. }))
-            .count();
-        let floor_albedo_walls = scene
-            .walls
-            .iter()
-            .filter(|w| matches!(w.material, Material::Diffuse { albedo: None }))
-            .count();
-        let occluders = scene
-            .walls
-            .iter()
-            .filter(|w| !matches!(w.material, Material::Transparent { tint } if tint == Rgb::ONE))
-            .count();
-        let floor_black = matches!(scene.floor, Floor::Color(c) if c == Rgb::ZERO);
-        let reflectors = scene
-            .walls
-            .iter()
-            .filter(|w| match w.material {
-                Material::Diffuse { albedo: Some(a) } => a != Rgb::ZERO,
-                Material::Diffuse { albedo: None } => !floor_black,
-                Material::Mirror { tint } => tint != Rgb::ZERO,
-                Material::Transparent { .. } => false,
-                Material::Glass { .. } => true,
-            })
-            .count();
-        let force = options.reference;
-        let no_lights = scene.lights.is_empty();
-
-        // The light tracer casts no shadow ray and reads no memo.
-        let tracing_light = options.integrator == Integrator::Light;
-        let shadows = !tracing_light && (force || (occluders > 0 && !no_lights));
-        let indirect_possible = options.bounces > 0 && !no_lights;
-        let indirect = indirect_possible && (force || reflectors > 0);
+    /// Every effect with its reason, in a fixed order, for printing.
+    pub fn effects(&self) -> Vec<Effect> {
+        let Inventory {
+            points,
+            spots,
+            lines,
+            circles,
+            suns,
+            areas,
+            lights,
+            walls,
+            mirrors,
+            panes,
+            glass_edges,
+            glass_bodies,
+            dispersive,
+            diffuse,
+            floor_albedo_walls,
+            occluders,
+            reflectors,
+            ref queries,
+            brute_force,
+        } = self.inventory;
+        let Plan {
+            bounces,
+            tracing_light,
+            reference,
+            memo_enabled,
+            ref bin_length,
+            floor_grid,
+            wall_memo_fits,
+            pairs,
+            mask_cells,
+            shadows,
+            indirect,
+            mirror_emission,
+            wall_memo,
+            floor_memo,
+            floor_coherence,
+            floor_ray_culling,
+            ..
+        } = *self;
+        let force = reference;
+        let no_lights = lights == 0;
         let specular = mirrors + glass_edges;
-        let mirror_emission = indirect && (force || (specular > 0 && areas > 0));
-        let wall_memo_wanted = !tracing_light
-            && indirect
-            && options.memo.enabled
-            && (force || (diffuse > 0 && reflectors > 0));
-        // Counted before anything is allocated; over its budget the memo
-        // is off (the same image, estimated by shadow rays).
-        let wall_memo_fits = !wall_memo_wanted
-            || crate::memo::wall_memo_bytes(
-                scene,
-                &options.memo,
-                options.scale,
-                crate::memo::WALL_MEMO_BUDGET,
-            )
-            .is_some();
-        let wall_memo = wall_memo_wanted && wall_memo_fits;
-        // Forcing never changes how the floor's direct light is estimated:
-        // that would change the image.
-        let floor_memo =
-            !tracing_light && indirect_possible && reflectors > 0 && options.memo.enabled;
-        let pairs = scene.walls.len() * scene.lights.len();
-        let (width, height) = crate::render::image_size(scene, options.scale);
-        let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
-        let floor_coherence = floor_memo
-            && shadows
-            && !options.reference
-            && pairs <= crate::coherence::MAX_PAIRS
-            && mask_cells <= crate::coherence::MAX_CELLS;
-        let brute_force = scene.segments().strategy() == Strategy::BruteForce;
-        let floor_ray_culling = !tracing_light
-            && indirect
-            && !scene.walls.is_empty()
-            && brute_force
-            && !options.reference;
-
         let mut effects = Vec::new();
         let mut add =
             |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
@@ -212,15 +130,15 @@ impl Plan {
             indirect,
             if no_lights {
                 "no light in the scene".into()
-            } else if options.bounces == 0 {
+            } else if bounces == 0 {
                 "bounces = 0".into()
             } else if reflectors == 0 && !force {
                 "no wall reflects light (none, all transparent, or all black)".into()
             } else {
                 format!(
                     "up to {} bounce{}",
-                    options.bounces,
-                    if options.bounces == 1 { "" } else { "s" }
+                    bounces,
+                    if bounces == 1 { "" } else { "s" }
                 )
             },
         );
@@ -275,7 +193,7 @@ impl Plan {
             wall_memo,
             if tracing_light {
                 "light tracing does not read it".into()
-            } else if !options.memo.enabled {
+            } else if !memo_enabled {
                 "the cache is switched off (--cache off)".into()
             } else if !indirect {
                 "no indirect light is traced, so no path reads it".into()
@@ -290,7 +208,7 @@ impl Plan {
                 format!(
                     "{} binned every {} pixel",
                     n(diffuse, "diffuse wall"),
-                    options.memo.bin_length
+                    bin_length
                 )
             },
         );
@@ -299,12 +217,12 @@ impl Plan {
             floor_memo,
             if tracing_light {
                 "light tracing does not read it".into()
-            } else if !options.memo.enabled {
+            } else if !memo_enabled {
                 "the cache is switched off (--cache off)".into()
             } else if !indirect {
                 "no indirect path would reuse it".into()
             } else {
-                let grid = crate::memo::floor_grid(&options.memo, options.samples);
+                let grid = floor_grid;
                 format!(
                     "{} stratified points per pixel (at least as many as the samples)",
                     grid * grid
@@ -318,7 +236,7 @@ impl Plan {
                 "no floor cache".into()
             } else if !shadows {
                 "no shadow rays".into()
-            } else if options.reference {
+            } else if reference {
                 "the reference model runs no fast path".into()
             } else if pairs > crate::coherence::MAX_PAIRS {
                 format!(
@@ -357,11 +275,7 @@ impl Plan {
             } else if !indirect {
                 "no indirect light is traced".into()
             } else {
-                format!(
-                    "{} in {} edges",
-                    n(scene.glass.len(), "glass body"),
-                    glass_edges
-                )
+                format!("{} in {} edges", n(glass_bodies, "glass body"), glass_edges)
             },
         );
         add(
@@ -382,11 +296,11 @@ impl Plan {
                 "light tracing casts none".into()
             } else if !indirect {
                 "no indirect light is traced".into()
-            } else if scene.walls.is_empty() {
+            } else if walls == 0 {
                 "no walls".into()
             } else if !brute_force {
                 "the BVH culls walls for every ray".into()
-            } else if options.reference {
+            } else if reference {
                 "the reference model runs no fast path".into()
             } else {
                 let off_mirrors = if mirrors > 0 {
@@ -401,27 +315,14 @@ impl Plan {
         );
         add(
             "ray queries",
-            !scene.walls.is_empty(),
-            if scene.walls.is_empty() {
+            walls > 0,
+            if walls == 0 {
                 "no walls".into()
             } else {
-                format!(
-                    "{}: {}",
-                    n(scene.walls.len(), "wall"),
-                    scene.segments().describe()
-                )
+                format!("{}: {}", n(walls, "wall"), queries)
             },
         );
-        Plan {
-            shadows,
-            indirect,
-            mirror_emission,
-            wall_memo,
-            floor_memo,
-            floor_coherence,
-            floor_ray_culling,
-            effects,
-        }
+        effects
     }
 }
 
@@ -451,12 +352,8 @@ struct PlanText<'a> {
 
 impl fmt::Display for PlanText<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let shown = || {
-            self.plan
-                .effects
-                .iter()
-                .filter(|e| self.verbose || !e.is_internal())
-        };
+        let effects = self.plan.effects();
+        let shown = || effects.iter().filter(|e| self.verbose || !e.is_internal());
         let width = shown().map(|e| e.name.len()).max().unwrap_or(0);
         for (k, e) in shown().enumerate() {
             if k > 0 {

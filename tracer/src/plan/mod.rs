@@ -1,0 +1,202 @@
+//! The render plan: what a scene holds (its [`Inventory`]) and what a
+//! render of it does with that (the decisions). The integrators read the
+//! decisions, so a skipped effect costs no rays; `Stats` counts prove it.
+//! What the plan says to a user, effect by effect, is written apart
+//! (`wording.rs`).
+
+mod wording;
+
+use flatray_geometry::Strategy;
+
+use crate::render::{Integrator, RenderOptions};
+use crate::scene::{LightShape, Material, Scene};
+use crate::{Floor, Rgb};
+
+pub use wording::Effect;
+
+/// What a scene holds, counted once: the facts every decision reads.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Inventory {
+    pub points: usize,
+    pub spots: usize,
+    pub lines: usize,
+    pub circles: usize,
+    pub suns: usize,
+    /// Lights a path ray can meet (lines and circles): path tracing sees
+    /// them in mirrors.
+    pub areas: usize,
+    pub lights: usize,
+    pub walls: usize,
+    pub mirrors: usize,
+    pub panes: usize,
+    pub glass_edges: usize,
+    pub glass_bodies: usize,
+    pub dispersive: usize,
+    pub diffuse: usize,
+    /// Diffuse walls that take the floor's albedo.
+    pub floor_albedo_walls: usize,
+    /// Walls that can block light: all but clear panes.
+    pub occluders: usize,
+    /// Walls that send light on: not black, not panes.
+    pub reflectors: usize,
+    /// How the walls' ray queries run, in words.
+    pub queries: String,
+    pub brute_force: bool,
+}
+
+impl Inventory {
+    pub fn of(scene: &Scene) -> Inventory {
+        let lights =
+            |f: &dyn Fn(&LightShape) -> bool| scene.lights.iter().filter(|l| f(&l.shape)).count();
+        let walls =
+            |f: &dyn Fn(&Material) -> bool| scene.walls.iter().filter(|w| f(&w.material)).count();
+        let floor_black = matches!(scene.floor, Floor::Color(c) if c == Rgb::ZERO);
+        Inventory {
+            points: lights(&|s| matches!(s, LightShape::Point { .. })),
+            spots: lights(&|s| matches!(s, LightShape::Spot { .. })),
+            lines: lights(&|s| matches!(s, LightShape::Line { .. })),
+            circles: lights(&|s| matches!(s, LightShape::Circle { .. })),
+            suns: lights(&|s| matches!(s, LightShape::Directional { .. })),
+            areas: lights(&|s| s.has_area()),
+            lights: scene.lights.len(),
+            walls: scene.walls.len(),
+            mirrors: walls(&|m| matches!(m, Material::Mirror { .. })),
+            panes: walls(&|m| matches!(m, Material::Transparent { .. })),
+            glass_edges: walls(&|m| matches!(m, Material::Glass { .. })),
+            glass_bodies: scene.glass.len(),
+            dispersive: scene.glass.iter().filter(|g| g.dispersion != 0.0).count(),
+            diffuse: walls(&|m| matches!(m, Material::Diffuse { .. })),
+            floor_albedo_walls: walls(&|m| matches!(m, Material::Diffuse { albedo: None })),
+            occluders: walls(
+                &|m| !matches!(m, Material::Transparent { tint } if *tint == Rgb::ONE),
+            ),
+            reflectors: walls(&|m| match *m {
+                Material::Diffuse { albedo: Some(a) } => a != Rgb::ZERO,
+                Material::Diffuse { albedo: None } => !floor_black,
+                Material::Mirror { tint } => tint != Rgb::ZERO,
+                Material::Transparent { .. } => false,
+                Material::Glass { .. } => true,
+            }),
+            queries: scene.segments().describe(),
+            brute_force: scene.segments().strategy() == Strategy::BruteForce,
+        }
+    }
+}
+
+/// What a render of a scene does: the inventory, the settings that the
+/// decisions read, and the decisions.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Plan {
+    pub inventory: Inventory,
+    /// The settings, as the decisions read them.
+    pub bounces: u32,
+    pub tracing_light: bool,
+    pub reference: bool,
+    pub memo_enabled: bool,
+    /// The wall memo's bin length, in pixels, as given.
+    pub bin_length: String,
+    /// The floor memo's strata per pixel, per side.
+    pub floor_grid: u32,
+    /// Whether the wall memo fits its budget.
+    pub wall_memo_fits: bool,
+    /// Wall-light pairs and pixel-light cells: what the coherence masks
+    /// would cost.
+    pub pairs: usize,
+    pub mask_cells: u64,
+    /// Shadow rays towards lights (otherwise every light is visible).
+    pub shadows: bool,
+    /// Indirect paths from the floor.
+    pub indirect: bool,
+    /// Lights with an area met by a path ray after a mirror.
+    pub mirror_emission: bool,
+    /// The wall half of the memo.
+    pub wall_memo: bool,
+    /// The floor half of the memo: direct light once per pixel.
+    pub floor_memo: bool,
+    /// The floor memo's strata share one shadow ray per light where no
+    /// shadow edge crosses their pixel (`coherence.rs`).
+    pub floor_coherence: bool,
+    /// The floor's rays test only the walls that rays from their block of
+    /// pixels, in their arc of directions, can meet (`ArcCandidates`).
+    pub floor_ray_culling: bool,
+}
+
+impl Plan {
+    /// The plan for `scene` rendered with `options`. With
+    /// `options.reference`, every effect is on wherever it cannot change
+    /// the image, and no fast path runs.
+    pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
+        let inventory = Inventory::of(scene);
+        let Inventory {
+            areas,
+            mirrors,
+            glass_edges,
+            diffuse,
+            occluders,
+            reflectors,
+            brute_force,
+            ..
+        } = inventory;
+        let force = options.reference;
+        let no_lights = scene.lights.is_empty();
+
+        // The light tracer casts no shadow ray and reads no memo.
+        let tracing_light = options.integrator == Integrator::Light;
+        let shadows = !tracing_light && (force || (occluders > 0 && !no_lights));
+        let indirect_possible = options.bounces > 0 && !no_lights;
+        let indirect = indirect_possible && (force || reflectors > 0);
+        let specular = mirrors + glass_edges;
+        let mirror_emission = indirect && (force || (specular > 0 && areas > 0));
+        let wall_memo_wanted = !tracing_light
+            && indirect
+            && options.memo.enabled
+            && (force || (diffuse > 0 && reflectors > 0));
+        // Counted before anything is allocated; over its budget the memo
+        // is off (the same image, estimated by shadow rays).
+        let wall_memo_fits = !wall_memo_wanted
+            || crate::memo::wall_memo_bytes(
+                scene,
+                &options.memo,
+                options.scale,
+                crate::memo::WALL_MEMO_BUDGET,
+            )
+            .is_some();
+        let wall_memo = wall_memo_wanted && wall_memo_fits;
+        // The reference never changes how the floor's direct light is
+        // estimated: that would change the image.
+        let floor_memo =
+            !tracing_light && indirect_possible && reflectors > 0 && options.memo.enabled;
+        let pairs = scene.walls.len() * scene.lights.len();
+        let (width, height) = crate::render::image_size(scene, options.scale);
+        let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
+        let floor_coherence = floor_memo
+            && shadows
+            && !options.reference
+            && pairs <= crate::coherence::MAX_PAIRS
+            && mask_cells <= crate::coherence::MAX_CELLS;
+        let floor_ray_culling = !tracing_light
+            && indirect
+            && !scene.walls.is_empty()
+            && brute_force
+            && !options.reference;
+        Plan {
+            inventory,
+            bounces: options.bounces,
+            tracing_light,
+            reference: options.reference,
+            memo_enabled: options.memo.enabled,
+            bin_length: options.memo.bin_length.to_string(),
+            floor_grid: crate::memo::floor_grid(&options.memo, options.samples),
+            wall_memo_fits,
+            pairs,
+            mask_cells,
+            shadows,
+            indirect,
+            mirror_emission,
+            wall_memo,
+            floor_memo,
+            floor_coherence,
+            floor_ray_culling,
+        }
+    }
+}
