@@ -10,7 +10,6 @@
 
 use rayon::prelude::*;
 
-use crate::render::{Image, Rendered};
 use crate::{Rgb, Stats};
 
 /// What one unit of work measured.
@@ -23,10 +22,15 @@ pub(crate) enum Part {
         values: Vec<[f32; 3]>,
     },
     /// Fluence deposited anywhere on the image (a light tracer's track
-    /// lengths), summed in the unit's own order. `first_half` says whether
-    /// the unit belongs to the first half of the estimator's work, which
-    /// is kept apart for the noise estimate.
-    Splats { fluence: Vec<Rgb>, first_half: bool },
+    /// lengths), and on the walls' bins (the caustic pass's), summed in
+    /// the unit's own order. `first_half` says whether the unit belongs to
+    /// the first half of the estimator's work, whose floor deposits are
+    /// kept apart for the noise estimate.
+    Splats {
+        fluence: Vec<Rgb>,
+        walls: Vec<Rgb>,
+        first_half: bool,
+    },
 }
 
 /// The merged parts of a render.
@@ -39,6 +43,8 @@ pub(crate) struct Film {
     pub fluence: Vec<Rgb>,
     /// Summed deposits of the units of the first half.
     pub first: Vec<Rgb>,
+    /// Summed deposits on the walls (empty when none).
+    pub walls: Vec<Rgb>,
 }
 
 impl Film {
@@ -49,6 +55,7 @@ impl Film {
             values: vec![[0.0; 3]; width as usize * height as usize],
             fluence: Vec::new(),
             first: Vec::new(),
+            walls: Vec::new(),
         }
     }
 
@@ -70,17 +77,22 @@ impl Film {
             }
             Part::Splats {
                 fluence,
+                walls,
                 first_half,
             } => {
-                let add = |sums: &mut Vec<Rgb>| {
-                    sums.resize(pixels, Rgb::ZERO);
-                    for (s, f) in sums.iter_mut().zip(&fluence) {
+                let add = |sums: &mut Vec<Rgb>, values: &[Rgb]| {
+                    sums.resize(values.len(), Rgb::ZERO);
+                    for (s, f) in sums.iter_mut().zip(values) {
                         *s += *f;
                     }
                 };
-                add(&mut self.fluence);
+                debug_assert_eq!(fluence.len(), pixels);
+                add(&mut self.fluence, &fluence);
                 if first_half {
-                    add(&mut self.first);
+                    add(&mut self.first, &fluence);
+                }
+                if !walls.is_empty() {
+                    add(&mut self.walls, &walls);
                 }
             }
         }
@@ -89,6 +101,9 @@ impl Film {
 
 /// A way of estimating the image, unit of work by unit of work.
 pub(crate) trait Estimator: Sync {
+    /// What [`Estimator::finish`] makes of the film: an image, or the
+    /// caustic pass's light on the floor and the walls.
+    type Output;
     /// The image's size in pixels.
     fn size(&self) -> (u32, u32);
     /// How many units of work; [`run`] merges them in this order.
@@ -98,17 +113,23 @@ pub(crate) trait Estimator: Sync {
     fn render_unit(&self, unit: usize, stats: &mut Stats, progress: &(dyn Fn(u64) + Sync)) -> Part;
     /// Turns the merged film into the image (scaling deposits by the floor
     /// albedo and exposure, estimating their noise).
-    fn finish(&self, film: Film, stats: &mut Stats) -> Image;
+    fn finish(&self, film: Film, stats: &mut Stats) -> Self::Output;
+}
+
+/// What [`run`] returns: the estimator's output and everything counted.
+pub(crate) struct Outcome<O> {
+    pub output: O,
+    pub stats: Stats,
 }
 
 /// The render loop: every unit in parallel, then the parts merged in unit
 /// order into one film, after `stats` (what was counted before the loop,
 /// such as filling a cache).
-pub(crate) fn run(
-    estimator: &impl Estimator,
+pub(crate) fn run<E: Estimator>(
+    estimator: &E,
     mut stats: Stats,
     progress: &(dyn Fn(u64) + Sync),
-) -> Rendered {
+) -> Outcome<E::Output> {
     let parts: Vec<(Part, Stats)> = (0..estimator.units())
         .into_par_iter()
         .map(|unit| {
@@ -123,6 +144,6 @@ pub(crate) fn run(
         stats.merge(&unit_stats);
         film.add(part);
     }
-    let image = estimator.finish(film, &mut stats);
-    Rendered { image, stats }
+    let output = estimator.finish(film, &mut stats);
+    Outcome { output, stats }
 }

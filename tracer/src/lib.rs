@@ -14,6 +14,7 @@
 //! processor has it (`render.rs::pixel_fn`).
 
 mod bsdf;
+mod caustics;
 mod coherence;
 mod film;
 mod glass;

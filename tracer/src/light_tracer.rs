@@ -6,8 +6,10 @@
 use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
 use crate::bsdf::{Bsdf, Sampling, Transport};
+use crate::caustics::WallBins;
 use crate::film::{Estimator, Film, Part, run};
 use crate::glass::{GlassState, absorption, transmit};
+use crate::lights::Photon;
 use crate::plan::Plan;
 use crate::render::{Image, RenderOptions, Rendered, image_size};
 use crate::sampling::Stream;
@@ -64,7 +66,11 @@ pub fn render_light(
         per_chunk: paths.div_ceil(chunks as u64),
         grid: Grid::new(scene, options.scale, width, height),
     };
-    run(&estimator, Stats::default(), progress)
+    let outcome = run(&estimator, Stats::default(), progress);
+    Rendered {
+        image: outcome.output,
+        stats: outcome.stats,
+    }
 }
 
 /// Light tracing as units of the render loop: fixed chunks of photon
@@ -86,6 +92,8 @@ struct Photons<'a> {
 }
 
 impl Estimator for Photons<'_> {
+    type Output = Image;
+
     fn size(&self) -> (u32, u32) {
         self.size
     }
@@ -132,6 +140,7 @@ impl Estimator for Photons<'_> {
         progress(done % 4096);
         Part::Splats {
             fluence: buffer,
+            walls: Vec::new(),
             first_half: chunk < self.chunks / 2,
         }
     }
@@ -187,20 +196,53 @@ fn trace_photon(
     stats: &mut Stats,
 ) {
     stats.physics.light_paths += 1;
-    let mut power = light.color * weight;
-    // The first flight reproduces the kernel: the photon says how.
     let photon = light.shape.emit(light, scene, stream);
-    power *= photon.scale;
-    let (origin, dir, skip, first) = (photon.origin, photon.dir, photon.skip, photon.kernel);
+    let power = light.color * weight * photon.scale;
+    let mut deposits = Deposits {
+        grid,
+        floor: buffer,
+        walls: None,
+    };
+    follow_photon(scene, photon, power, bounces, &mut deposits, stream, stats);
+}
+
+/// Where a photon's light goes: the floor's pixels, and for the caustic
+/// pass the diffuse walls' bins.
+pub(crate) struct Deposits<'a> {
+    pub grid: &'a Grid,
+    pub floor: &'a mut [Rgb],
+    /// The caustic pass (`caustics.rs`): a photon's flights count only
+    /// after its first specular event (a mirror or glass), and it stops at
+    /// its first diffuse wall, its power binned there, if it has been
+    /// specular before.
+    pub walls: Option<(&'a WallBins, &'a mut [Rgb])>,
+}
+
+/// Follows `photon`, of `power`, through at most `bounces` scattering
+/// events, depositing each free flight's track length into the floor's
+/// pixels it crosses.
+pub(crate) fn follow_photon(
+    scene: &Scene,
+    photon: Photon,
+    power: Rgb,
+    bounces: u32,
+    deposits: &mut Deposits,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) {
+    let mut power = power;
     let r0 = scene.small_radius;
-    let mut ray = Ray::new(origin, dir);
-    let mut skip = skip;
-    let mut kernel = first;
+    let mut ray = Ray::new(photon.origin, photon.dir);
+    let mut skip = photon.skip;
+    // The first flight reproduces the kernel: the photon says how.
+    let mut kernel = photon.kernel;
     // Distance along the first flight, unfolded through transparent walls
     // and mirrors: the kernel applies until the first diffuse reflection,
     // as for a mirror image of the light.
     let mut travelled = 0.0;
     let mut bounce = 0;
+    let mut specular = 0;
+    let caustic = deposits.walls.is_some();
     let mut glass = GlassState::default();
     loop {
         stats.work.bounce_rays += 1;
@@ -217,9 +259,19 @@ fn trace_photon(
             None => glass.inside,
         };
         let absorb = absorption(scene, body);
-        grid.deposit(
-            &ray, t_end, power, kernel, travelled, absorb, r0, buffer, stream,
-        );
+        if !caustic || specular > 0 {
+            deposits.grid.deposit(
+                &ray,
+                t_end,
+                power,
+                kernel,
+                travelled,
+                absorb,
+                r0,
+                deposits.floor,
+                stream,
+            );
+        }
         let Some((index, h)) = hit else {
             stats.physics.paths_escaped += 1;
             return;
@@ -247,6 +299,19 @@ fn trace_photon(
                 return;
             }
         }
+        if let Some((bins, values)) = &mut deposits.walls
+            && !bsdf.is_specular()
+        {
+            // The caustic pass ends at the first diffuse wall: what
+            // arrives there after `specular` events is binned, for the
+            // path tracer's next-event estimation to read.
+            stats.physics.paths_to_walls += 1;
+            if specular > 0 {
+                let arriving = power * kernel.factor(travelled, r0);
+                bins.add(values, (index, side, h.u), specular, arriving);
+            }
+            return;
+        }
         if let Bsdf::Mirror { .. } = bsdf {
             stats.physics.mirror_reflections += 1;
         }
@@ -262,6 +327,9 @@ fn trace_photon(
         );
         if bsdf.is_specular() {
             power *= scattered.weight;
+            if !matches!(bsdf, Bsdf::Transparent { .. }) {
+                specular += 1;
+            }
         } else {
             // Power arriving at the wall, with the kernel's share: the
             // kernel applies up to the first diffuse reflection.
@@ -371,7 +439,7 @@ fn absorbed_length(a: Rgb, t: f64, length: f64) -> Rgb {
 }
 
 /// The pixel grid over the canvas, in pixel units.
-struct Grid {
+pub(crate) struct Grid {
     origin: DVec2,
     scale: DVec2,
     width: u32,
@@ -381,7 +449,7 @@ struct Grid {
 }
 
 impl Grid {
-    fn new(scene: &Scene, _scale: f64, width: u32, height: u32) -> Grid {
+    pub(crate) fn new(scene: &Scene, _scale: f64, width: u32, height: u32) -> Grid {
         let scale = DVec2::new(
             width as f64 / scene.canvas.width as f64,
             height as f64 / scene.canvas.height as f64,

@@ -7,6 +7,7 @@ use flatray_cache::{Key, WallMemo};
 use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
 
 use crate::bsdf::{Bsdf, Sampling, Transport};
+use crate::caustics::Caustics;
 use crate::glass::{GlassState, absorption, transmit};
 use crate::light::{Receiver, direct_light};
 use crate::lights::line_emitted;
@@ -214,7 +215,7 @@ pub(crate) fn path_finish(
             // Next-event estimation, at the one non-specular BSDF: f E,
             // with f = rho / 2 and 2pi already in the throughput. The memo
             // holds E on each side of a diffuse wall.
-            let irradiance = match memo {
+            let mut irradiance = match memo {
                 Some(memo) => {
                     stats.work.memo_lookups += 1;
                     memo_irradiance(memo, index, side, h.u)
@@ -228,6 +229,9 @@ pub(crate) fn path_finish(
                     direct_light(scene, x, receiver, shadows, stream, stats)
                 }
             };
+            if let Some(caustics) = trace.caustics {
+                irradiance += caustics.wall(index, side, h.u, bounce);
+            }
             fluence += throughput * rho * 0.5 * irradiance;
             if bounce == bounces {
                 stats.physics.paths_bounce_limit += 1;
@@ -329,6 +333,9 @@ pub(crate) struct Trace<'a> {
     /// The reference model: look for them after every bounce (adding
     /// nothing).
     pub force: bool,
+    /// The caustic pass's light on the diffuse walls, added to next-event
+    /// estimation there.
+    pub caustics: Option<&'a Caustics>,
     /// Whether a diffuse wall that takes the floor's albedo reads it from
     /// the scene's table along the walls (the same values) rather than
     /// from the floor.

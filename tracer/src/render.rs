@@ -8,6 +8,7 @@ use flatray_geometry::{ArcCandidates, DVec2, RayLanes, Skip, hull_candidates};
 
 use flatray_cache::WallMemo;
 
+use crate::caustics::Caustics;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::film::{Estimator, Film, Part, run};
 use crate::light::{Strata, Visibility, direct_light_points, direct_light_strata};
@@ -146,13 +147,27 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         .floor_coherence
         .then(|| FloorCoherence::build(scene, (width, height)))
         .flatten();
+    // Light from points, spots and suns through mirrors and glass, which
+    // no path from the floor can find: traced from the lights first, so
+    // that next-event estimation at the walls can read it.
+    let caustics = if plan.caustics {
+        crate::caustics::trace_caustics(scene, options, options.bounces, &mut memo_stats, &|_| {})
+    } else {
+        None
+    };
     let context = Context {
         options,
         size: (width, height),
         floor_memo: plan.floor_memo,
         coherence: coherence.as_ref(),
         culling: plan.floor_ray_culling,
-        trace: trace_for(scene, options, &plan, memo.as_ref(), mirror_arcs.as_ref()),
+        trace: trace_for(
+            scene,
+            options,
+            &plan,
+            (memo.as_ref(), caustics.as_ref()),
+            mirror_arcs.as_ref(),
+        ),
         render_pixel: if options.reference {
             render_pixel
         } else {
@@ -164,7 +179,11 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
     let tiles: Vec<(u32, u32)> = (0..tiles_y)
         .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
         .collect();
-    run(&PixelEstimator { context, tiles }, memo_stats, progress)
+    let outcome = run(&PixelEstimator { context, tiles }, memo_stats, progress);
+    Rendered {
+        image: outcome.output,
+        stats: outcome.stats,
+    }
 }
 
 /// The path estimators (`Path`, `Original`) as units of the render loop:
@@ -176,6 +195,8 @@ struct PixelEstimator<'a> {
 }
 
 impl Estimator for PixelEstimator<'_> {
+    type Output = Image;
+
     fn size(&self) -> (u32, u32) {
         self.context.size
     }
@@ -297,7 +318,7 @@ fn trace_for<'a>(
     scene: &'a Scene,
     options: &RenderOptions,
     plan: &Plan,
-    memo: Option<&'a WallMemo>,
+    (memo, caustics): (Option<&'a WallMemo>, Option<&'a Caustics>),
     mirror_arcs: Option<&'a MirrorArcs>,
 ) -> Trace<'a> {
     let bounces = if plan.indirect { options.bounces } else { 0 };
@@ -312,6 +333,7 @@ fn trace_for<'a>(
         mirror_emission: plan.mirror_emission,
         force,
         tables: !force,
+        caustics,
         one_bounce_memo: memo.filter(|_| bounces == 1 && !force),
         mirror_arcs,
     }
@@ -422,7 +444,10 @@ fn render_pixel(
             }
         }
     }
-    let mean = direct + sums.all / options.samples.max(1) as f64;
+    let mut mean = direct + sums.all / options.samples.max(1) as f64;
+    if let Some(caustics) = trace.caustics {
+        mean += caustics.floor[(y * size.0 + x) as usize];
+    }
     let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
     let scale = albedo * options.exposure;
     let value = mean * scale;
@@ -826,7 +851,7 @@ pub fn pixel_sample(
         floor_memo: false,
         coherence: None,
         culling: false,
-        trace: trace_for(scene, &options, &plan, None, None),
+        trace: trace_for(scene, &options, &plan, (None, None), None),
         render_pixel,
     };
     sample_with(

@@ -23,6 +23,11 @@ pub struct Physics {
     pub camera_samples: u64,
     /// Photon paths emitted by the light tracer.
     pub light_paths: u64,
+    /// Photons of the caustic pass: from points, spots and suns towards
+    /// mirrors and glass.
+    pub caustic_photons: u64,
+    /// Caustic photons that ended at their first diffuse wall.
+    pub paths_to_walls: u64,
     /// Paths whose last ray hit nothing.
     pub paths_escaped: u64,
     /// Paths stopped by the bounce limit.
@@ -109,6 +114,18 @@ impl Noise {
         }
     }
 
+    /// Adds the estimated error of a second, independent part of the
+    /// pixels already added (`difference` and `weight` as for
+    /// [`Noise::add`]): their errors add in squares.
+    pub fn add_error(&mut self, difference: crate::Rgb, weight: f64) {
+        if !difference.is_finite() {
+            return;
+        }
+        for c in 0..3 {
+            self.error_squared[c] += difference[c] * difference[c] * weight;
+        }
+    }
+
     pub fn merge(&mut self, other: &Noise) {
         self.pixels += other.pixels;
         for c in 0..3 {
@@ -186,6 +203,8 @@ impl Physics {
     pub fn merge(&mut self, other: &Physics) {
         self.camera_samples += other.camera_samples;
         self.light_paths += other.light_paths;
+        self.caustic_photons += other.caustic_photons;
+        self.paths_to_walls += other.paths_to_walls;
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
         self.paths_absorbed += other.paths_absorbed;
@@ -236,10 +255,16 @@ impl fmt::Display for Physics {
         writeln!(f, "samples")?;
         writeln!(f, "  camera samples   {:>14}", p.camera_samples)?;
         writeln!(f, "  light paths      {:>14}", p.light_paths)?;
+        if p.caustic_photons > 0 {
+            writeln!(f, "  caustic photons  {:>14}", p.caustic_photons)?;
+        }
         writeln!(f, "paths ended by")?;
         writeln!(f, "  escaping         {:>14}", p.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", p.paths_bounce_limit)?;
         writeln!(f, "  absorption       {:>14}", p.paths_absorbed)?;
+        if p.paths_to_walls > 0 {
+            writeln!(f, "  at a diffuse wall {:>13}", p.paths_to_walls)?;
+        }
         writeln!(f, "events")?;
         writeln!(f, "  mirror bounces   {:>14}", p.mirror_reflections)?;
         writeln!(f, "  transparent      {:>14}", p.transparent_passes)?;

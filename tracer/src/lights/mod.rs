@@ -14,7 +14,10 @@
 //! - `met_by`: where a path ray meets light it emits, for lights that are
 //!   not walls and can be seen (after a mirror);
 //! - `hull`: points whose convex hull holds every point that shadow rays
-//!   aim at, for culled shadow rays.
+//!   aim at, for culled shadow rays;
+//! - `aperture`: for a light of one direction per point (a point, a spot,
+//!   the sun), the photons it sends that reach a given wall, for the
+//!   caustic pass (`caustics.rs`).
 //!
 //! The methods on [`LightShape`] below dispatch to them; each `match` is
 //! exhaustive, so a new kind of light is a compiler error in this file
@@ -34,6 +37,7 @@ use flatray_geometry::{DVec2, Ray, Segment, Skip};
 use crate::light_tracer::Kernel;
 use crate::sampling::Stream;
 use crate::scene::{Light, LightShape, Scene};
+use sun::sun_line;
 
 pub(crate) use line::emitted as line_emitted;
 
@@ -207,6 +211,140 @@ impl LightShape {
             LightShape::Line { segment, .. } => Some([segment.a, segment.b, segment.a, segment.b]),
             LightShape::Directional { .. } => None,
             LightShape::Circle { at, radius } => Some(circle::hull(at, radius)),
+        }
+    }
+}
+
+/// The photons a light of one direction per point sends towards a wall:
+/// an interval of directions from a point (a point light or a spot), or of
+/// positions across the sun's beam.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Aperture {
+    /// Directions from `at` turning from unit `from` by up to `angle`
+    /// radians (`< pi`), counterclockwise when `turn` is 1, clockwise when
+    /// it is -1.
+    Angle {
+        at: DVec2,
+        from: DVec2,
+        angle: f64,
+        turn: f64,
+    },
+    /// Rays of the sun's beam entering at `start + across * s` for `s` in
+    /// `s0..s1`, travelling in `direction`.
+    Beam {
+        start: DVec2,
+        across: DVec2,
+        direction: DVec2,
+        s0: f64,
+        s1: f64,
+    },
+}
+
+impl Aperture {
+    /// Its measure: radians, or units of the beam's width.
+    pub fn measure(&self) -> f64 {
+        match *self {
+            Aperture::Angle { angle, .. } => angle,
+            Aperture::Beam { s0, s1, .. } => s1 - s0,
+        }
+    }
+
+    /// The ray at fraction `u` of the aperture: origin and direction.
+    pub fn ray(&self, u: f64) -> (DVec2, DVec2) {
+        match *self {
+            Aperture::Angle {
+                at,
+                from,
+                angle,
+                turn,
+            } => {
+                let (s, c) = (angle * u).sin_cos();
+                (at, from * c + from.perp() * (turn * s))
+            }
+            Aperture::Beam {
+                start,
+                across,
+                direction,
+                s0,
+                s1,
+            } => (start + across * (s0 + (s1 - s0) * u), direction),
+        }
+    }
+
+    /// Whether the aperture holds the ray from `origin` along `dir` (one
+    /// that [`Aperture::ray`] of this light's apertures gave).
+    pub fn contains(&self, origin: DVec2, dir: DVec2) -> bool {
+        match *self {
+            Aperture::Angle {
+                from, angle, turn, ..
+            } => {
+                let to = {
+                    let (s, c) = angle.sin_cos();
+                    from * c + from.perp() * (turn * s)
+                };
+                turn * from.perp_dot(dir) >= 0.0 && turn * dir.perp_dot(to) >= 0.0
+            }
+            Aperture::Beam {
+                start,
+                across,
+                s0,
+                s1,
+                ..
+            } => {
+                let s = (origin - start).dot(across);
+                s >= s0 && s <= s1
+            }
+        }
+    }
+}
+
+impl LightShape {
+    /// Where this light sends photons that can reach `target` first: for
+    /// lights of one direction per point; `None` for lights with an area
+    /// (path tracing sees those in mirrors) and where the target subtends
+    /// nothing.
+    pub(crate) fn aperture(&self, scene: &Scene, target: &Segment) -> Option<Aperture> {
+        match *self {
+            LightShape::Point { at } | LightShape::Spot { at, .. } => {
+                let (va, vb) = (target.a - at, target.b - at);
+                let cross = va.perp_dot(vb);
+                if cross == 0.0 || va == DVec2::ZERO || vb == DVec2::ZERO {
+                    return None;
+                }
+                let angle = cross.abs().atan2(va.dot(vb));
+                (angle > 0.0).then(|| Aperture::Angle {
+                    at,
+                    from: va.normalize(),
+                    angle,
+                    turn: cross.signum(),
+                })
+            }
+            LightShape::Directional { direction } => {
+                let (start, across, width) = sun_line(scene, direction);
+                let across = across.normalize();
+                let (sa, sb) = (
+                    (target.a - start).dot(across),
+                    (target.b - start).dot(across),
+                );
+                let (s0, s1) = (sa.min(sb).max(0.0), sa.max(sb).min(width));
+                (s1 > s0).then_some(Aperture::Beam {
+                    start,
+                    across,
+                    direction,
+                    s0,
+                    s1,
+                })
+            }
+            LightShape::Line { .. } | LightShape::Circle { .. } => None,
+        }
+    }
+
+    /// The kernel a photon of this light carries on its first flight.
+    pub(crate) fn kernel(&self, light: &Light) -> Kernel {
+        match self {
+            LightShape::Point { .. } | LightShape::Spot { .. } => Kernel::Point(light.falloff),
+            LightShape::Line { .. } | LightShape::Circle { .. } => Kernel::Line(light.falloff),
+            LightShape::Directional { .. } => Kernel::None,
         }
     }
 }

@@ -109,6 +109,9 @@ pub struct Plan {
     pub indirect: bool,
     /// Lights with an area met by a path ray after a mirror.
     pub mirror_emission: bool,
+    /// The caustic pass: light from points, spots and suns through
+    /// mirrors and glass, traced from the lights (`caustics.rs`).
+    pub caustics: bool,
     /// The wall half of the memo.
     pub wall_memo: bool,
     /// The floor half of the memo: direct light once per pixel.
@@ -128,6 +131,9 @@ impl Plan {
     pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
         let inventory = Inventory::of(scene);
         let Inventory {
+            points,
+            spots,
+            suns,
             areas,
             mirrors,
             glass_edges,
@@ -147,6 +153,9 @@ impl Plan {
         let indirect = indirect_possible && (force || reflectors > 0);
         let specular = mirrors + glass_edges;
         let mirror_emission = indirect && (force || (specular > 0 && areas > 0));
+        // Path tracing cannot find their light after a mirror or glass:
+        // the caustic pass does, wherever both are in the scene.
+        let caustics = !tracing_light && indirect && specular > 0 && points + spots + suns > 0;
         let wall_memo_wanted = !tracing_light
             && indirect
             && options.memo.enabled
@@ -193,6 +202,7 @@ impl Plan {
             shadows,
             indirect,
             mirror_emission,
+            caustics,
             wall_memo,
             floor_memo,
             floor_coherence,

@@ -69,6 +69,7 @@ impl Plan {
             shadows,
             indirect,
             mirror_emission,
+            caustics,
             wall_memo,
             floor_memo,
             floor_coherence,
@@ -253,8 +254,8 @@ impl Plan {
             },
         );
         add(
-            "point lights seen in mirrors or glass",
-            tracing_light && indirect && specular > 0 && points + spots + suns > 0,
+            "points, spots and sun seen in mirrors or glass",
+            caustics || (tracing_light && indirect && specular > 0 && points + spots + suns > 0),
             if specular == 0 {
                 "no mirror or glass in the scene".into()
             } else if points + spots + suns == 0 {
@@ -264,7 +265,11 @@ impl Plan {
             } else if tracing_light {
                 "light tracing follows their light through mirrors and glass".into()
             } else {
-                "path tracing cannot see them (a path of probability zero): render with --integrator light to see them".into()
+                format!(
+                    "a photon pass from {} towards {}: their light on the floor by track length, on diffuse walls in bins",
+                    n(points + spots + suns, "point, spot or directional light"),
+                    n(specular, "mirror or glass edge")
+                )
             },
         );
         add(

@@ -1,0 +1,388 @@
+//! Light that path tracing cannot find: from a point, a spot or the sun
+//! through one or more mirrors or glass edges, to the floor or to a
+//! diffuse wall. A path from the floor meets such a light only by hitting
+//! a point (a path of probability zero), so the path tracer leaves it to
+//! this pass, and the two split the paths between them with no overlap:
+//!
+//! - next-event estimation (the path tracer) takes light that reaches a
+//!   receiver straight from a light, through panes at most;
+//! - the caustic pass takes light from a light of one direction per point
+//!   that reaches the receiver after at least one mirror or glass event.
+//!
+//! Photons leave each such light towards the mirrors and glass edges only
+//! (`Aperture`: the directions, or the sun's rays, that meet each of
+//! them), so none is wasted on the rest of the room. Each is followed by
+//! the light tracer's code (`light_tracer::follow_photon`): its flights
+//! after its first specular event add their exact track length to the
+//! floor's pixels, and at its first diffuse wall it stops, its power
+//! added to that wall's bins by the number of specular events it took.
+//! The path tracer's next-event estimation at a diffuse wall adds the
+//! bins that its remaining bounces allow ([`Caustics::wall`]).
+//!
+//! The floor's part is unbiased, as the light tracer's is. The walls' part
+//! averages each bin (one pixel long at the wall memo's default): a bias
+//! like the wall memo's, where the caustic on a wall has an edge.
+
+use flatray_geometry::{DVec2, Side, Skip};
+
+use crate::film::{Estimator, Film, Part, run};
+use crate::light_tracer::{Deposits, Grid, follow_photon};
+use crate::lights::{Aperture, Photon};
+use crate::render::{RenderOptions, image_size};
+use crate::sampling::Stream;
+use crate::scene::{Material, Scene};
+use crate::{Rgb, Stats};
+
+/// Caustic photons per pixel sample of the render. Every photon is aimed
+/// at a mirror or glass edge, and a photon's track covers many pixels: on
+/// the bathroom (`scenes/bathroom.ron`, 64 spp) one photon per 16 samples
+/// adds a tenth to the time, and more photons leave the noise estimate
+/// where the path samples hold it (2.15 % at 1/32, 2.11 % at 1/2).
+pub const PHOTONS_PER_SAMPLE: f64 = 0.0625;
+/// Fixed work chunks, as the light tracer's.
+const MAX_CHUNKS: usize = 16;
+/// Bytes the chunks' floor and wall buffers may take together.
+const CHUNK_BUDGET: usize = 256 << 20;
+/// At most this many wall bins (of each side and level) in all.
+const MAX_WALL_BINS: usize = 1 << 18;
+/// Stream sample index of caustic photons, apart from every other stream.
+const CAUSTIC_STREAM: u64 = 1 << 42;
+
+/// The layout of the diffuse walls' bins: per wall, its first value and
+/// its number of bins along it; per bin, two sides times `levels` values.
+/// Level `k - 1` holds the light that arrived after at most `k` specular
+/// events.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct WallBins {
+    first: Vec<usize>,
+    count: Vec<usize>,
+    /// Per wall: one over its bins' length.
+    per_length: Vec<f64>,
+    levels: usize,
+    len: usize,
+}
+
+impl WallBins {
+    /// Bins of about `bin_length` world units on every diffuse wall, for
+    /// light that took up to `levels` specular events; coarser where the
+    /// walls are long, within [`MAX_WALL_BINS`].
+    fn new(scene: &Scene, bin_length: f64, levels: usize) -> WallBins {
+        let lengths: Vec<f64> = scene
+            .walls
+            .iter()
+            .map(|w| match w.material {
+                Material::Diffuse { .. } => w.segment.length(),
+                _ => 0.0,
+            })
+            .collect();
+        let total: f64 = lengths.iter().sum();
+        let bin_length = bin_length.max(total / MAX_WALL_BINS as f64);
+        let mut bins = WallBins {
+            levels,
+            ..WallBins::default()
+        };
+        for length in lengths {
+            let n = if length > 0.0 {
+                ((length / bin_length).ceil() as usize).clamp(1, MAX_WALL_BINS)
+            } else {
+                0
+            };
+            bins.first.push(bins.len);
+            bins.count.push(n);
+            bins.per_length
+                .push(if n > 0 { n as f64 / length } else { 0.0 });
+            bins.len += n * 2 * levels;
+        }
+        bins
+    }
+
+    /// The index of the value of wall `wall`, side `side`, at `u`, level
+    /// `level`; `None` for a wall without bins.
+    #[inline]
+    fn index(&self, wall: u32, side: Side, u: f64, level: usize) -> Option<usize> {
+        let w = wall as usize;
+        let n = *self.count.get(w)?;
+        if n == 0 || level >= self.levels {
+            return None;
+        }
+        // u in [0, 1]: the cast saturates.
+        let bin = ((u * n as f64) as usize).min(n - 1);
+        Some(self.first[w] + (level * 2 + side.index()) * n + bin)
+    }
+
+    /// Adds `power`, arriving after `specular` events at the point `u` of
+    /// wall `wall` from `side`, to the levels that take it: as irradiance
+    /// over its bin.
+    pub fn add(
+        &self,
+        values: &mut [Rgb],
+        (wall, side, u): (u32, Side, f64),
+        specular: u32,
+        power: Rgb,
+    ) {
+        let Some(per_length) = self.per_length.get(wall as usize) else {
+            return;
+        };
+        let irradiance = power * *per_length;
+        for level in (specular as usize).saturating_sub(1)..self.levels {
+            if let Some(k) = self.index(wall, side, u, level) {
+                values[k] += irradiance;
+            }
+        }
+    }
+}
+
+/// What the caustic pass measured: the fluence on the floor per pixel,
+/// and the irradiance on the diffuse walls.
+pub(crate) struct Caustics {
+    pub floor: Vec<Rgb>,
+    bins: WallBins,
+    walls: Vec<Rgb>,
+    bounces: u32,
+}
+
+impl Caustics {
+    /// The irradiance from caustic light on side `side` of wall `wall` at
+    /// `u`, for a path at its `bounce`-th reflection: light that took at
+    /// most `bounces - bounce` specular events to get there.
+    #[inline]
+    pub fn wall(&self, wall: u32, side: Side, u: f64, bounce: u32) -> Rgb {
+        let allowed = self.bounces.saturating_sub(bounce) as usize;
+        if allowed == 0 {
+            return Rgb::ZERO;
+        }
+        self.bins
+            .index(wall, side, u, allowed - 1)
+            .map_or(Rgb::ZERO, |k| self.walls[k])
+    }
+}
+
+/// One light's apertures towards the specular walls.
+struct Emitter {
+    light: usize,
+    apertures: Vec<Aperture>,
+    /// Their measures, summed as they are listed.
+    cumulative: Vec<f64>,
+}
+
+/// The caustic pass as units of the render loop: chunks of photons, each
+/// summed into buffers of the floor and the walls.
+struct CausticPass<'a> {
+    scene: &'a Scene,
+    options: &'a RenderOptions,
+    size: (u32, u32),
+    bounces: u32,
+    emitters: Vec<Emitter>,
+    /// The emitters' cumulative shares: intensity times their apertures'
+    /// measure.
+    shares: Vec<f64>,
+    /// Their total, and each photon's share of it.
+    total: f64,
+    photons: u64,
+    chunks: usize,
+    per_chunk: u64,
+    grid: Grid,
+    bins: WallBins,
+}
+
+/// Runs the caustic pass for a path-traced render of `scene`; `None` when
+/// the scene has no mirror or glass, or no light of one direction per
+/// point (the plan says so).
+pub(crate) fn trace_caustics(
+    scene: &Scene,
+    options: &RenderOptions,
+    bounces: u32,
+    stats: &mut Stats,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Option<Caustics> {
+    let targets: Vec<_> = scene
+        .walls
+        .iter()
+        .filter(|w| matches!(w.material, Material::Mirror { .. } | Material::Glass { .. }))
+        .map(|w| w.segment)
+        .collect();
+    let emitters: Vec<Emitter> = scene
+        .lights
+        .iter()
+        .enumerate()
+        .filter_map(|(index, light)| {
+            let apertures: Vec<Aperture> = targets
+                .iter()
+                .filter_map(|t| light.shape.aperture(scene, t))
+                .collect();
+            let mut sum = 0.0;
+            let cumulative: Vec<f64> = apertures
+                .iter()
+                .map(|a| {
+                    sum += a.measure();
+                    sum
+                })
+                .collect();
+            (sum > 0.0 && light.intensity > 0.0).then_some(Emitter {
+                light: index,
+                apertures,
+                cumulative,
+            })
+        })
+        .collect();
+    if emitters.is_empty() || bounces == 0 {
+        return None;
+    }
+    let mut total = 0.0;
+    let shares: Vec<f64> = emitters
+        .iter()
+        .map(|e| {
+            total += scene.lights[e.light].intensity * e.cumulative.last().copied().unwrap_or(0.0);
+            total
+        })
+        .collect();
+    let (width, height) = image_size(scene, options.scale);
+    let pixels = width as usize * height as usize;
+    let photons =
+        ((options.samples as f64 * pixels as f64 * PHOTONS_PER_SAMPLE).ceil() as u64).max(1);
+    let levels = bounces.saturating_sub(1) as usize;
+    let bins = WallBins::new(scene, options.memo.bin_length / options.scale, levels);
+    let chunk_bytes = (pixels + bins.len) * 24;
+    let chunks = (CHUNK_BUDGET / chunk_bytes.max(1)).clamp(1, MAX_CHUNKS);
+    let pass = CausticPass {
+        scene,
+        options,
+        size: (width, height),
+        bounces,
+        emitters,
+        shares,
+        total,
+        photons,
+        chunks,
+        per_chunk: photons.div_ceil(chunks as u64),
+        grid: Grid::new(scene, options.scale, width, height),
+        bins,
+    };
+    let outcome = run(&pass, Stats::default(), progress);
+    stats.merge(&outcome.stats);
+    Some(outcome.output)
+}
+
+impl Estimator for CausticPass<'_> {
+    type Output = Caustics;
+
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn units(&self) -> usize {
+        self.chunks
+    }
+
+    fn render_unit(
+        &self,
+        chunk: usize,
+        stats: &mut Stats,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Part {
+        let scene = self.scene;
+        let mut floor = vec![Rgb::ZERO; self.size.0 as usize * self.size.1 as usize];
+        let mut walls = vec![Rgb::ZERO; self.bins.len];
+        let first = chunk as u64 * self.per_chunk;
+        let last = ((chunk as u64 + 1) * self.per_chunk).min(self.photons);
+        let weight = self.total / self.photons as f64;
+        let pick = |list: &[f64], u: f64| {
+            let u = u * list.last().copied().unwrap_or(0.0);
+            list.iter().position(|&c| u < c).unwrap_or(list.len() - 1)
+        };
+        for index in first..last {
+            let mut stream = Stream::new(self.options.seed, index, CAUSTIC_STREAM);
+            stats.physics.caustic_photons += 1;
+            let emitter = &self.emitters[pick(&self.shares, stream.uniform())];
+            let light = &scene.lights[emitter.light];
+            let aperture = &emitter.apertures[pick(&emitter.cumulative, stream.uniform())];
+            let (origin, dir) = aperture.ray(stream.uniform());
+            // The density of this ray among the light's apertures: every
+            // aperture that holds it could have drawn it.
+            let holding = emitter
+                .apertures
+                .iter()
+                .filter(|a| a.contains(origin, dir))
+                .count()
+                .max(1);
+            let window = light.spot_window(dir);
+            let power = light.color * (weight * window / holding as f64);
+            if power == Rgb::ZERO {
+                continue;
+            }
+            let photon = Photon {
+                origin,
+                dir,
+                scale: 1.0,
+                kernel: light.shape.kernel(light),
+                skip: Skip::NONE,
+            };
+            let mut deposits = Deposits {
+                grid: &self.grid,
+                floor: &mut floor,
+                walls: Some((&self.bins, &mut walls)),
+            };
+            follow_photon(
+                scene,
+                photon,
+                power,
+                self.bounces,
+                &mut deposits,
+                &mut stream,
+                stats,
+            );
+        }
+        progress(last.saturating_sub(first));
+        Part::Splats {
+            fluence: floor,
+            walls,
+            first_half: chunk < self.chunks / 2,
+        }
+    }
+
+    fn finish(&self, film: Film, stats: &mut Stats) -> Caustics {
+        let (width, height) = self.size;
+        let pixels = width as usize * height as usize;
+        let floor = if film.fluence.is_empty() {
+            vec![Rgb::ZERO; pixels]
+        } else {
+            film.fluence
+        };
+        // The noise of the floor's part, from its two halves of photons,
+        // in image units: added to the render's estimate.
+        let first_photons = ((self.chunks / 2) as u64 * self.per_chunk).min(self.photons);
+        if first_photons > 0 && first_photons < self.photons && !film.first.is_empty() {
+            let scene = self.scene;
+            let (p, p1) = (self.photons as f64, first_photons as f64);
+            let step = DVec2::new(
+                scene.canvas.width as f64 / width as f64,
+                scene.canvas.height as f64 / height as f64,
+            );
+            for y in 0..height {
+                for x in 0..width {
+                    let k = y as usize * width as usize + x as usize;
+                    let centre =
+                        scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
+                    let scale =
+                        scene.floor.albedo_at(&scene.canvas, centre) * self.options.exposure;
+                    let a = film.first[k] * (p / p1);
+                    let b = (floor[k] - film.first[k]) * (p / (p - p1));
+                    stats
+                        .noise
+                        .add_error((a - b) * scale, p1 * (p - p1) / (p * p));
+                }
+            }
+        }
+        let walls = if film.walls.is_empty() {
+            vec![Rgb::ZERO; self.bins.len]
+        } else {
+            film.walls
+        };
+        Caustics {
+            floor,
+            bins: self.bins.clone(),
+            walls,
+            bounces: self.bounces,
+        }
+    }
+}
