@@ -73,6 +73,10 @@ enum Command {
         /// The direct-light memo (overrides the scene).
         #[arg(long, value_enum)]
         cache: Option<Switch>,
+        /// The caustic pass: points, spots and sun seen in mirrors and
+        /// glass (on by default).
+        #[arg(long, value_enum)]
+        caustics: Option<Switch>,
         /// The estimator (overrides the scene).
         #[arg(long, value_enum)]
         integrator: Option<IntegratorArg>,
@@ -149,6 +153,11 @@ struct RenderArgs {
     /// The direct-light memo (overrides the scene).
     #[arg(long, value_enum)]
     cache: Option<Switch>,
+    /// The caustic pass: points, spots and sun seen in mirrors and glass
+    /// (on by default; off, their light through mirrors and glass is
+    /// missing).
+    #[arg(long, value_enum)]
+    caustics: Option<Switch>,
     /// Render the canvas at this many pixels per world unit (0.25 for a
     /// preview, 2 for a sharper image); the geometry is unchanged.
     #[arg(long, default_value_t = 1.0)]
@@ -252,9 +261,17 @@ where
             scene,
             bounces,
             cache,
+            caustics,
             integrator,
             verbose,
-        } => plan(&scene, bounces, cache, integrator, verbose, &mut out),
+        } => plan(
+            &scene,
+            bounces,
+            (cache, caustics),
+            integrator,
+            verbose,
+            &mut out,
+        ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
         Command::Completions { shell } => {
@@ -428,7 +445,7 @@ fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
 fn plan(
     scene: &Path,
     bounces: Option<u32>,
-    cache: Option<Switch>,
+    (cache, caustics): (Option<Switch>, Option<Switch>),
     integrator: Option<IntegratorArg>,
     verbose: bool,
     out: &mut dyn Write,
@@ -445,6 +462,7 @@ fn plan(
             },
             ..loaded.options.memo
         },
+        caustics: !matches!(caustics, Some(Switch::Off)),
         ..loaded.options
     };
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
@@ -502,6 +520,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             },
             ..loaded.options.memo
         },
+        caustics: !matches!(args.caustics, Some(Switch::Off)),
         reference: args.reference,
     };
     let (width, height) = checked_size(&loaded, options.scale)?;

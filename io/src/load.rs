@@ -385,6 +385,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             floor_samples: file.render.cache_floor_samples.0,
             ..MemoOptions::default()
         },
+        caustics: true,
         reference: false,
     };
     Ok(Loaded {

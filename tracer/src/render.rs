@@ -52,6 +52,10 @@ pub struct RenderOptions {
     pub integrator: Integrator,
     /// The direct-light memo.
     pub memo: MemoOptions,
+    /// The caustic pass (on by default): the light of points, spots and
+    /// suns through mirrors and glass, which path tracing alone cannot
+    /// see. Off, that light is missing from the image.
+    pub caustics: bool,
     /// The plain model: every effect computed wherever it could add
     /// light, even where the plan would skip it, and no fast path (no
     /// culling, lanes, shared shadow rays, tables or shortcuts, and the
@@ -71,6 +75,7 @@ impl Default for RenderOptions {
             scale: 1.0,
             integrator: Integrator::Path,
             memo: MemoOptions::default(),
+            caustics: true,
             reference: false,
         }
     }

@@ -93,6 +93,7 @@ pub struct Plan {
     pub tracing_light: bool,
     pub reference: bool,
     pub memo_enabled: bool,
+    pub caustics_enabled: bool,
     /// The wall memo's bin length, in pixels, as given.
     pub bin_length: String,
     /// The floor memo's strata per pixel, per side.
@@ -155,7 +156,11 @@ impl Plan {
         let mirror_emission = indirect && (force || (specular > 0 && areas > 0));
         // Path tracing cannot find their light after a mirror or glass:
         // the caustic pass does, wherever both are in the scene.
-        let caustics = !tracing_light && indirect && specular > 0 && points + spots + suns > 0;
+        let caustics = options.caustics
+            && !tracing_light
+            && indirect
+            && specular > 0
+            && points + spots + suns > 0;
         let wall_memo_wanted = !tracing_light
             && indirect
             && options.memo.enabled
@@ -194,6 +199,7 @@ impl Plan {
             tracing_light,
             reference: options.reference,
             memo_enabled: options.memo.enabled,
+            caustics_enabled: options.caustics,
             bin_length: options.memo.bin_length.to_string(),
             floor_grid: crate::memo::floor_grid(&options.memo, options.samples),
             wall_memo_fits,

@@ -61,6 +61,7 @@ impl Plan {
             tracing_light,
             reference,
             memo_enabled,
+            caustics_enabled,
             ref bin_length,
             floor_grid,
             wall_memo_fits,
@@ -264,6 +265,8 @@ impl Plan {
                 "no indirect light is traced".into()
             } else if tracing_light {
                 "light tracing follows their light through mirrors and glass".into()
+            } else if !caustics_enabled {
+                "the caustic pass is switched off (--caustics off): path tracing alone cannot see them".into()
             } else {
                 format!(
                     "a photon pass from {} towards {}: their light on the floor by track length, on diffuse walls in bins",
