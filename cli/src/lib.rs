@@ -90,6 +90,10 @@ enum Command {
     /// Turn a floor plan from another tool (an SVG drawing, a Tiled map in
     /// TMX or JSON, a wall-mask image) into a commented scene file.
     Import(ImportArgs),
+    /// Make up an apartment's floor plan (rooms with doors and windows,
+    /// furniture, coloured walls, mirrors, lamps) as a scene file: for
+    /// trying flatray, and benchmarking it, on a plan of any size.
+    Generate(GenerateArgs),
     /// Print a shell completion script (for example:
     /// `flatray completions bash > ~/.local/share/bash-completion/completions/flatray`).
     Completions {
@@ -125,6 +129,28 @@ struct ImportArgs {
     /// Use the SVG's first bitmap as the floor (written beside the scene).
     #[arg(long)]
     floor_image: bool,
+}
+
+#[derive(Debug, clap::Args)]
+struct GenerateArgs {
+    /// The scene file to write.
+    #[arg(short, long, default_value = "apartment.ron")]
+    output: PathBuf,
+    /// Rooms, on a grid about as wide as it is tall.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    rooms: u32,
+    /// Lamps per room (every fourth a spot).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=64))]
+    lamps: u32,
+    /// The share of rooms with a mirror, 0 to 1.
+    #[arg(long, default_value_t = 0.3)]
+    mirrors: f64,
+    /// No sunlight through the windows.
+    #[arg(long)]
+    no_sun: bool,
+    /// Which plan of this size: the same seed makes the same plan.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 #[derive(Debug, clap::Args)]
@@ -274,6 +300,7 @@ where
         ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
+        Command::Generate(args) => generate(args, &mut out),
         Command::Completions { shell } => {
             let mut command = <Cli as clap::CommandFactory>::command();
             clap_complete::generate(shell, &mut command, "flatray", &mut out);
@@ -617,6 +644,26 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             (written_at - rendered_at).as_secs_f64()
         );
     }
+    Ok(())
+}
+
+fn generate(args: GenerateArgs, out: &mut dyn Write) -> Result<(), Failure> {
+    if !(0.0..=1.0).contains(&args.mirrors) {
+        return Err(Failure::usage(format!(
+            "--mirrors: expected a share from 0 to 1, found {}",
+            args.mirrors
+        )));
+    }
+    let plan = flatray_io::generate::Apartment {
+        rooms: args.rooms,
+        lamps_per_room: args.lamps,
+        mirrors: args.mirrors,
+        sun: !args.no_sun,
+        seed: args.seed,
+    };
+    check_output(&args.output, &[])?;
+    flatray_io::write_text(&args.output, &plan.to_ron()).map_err(Failure::other)?;
+    let _ = writeln!(out, "wrote {}", args.output.display());
     Ok(())
 }
 

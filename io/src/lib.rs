@@ -12,6 +12,7 @@
 
 mod error;
 pub mod format;
+pub mod generate;
 pub mod import;
 mod load;
 mod locate;

@@ -164,3 +164,18 @@ fn scenes_without_mirrors_glass_or_lamps_trace_no_photon() {
         assert!(!flatray_tracer::Plan::new(&loaded.scene, &options).caustics);
     }
 }
+
+/// A generated apartment (`flatray generate`): rooms with doors, windows
+/// letting the sun in, furniture, mirrors and lamps, three bounces.
+#[test]
+fn a_generated_apartment() {
+    let plan = flatray_io::generate::Apartment {
+        rooms: 4,
+        mirrors: 1.0,
+        seed: 3,
+        ..Default::default()
+    };
+    let loaded = scene(&plan.to_ron());
+    assert!(loaded.scene.walls.len() > 20 && loaded.scene.lights.len() == 5);
+    assert_agree("apartment", &loaded.scene, options(4, 3, 0.2, false), 0.005);
+}
