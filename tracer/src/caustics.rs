@@ -23,7 +23,7 @@
 //! averages each bin (one pixel long at the wall memo's default): a bias
 //! like the wall memo's, where the caustic on a wall has an edge.
 
-use flatray_geometry::{DVec2, Side, Skip};
+use flatray_geometry::{DVec2, Ray, Side, Skip};
 
 use crate::film::{Estimator, Film, Part, run};
 use crate::light_tracer::{Deposits, Grid, follow_photon};
@@ -39,10 +39,12 @@ use crate::{Rgb, Stats};
 /// adds a tenth to the time, and more photons leave the noise estimate
 /// where the path samples hold it (2.15 % at 1/32, 2.11 % at 1/2).
 pub const PHOTONS_PER_SAMPLE: f64 = 0.0625;
-/// Fixed work chunks, as the light tracer's.
+/// Fixed work chunks, as the light tracer's: at least two (the noise
+/// estimate compares halves), at most sixteen.
 const MAX_CHUNKS: usize = 16;
-/// Bytes the chunks' floor and wall buffers may take together.
-const CHUNK_BUDGET: usize = 256 << 20;
+/// Bytes the chunks' floor and wall buffers may take together (beyond the
+/// two chunks that every pass has).
+const CHUNK_BUDGET: usize = 32 << 20;
 /// At most this many wall bins (of each side and level) in all.
 const MAX_WALL_BINS: usize = 1 << 18;
 /// Stream sample index of caustic photons, apart from every other stream.
@@ -165,6 +167,88 @@ struct Emitter {
     cumulative: Vec<f64>,
 }
 
+/// Parts of an aperture tested for whether a diffuse wall hides the target.
+const APERTURE_PARTS: usize = 64;
+
+/// The parts of `aperture` (towards wall `target`) whose photons can meet
+/// the target or another specular wall before a diffuse one, merged into
+/// runs: a part is left out only where one diffuse wall stands in front of
+/// the target across the whole part. Its photons would all stop there
+/// before any specular event, adding nothing, so leaving them out changes
+/// no expected value, and spares the photons that a room's walls hide
+/// from its mirrors. A direction that meets another specular wall first
+/// lies in that wall's aperture, which keeps it.
+fn reaching(scene: &Scene, aperture: &Aperture, target: u32) -> Vec<Aperture> {
+    let hidden = |k: usize| {
+        let (u0, u1) = (
+            k as f64 / APERTURE_PARTS as f64,
+            (k + 1) as f64 / APERTURE_PARTS as f64,
+        );
+        let edge = |u: f64| {
+            let (origin, dir) = aperture.ray(u);
+            let ray = Ray::new(origin, dir);
+            let (wall, hit) = scene
+                .segments
+                .closest_hit(&ray, f64::INFINITY, Skip::NONE)?;
+            // Where the ray meets the target's line (an edge ray aims at
+            // its end, and may pass it by a rounding).
+            let s = &scene.walls[target as usize].segment;
+            let (e, denom) = (s.edge(), dir.perp_dot(s.edge()));
+            let beyond = (s.a - origin).perp_dot(e) / denom;
+            if !(beyond.is_finite() && beyond > 0.0) {
+                return None;
+            }
+            let diffuse = matches!(
+                scene.walls[wall as usize].material,
+                Material::Diffuse { .. }
+            );
+            // Well inside the wall, and well in front of the target.
+            (diffuse
+                && wall != target
+                && hit.u > 1e-6
+                && hit.u < 1.0 - 1e-6
+                && hit.t < beyond * (1.0 - 1e-9))
+                .then(|| (wall, ray.at(hit.t), ray.at(beyond)))
+        };
+        match (edge(u0), edge(u1)) {
+            (Some((w0, a0, b0)), Some((w1, a1, b1))) => {
+                // The same wall, and its chord across the part never meets
+                // the target's: it is in front all the way.
+                w0 == w1 && !segments_meet(a0, a1, b0, b1)
+            }
+            _ => false,
+        }
+    };
+    let mut parts = Vec::new();
+    let mut start = None;
+    for k in 0..=APERTURE_PARTS {
+        let keep = k < APERTURE_PARTS && !hidden(k);
+        match (keep, start) {
+            (true, None) => start = Some(k),
+            (false, Some(s)) => {
+                parts.push(aperture.part(
+                    s as f64 / APERTURE_PARTS as f64,
+                    k as f64 / APERTURE_PARTS as f64,
+                ));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    parts
+}
+
+/// Whether segments `p0 p1` and `q0 q1` meet (touching counts).
+fn segments_meet(p0: DVec2, p1: DVec2, q0: DVec2, q1: DVec2) -> bool {
+    let side = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
+    let (d1, d2) = (side(q0, q1, p0), side(q0, q1, p1));
+    let (d3, d4) = (side(p0, p1, q0), side(p0, p1, q1));
+    if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 {
+        return true;
+    }
+    false
+}
+
 /// The caustic pass as units of the render loop: chunks of photons, each
 /// summed into buffers of the floor and the walls.
 struct CausticPass<'a> {
@@ -195,11 +279,13 @@ pub(crate) fn trace_caustics(
     stats: &mut Stats,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Option<Caustics> {
-    let targets: Vec<_> = scene
-        .walls
-        .iter()
-        .filter(|w| matches!(w.material, Material::Mirror { .. } | Material::Glass { .. }))
-        .map(|w| w.segment)
+    let targets: Vec<u32> = (0..scene.walls.len() as u32)
+        .filter(|&i| {
+            matches!(
+                scene.walls[i as usize].material,
+                Material::Mirror { .. } | Material::Glass { .. }
+            )
+        })
         .collect();
     let emitters: Vec<Emitter> = scene
         .lights
@@ -208,7 +294,11 @@ pub(crate) fn trace_caustics(
         .filter_map(|(index, light)| {
             let apertures: Vec<Aperture> = targets
                 .iter()
-                .filter_map(|t| light.shape.aperture(scene, t))
+                .filter_map(|&t| {
+                    let target = &scene.walls[t as usize].segment;
+                    light.shape.aperture(scene, target).map(|a| (a, t))
+                })
+                .flat_map(|(a, t)| reaching(scene, &a, t))
                 .collect();
             let mut sum = 0.0;
             let cumulative: Vec<f64> = apertures
@@ -243,7 +333,7 @@ pub(crate) fn trace_caustics(
     let levels = bounces.saturating_sub(1) as usize;
     let bins = WallBins::new(scene, options.memo.bin_length / options.scale, levels);
     let chunk_bytes = (pixels + bins.len) * 24;
-    let chunks = (CHUNK_BUDGET / chunk_bytes.max(1)).clamp(1, MAX_CHUNKS);
+    let chunks = (CHUNK_BUDGET / chunk_bytes.max(1)).clamp(2, MAX_CHUNKS);
     let pass = CausticPass {
         scene,
         options,

@@ -221,11 +221,12 @@ impl LightShape {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Aperture {
     /// Directions from `at` turning from unit `from` by up to `angle`
-    /// radians (`< pi`), counterclockwise when `turn` is 1, clockwise when
-    /// it is -1.
+    /// radians (`< pi`) to unit `to`, counterclockwise when `turn` is 1,
+    /// clockwise when it is -1.
     Angle {
         at: DVec2,
         from: DVec2,
+        to: DVec2,
         angle: f64,
         turn: f64,
     },
@@ -240,7 +241,48 @@ pub(crate) enum Aperture {
     },
 }
 
+/// Unit `from` turned by `angle` radians, counterclockwise for `turn` 1.
+fn turned(from: DVec2, angle: f64, turn: f64) -> DVec2 {
+    let (s, c) = angle.sin_cos();
+    from * c + from.perp() * (turn * s)
+}
+
 impl Aperture {
+    /// The part of the aperture from fraction `u0` to `u1` of it.
+    pub fn part(&self, u0: f64, u1: f64) -> Aperture {
+        match *self {
+            Aperture::Angle {
+                at,
+                from,
+                angle,
+                turn,
+                ..
+            } => {
+                let start = turned(from, angle * u0, turn);
+                Aperture::Angle {
+                    at,
+                    from: start,
+                    to: turned(from, angle * u1, turn),
+                    angle: angle * (u1 - u0),
+                    turn,
+                }
+            }
+            Aperture::Beam {
+                start,
+                across,
+                direction,
+                s0,
+                s1,
+            } => Aperture::Beam {
+                start,
+                across,
+                direction,
+                s0: s0 + (s1 - s0) * u0,
+                s1: s0 + (s1 - s0) * u1,
+            },
+        }
+    }
+
     /// Its measure: radians, or units of the beam's width.
     pub fn measure(&self) -> f64 {
         match *self {
@@ -257,10 +299,8 @@ impl Aperture {
                 from,
                 angle,
                 turn,
-            } => {
-                let (s, c) = (angle * u).sin_cos();
-                (at, from * c + from.perp() * (turn * s))
-            }
+                ..
+            } => (at, turned(from, angle * u, turn)),
             Aperture::Beam {
                 start,
                 across,
@@ -275,13 +315,7 @@ impl Aperture {
     /// that [`Aperture::ray`] of this light's apertures gave).
     pub fn contains(&self, origin: DVec2, dir: DVec2) -> bool {
         match *self {
-            Aperture::Angle {
-                from, angle, turn, ..
-            } => {
-                let to = {
-                    let (s, c) = angle.sin_cos();
-                    from * c + from.perp() * (turn * s)
-                };
+            Aperture::Angle { from, to, turn, .. } => {
                 turn * from.perp_dot(dir) >= 0.0 && turn * dir.perp_dot(to) >= 0.0
             }
             Aperture::Beam {
@@ -312,11 +346,13 @@ impl LightShape {
                     return None;
                 }
                 let angle = cross.abs().atan2(va.dot(vb));
+                let (from, turn) = (va.normalize(), cross.signum());
                 (angle > 0.0).then(|| Aperture::Angle {
                     at,
-                    from: va.normalize(),
+                    from,
+                    to: turned(from, angle, turn),
                     angle,
-                    turn: cross.signum(),
+                    turn,
                 })
             }
             LightShape::Directional { direction } => {

@@ -269,7 +269,7 @@ impl Plan {
                 "the caustic pass is switched off (--caustics off): path tracing alone cannot see them".into()
             } else {
                 format!(
-                    "a photon pass from {} towards {}: their light on the floor by track length, on diffuse walls in bins",
+                    "a photon pass from {} towards {} (the parts walls do not hide): their light on the floor by track length, on diffuse walls in bins",
                     n(points + spots + suns, "point, spot or directional light"),
                     n(specular, "mirror or glass edge")
                 )
