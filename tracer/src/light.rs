@@ -2,7 +2,7 @@
 
 use flatray_geometry::{DVec2, Ray, Skip};
 
-use crate::lights::arriving;
+use crate::lights::{arriving, point_incident};
 use crate::sampling::{Stream, angle_sample_lanes};
 use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
@@ -179,9 +179,9 @@ pub(crate) fn direct_light_strata(
             (LightShape::Point { at }, Visibility::Known(known)) => {
                 for (value, &x) in values.iter_mut().zip(points.iter()) {
                     // As `light_contribution` computes it for the floor.
-                    let Some(s) = (LightShape::Point { at }).incident(light, x, 0.0, r0) else {
-                        continue;
-                    };
+                    // `LightShape::incident` of a point, inlined into this
+                    // loop.
+                    let s = point_incident(at, light, x, r0);
                     let v = arriving(light.intensity, s.value, 1.0, s.pdf);
                     let v = if s.at_the_light() {
                         Rgb::splat(v)

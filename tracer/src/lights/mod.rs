@@ -40,6 +40,7 @@ use crate::scene::{Light, LightShape, Scene};
 use sun::sun_line;
 
 pub(crate) use line::emitted as line_emitted;
+pub(crate) use point::incident as point_incident;
 
 /// A sample of the light that reaches a receiver point from one light,
 /// before occlusion, the receiver's cosine, the light's colour and its
@@ -113,7 +114,7 @@ impl LightShape {
     /// A sample of light `light` (of this shape) arriving at `x`, with `u`
     /// in `[0, 1)` where the shape takes a number; `None` where none
     /// arrives (the dark side of a one-sided line, inside a circle).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn incident(&self, light: &Light, x: DVec2, u: f64, r0: f64) -> Option<Incident> {
         match *self {
             LightShape::Point { at } => Some(point::incident(at, light, x, r0)),

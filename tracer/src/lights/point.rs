@@ -12,8 +12,8 @@ use crate::scene::{Light, lies_on_line};
 
 /// The light at `at` seen from `x`: one direction, `G(r)` per unit
 /// intensity (the kernel clamped at `r0`).
-#[inline]
-pub(super) fn incident(at: DVec2, light: &Light, x: DVec2, r0: f64) -> Incident {
+#[inline(always)]
+pub(crate) fn incident(at: DVec2, light: &Light, x: DVec2, r0: f64) -> Incident {
     let to = at - x;
     let length = to.length();
     Incident {

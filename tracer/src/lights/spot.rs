@@ -10,7 +10,7 @@ use crate::scene::{Light, smooth_window};
 
 /// As a point light, times the window at the direction from the light to
 /// `x`.
-#[inline]
+#[inline(always)]
 pub(super) fn incident(at: DVec2, light: &Light, x: DVec2, r0: f64) -> Incident {
     let mut incident = super::point::incident(at, light, x, r0);
     if !incident.at_the_light() {

@@ -10,7 +10,7 @@ use crate::sampling::Stream;
 use crate::scene::Scene;
 
 /// Towards the sun, unbounded: the whole intensity.
-#[inline]
+#[inline(always)]
 pub(super) fn incident(direction: DVec2) -> Incident {
     Incident {
         to: -direction,
