@@ -7,6 +7,15 @@
 //! keyed by (seed, pixel, sample), so an image is bit-identical for any
 //! number of threads.
 //!
+//! The model, which reads like `docs/model.md`: the lights (`lights/`, a
+//! module per kind), the materials (`bsdf.rs`), next-event estimation
+//! (`light.rs`), the path tracer (`path.rs`), the light tracer
+//! (`light_tracer.rs`), the caustic pass (`caustics.rs`) and the one
+//! render loop (`film.rs`). Beside it, fast paths that compute the same
+//! bits (`tests/tests/identity.rs`): the memo (`memo.rs`), shared shadow
+//! rays (`coherence.rs`), culled rays (`mirror.rs`, `render.rs`), lanes,
+//! tables; `RenderOptions::reference` turns them all off.
+//!
 //! What it never does: read or write files, parse text, or print. Scenes
 //! come in as plain data ([`Scene`]); images go out as linear floats
 //! ([`Image`]); progress goes out through a callback. Its one `unsafe`
