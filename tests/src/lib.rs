@@ -162,3 +162,24 @@ pub fn block_stats(
         })
         .collect()
 }
+
+/// Mean and standard deviation of `f` over the unit pixel at `(x, y)`, by
+/// an `n` x `n` midpoint rule: the exact mean of a jittered pixel, and
+/// the spread of one jittered sample.
+pub fn pixel_moments(x: u32, y: u32, n: u32, f: impl Fn(glam::DVec2) -> f64) -> (f64, f64) {
+    let (mut s1, mut s2) = (0.0, 0.0);
+    for j in 0..n {
+        for i in 0..n {
+            let p = glam::DVec2::new(
+                x as f64 + (i as f64 + 0.5) / n as f64,
+                y as f64 + (j as f64 + 0.5) / n as f64,
+            );
+            let v = f(p);
+            s1 += v;
+            s2 += v * v;
+        }
+    }
+    let count = (n * n) as f64;
+    let mean = s1 / count;
+    (mean, (s2 / count - mean * mean).max(0.0).sqrt())
+}

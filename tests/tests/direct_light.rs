@@ -3,29 +3,9 @@
 //! errors of the pixel's jittered mean, computed by quadrature.
 
 use flatray_geometry::{DVec2, Segment};
-use flatray_tests::{TempDir, render, scene};
+use flatray_tests::{TempDir, pixel_moments, render, scene};
 use flatray_tracer::RenderOptions;
 use flatray_tracer::sampling::subtended_angle;
-
-/// Mean and standard deviation of `f` over the unit pixel at `(x, y)`, by
-/// a `n` x `n` midpoint rule.
-fn pixel_moments(x: u32, y: u32, n: u32, f: impl Fn(DVec2) -> f64) -> (f64, f64) {
-    let (mut s1, mut s2) = (0.0, 0.0);
-    for j in 0..n {
-        for i in 0..n {
-            let p = DVec2::new(
-                x as f64 + (i as f64 + 0.5) / n as f64,
-                y as f64 + (j as f64 + 0.5) / n as f64,
-            );
-            let v = f(p);
-            s1 += v;
-            s2 += v * v;
-        }
-    }
-    let count = (n * n) as f64;
-    let mean = s1 / count;
-    (mean, (s2 / count - mean * mean).max(0.0).sqrt())
-}
 
 /// Renders `text` to EXR and reads it back.
 fn render_to_exr(text: &str, options: RenderOptions) -> flatray_tracer::Image {

@@ -69,14 +69,7 @@ impl WallBins {
     /// light that took up to `levels` specular events; coarser where the
     /// walls are long, within [`MAX_WALL_BINS`].
     fn new(scene: &Scene, bin_length: f64, levels: usize) -> WallBins {
-        let lengths: Vec<f64> = scene
-            .walls
-            .iter()
-            .map(|w| match w.material {
-                Material::Diffuse { .. } => w.segment.length(),
-                _ => 0.0,
-            })
-            .collect();
+        let lengths = scene.diffuse_lengths();
         let total: f64 = lengths.iter().sum();
         let bin_length = bin_length.max(total / MAX_WALL_BINS as f64);
         let mut bins = WallBins {

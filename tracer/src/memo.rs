@@ -100,14 +100,7 @@ pub(crate) fn build_wall_memo(
     shadows: bool,
     stats: &mut Stats,
 ) -> WallMemo {
-    let lengths: Vec<f64> = scene
-        .walls
-        .iter()
-        .map(|w| match w.material {
-            Material::Diffuse { .. } => w.segment.length(),
-            _ => 0.0,
-        })
-        .collect();
+    let lengths = scene.diffuse_lengths();
     // Where other walls meet or cross each diffuse wall: bins and
     // interpolation stop there.
     let junctions: Vec<Vec<f64>> = scene

@@ -543,6 +543,18 @@ impl Scene {
         }
     }
 
+    /// Each wall's length if it is diffuse, else 0: what the wall memo
+    /// and the caustic pass bin.
+    pub(crate) fn diffuse_lengths(&self) -> Vec<f64> {
+        self.walls
+            .iter()
+            .map(|w| match w.material {
+                Material::Diffuse { .. } => w.segment.length(),
+                _ => 0.0,
+            })
+            .collect()
+    }
+
     /// The segment set of the walls, for queries.
     pub fn segments(&self) -> &SegmentSet {
         &self.segments
