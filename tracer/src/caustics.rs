@@ -21,7 +21,12 @@
 //!
 //! The floor's part is unbiased, as the light tracer's is. The walls' part
 //! averages each bin (one pixel long at the wall memo's default): a bias
-//! like the wall memo's, where the caustic on a wall has an edge.
+//! like the wall memo's, where the caustic on a wall has an edge. The bins
+//! keep at most [`MAX_LEVELS`] counts of specular events apart: light that
+//! took more (nine mirrors in a row) is read as if it took that many, and
+//! their values stay within [`MAX_WALL_VALUES`] per chunk of work (coarser
+//! bins, then fewer levels; a scene of more diffuse walls than that holds
+//! leaves the caustic light on walls out).
 
 use flatray_geometry::{DVec2, Ray, Side, Skip};
 
@@ -45,15 +50,19 @@ const MAX_CHUNKS: usize = 16;
 /// Bytes the chunks' floor and wall buffers may take together (beyond the
 /// two chunks that every pass has).
 const CHUNK_BUDGET: usize = 32 << 20;
-/// At most this many wall bins (of each side and level) in all.
-const MAX_WALL_BINS: usize = 1 << 18;
+/// At most this many values in the walls' bins, over every wall, side and
+/// level (24 bytes each, per chunk of work).
+pub const MAX_WALL_VALUES: usize = 1 << 20;
+/// At most this many levels of specular events: light that took more is
+/// binned with the last level's.
+const MAX_LEVELS: usize = 8;
 /// Stream sample index of caustic photons, apart from every other stream.
 const CAUSTIC_STREAM: u64 = 1 << 42;
 
 /// The layout of the diffuse walls' bins: per wall, its first value and
 /// its number of bins along it; per bin, two sides times `levels` values.
 /// Level `k - 1` holds the light that arrived after at most `k` specular
-/// events.
+/// events; the last level also holds what arrived after more.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WallBins {
     first: Vec<usize>,
@@ -66,19 +75,38 @@ pub(crate) struct WallBins {
 
 impl WallBins {
     /// Bins of about `bin_length` world units on every diffuse wall, for
-    /// light that took up to `levels` specular events; coarser where the
-    /// walls are long, within [`MAX_WALL_BINS`].
+    /// light that took up to `levels` specular events (at most
+    /// [`MAX_LEVELS`]); coarser where the walls are long, within
+    /// [`MAX_WALL_VALUES`]. With more diffuse walls than that allows one
+    /// bin each, fewer levels, and with none, no bins: the caustic light
+    /// on walls is then left out (`docs/robustness.md`).
     fn new(scene: &Scene, bin_length: f64, levels: usize) -> WallBins {
         let lengths = scene.diffuse_lengths();
+        let walls = lengths.iter().filter(|&&l| l > 0.0).count();
+        let levels = levels
+            .min(MAX_LEVELS)
+            .min(MAX_WALL_VALUES / (4 * walls.max(1)));
+        if levels == 0 {
+            return WallBins {
+                first: vec![0; lengths.len()],
+                count: vec![0; lengths.len()],
+                per_length: vec![0.0; lengths.len()],
+                levels: 0,
+                len: 0,
+            };
+        }
+        // Half the values for bins along the walls, the other half for
+        // the one each wall has at least.
+        let most = MAX_WALL_VALUES / (4 * levels);
         let total: f64 = lengths.iter().sum();
-        let bin_length = bin_length.max(total / MAX_WALL_BINS as f64);
+        let bin_length = bin_length.max(total / most as f64);
         let mut bins = WallBins {
             levels,
             ..WallBins::default()
         };
         for length in lengths {
             let n = if length > 0.0 {
-                ((length / bin_length).ceil() as usize).clamp(1, MAX_WALL_BINS)
+                ((length / bin_length).ceil() as usize).clamp(1, most)
             } else {
                 0
             };
@@ -119,7 +147,10 @@ impl WallBins {
             return;
         };
         let irradiance = power * *per_length;
-        for level in (specular as usize).saturating_sub(1)..self.levels {
+        let lowest = (specular as usize)
+            .saturating_sub(1)
+            .min(self.levels.saturating_sub(1));
+        for level in lowest..self.levels {
             if let Some(k) = self.index(wall, side, u, level) {
                 values[k] += irradiance;
             }
@@ -147,7 +178,12 @@ impl Caustics {
             return Rgb::ZERO;
         }
         self.bins
-            .index(wall, side, u, allowed - 1)
+            .index(
+                wall,
+                side,
+                u,
+                (allowed - 1).min(self.bins.levels.saturating_sub(1)),
+            )
             .map_or(Rgb::ZERO, |k| self.walls[k])
     }
 }
