@@ -88,9 +88,8 @@ pub(crate) fn path_begin(
 }
 
 /// The rest of [`path_sample`], given the fluence and the ray that
-/// `path_begin` returned, and where that ray meets the walls. Inlined:
-/// passed through memory, the hit was reloaded wider than it was stored,
-/// a stall that cost a tenth of the render.
+/// `path_begin` returned, and where that ray meets the walls. Inlined, so
+/// that the hit stays in registers rather than passing through memory.
 ///
 /// With `line_walls` (the walls the first ray's whole line can meet, in
 /// index order), the rays that continue it straight through transparent
