@@ -182,7 +182,9 @@ impl Plan {
         add(
             "colour bleeding from the floor",
             indirect && floor_albedo_walls > 0,
-            if floor_albedo_walls == 0 {
+            if diffuse == 0 {
+                "no diffuse wall in the scene".into()
+            } else if floor_albedo_walls == 0 {
                 "every diffuse wall has its own albedo".into()
             } else if !indirect {
                 "no indirect light is traced".into()
