@@ -832,7 +832,9 @@ struct Batch {
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of
 /// `size`, without the memo, exactly as a render with the memo off draws
-/// it: it can be re-run alone for debugging.
+/// it: it can be re-run alone for debugging. The caustic pass's light is
+/// not part of a sample (the pass traces it from the lights, for the
+/// whole image at once).
 pub fn pixel_sample(
     scene: &Scene,
     options: &RenderOptions,
