@@ -30,7 +30,7 @@
 
 use flatray_geometry::{DVec2, Ray, Side, Skip};
 
-use crate::film::{Estimator, Film, Part, run};
+use crate::film::{Estimator, Film, Part, pixel_scale, run};
 use crate::light_tracer::{Deposits, Grid, follow_photon};
 use crate::lights::{Aperture, Photon};
 use crate::render::{RenderOptions, image_size};
@@ -461,37 +461,28 @@ impl Estimator for CausticPass<'_> {
 
     fn finish(&self, film: Film, stats: &mut Stats) -> Caustics {
         let (width, height) = self.size;
-        let pixels = width as usize * height as usize;
-        let floor = if film.fluence.is_empty() {
-            vec![Rgb::ZERO; pixels]
-        } else {
-            film.fluence
-        };
         // The noise of the floor's part, from its two halves of photons,
         // in image units: added to the render's estimate.
         let first_photons = ((self.chunks / 2) as u64 * self.per_chunk).min(self.photons);
-        if first_photons > 0 && first_photons < self.photons && !film.first.is_empty() {
-            let scene = self.scene;
-            let (p, p1) = (self.photons as f64, first_photons as f64);
-            let step = DVec2::new(
-                scene.canvas.width as f64 / width as f64,
-                scene.canvas.height as f64 / height as f64,
-            );
+        if !film.first.is_empty() {
             for y in 0..height {
                 for x in 0..width {
                     let k = y as usize * width as usize + x as usize;
-                    let centre =
-                        scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-                    let scale =
-                        scene.floor.albedo_at(&scene.canvas, centre) * self.options.exposure;
-                    let a = film.first[k] * (p / p1);
-                    let b = (floor[k] - film.first[k]) * (p / (p - p1));
-                    stats
-                        .noise
-                        .add_error((a - b) * scale, p1 * (p - p1) / (p * p));
+                    if let Some((difference, weight)) =
+                        film.halves(k, (self.photons, first_photons))
+                    {
+                        let scale =
+                            pixel_scale(self.scene, self.size, (x, y), self.options.exposure);
+                        stats.noise.add_error(difference * scale, weight);
+                    }
                 }
             }
         }
+        let floor = if film.fluence.is_empty() {
+            vec![Rgb::ZERO; width as usize * height as usize]
+        } else {
+            film.fluence
+        };
         let walls = if film.walls.is_empty() {
             vec![Rgb::ZERO; self.bins.len]
         } else {

@@ -99,6 +99,43 @@ impl Film {
     }
 }
 
+impl Film {
+    /// For pixel `k`'s deposits, made by `all` paths (or photons) of which
+    /// `first` were in the first half of the units: how far the two
+    /// halves' estimates of the pixel differ, each scaled to the whole,
+    /// and the weight `n1 n2 / n^2` that [`crate::Noise::add`] takes.
+    /// `None` when one half is empty.
+    pub fn halves(&self, k: usize, (all, first): (u64, u64)) -> Option<(Rgb, f64)> {
+        if first == 0 || first >= all {
+            return None;
+        }
+        let fluence = self.fluence.get(k).copied().unwrap_or(Rgb::ZERO);
+        let half = self.first.get(k).copied().unwrap_or(Rgb::ZERO);
+        let (p, p1) = (all as f64, first as f64);
+        let a = half * (p / p1);
+        let b = (fluence - half) * (p / (p - p1));
+        Some((a - b, p1 * (p - p1) / (p * p)))
+    }
+}
+
+/// What the image's pixel `(x, y)` multiplies its mean fluence by: the
+/// floor's albedo at the pixel's centre times the exposure. For the
+/// estimators that deposit fluence (the light tracer, the caustic pass).
+pub(crate) fn pixel_scale(
+    scene: &crate::Scene,
+    (width, height): (u32, u32),
+    (x, y): (u32, u32),
+    exposure: f64,
+) -> Rgb {
+    let step = flatray_geometry::DVec2::new(
+        scene.canvas.width as f64 / width as f64,
+        scene.canvas.height as f64 / height as f64,
+    );
+    let centre =
+        scene.canvas.origin + (flatray_geometry::DVec2::new(x as f64, y as f64) + 0.5) * step;
+    scene.floor.albedo_at(&scene.canvas, centre) * exposure
+}
+
 /// A way of estimating the image, unit of work by unit of work.
 pub(crate) trait Estimator: Sync {
     /// What [`Estimator::finish`] makes of the film: an image, or the

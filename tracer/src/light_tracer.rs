@@ -7,7 +7,7 @@ use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
 use crate::bsdf::{Bsdf, Sampling, Transport};
 use crate::caustics::WallBins;
-use crate::film::{Estimator, Film, Part, run};
+use crate::film::{Estimator, Film, Part, pixel_scale, run};
 use crate::glass::{GlassState, absorption, transmit};
 use crate::lights::Photon;
 use crate::plan::Plan;
@@ -146,31 +146,18 @@ impl Estimator for Photons<'_> {
     }
 
     fn finish(&self, film: Film, stats: &mut Stats) -> Image {
-        let (scene, (width, height)) = (self.scene, self.size);
+        let (width, height) = self.size;
         let mut image = Image::new(width, height);
         // The first half of the chunks' paths, for the noise estimate.
         let first_paths = ((self.chunks / 2) as u64 * self.per_chunk).min(self.paths);
-        let paths = self.paths;
-        let step = DVec2::new(
-            scene.canvas.width as f64 / width as f64,
-            scene.canvas.height as f64 / height as f64,
-        );
         for y in 0..height {
             for x in 0..width {
                 let k = y as usize * width as usize + x as usize;
-                let centre = scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-                let scale = scene.floor.albedo_at(&scene.canvas, centre) * self.options.exposure;
+                let scale = pixel_scale(self.scene, self.size, (x, y), self.options.exposure);
                 let fluence = film.fluence.get(k).copied().unwrap_or(Rgb::ZERO);
                 let value = fluence * scale;
-                if first_paths > 0 && first_paths < paths {
-                    // Each half's estimate of the pixel, from its own paths.
-                    let (p, p1) = (paths as f64, first_paths as f64);
-                    let first = film.first.get(k).copied().unwrap_or(Rgb::ZERO);
-                    let a = first * (p / p1);
-                    let b = (fluence - first) * (p / (p - p1));
-                    stats
-                        .noise
-                        .add((a - b) * scale, value, p1 * (p - p1) / (p * p));
+                if let Some((difference, weight)) = film.halves(k, (self.paths, first_paths)) {
+                    stats.noise.add(difference * scale, value, weight);
                 }
                 if value.is_finite() {
                     image.pixels[k] = [value.x as f32, value.y as f32, value.z as f32];
