@@ -183,3 +183,61 @@ pub fn pixel_moments(x: u32, y: u32, n: u32, f: impl Fn(glam::DVec2) -> f64) -> 
     let mean = s1 / count;
     (mean, (s2 / count - mean * mean).max(0.0).sqrt())
 }
+
+/// How light tracing and path tracing are held to each other: block
+/// totals of `block` x `block` pixels over `runs` seeds from
+/// `first_seed`, within `k` combined standard errors, on at least
+/// `min_blocks` blocks.
+#[derive(Clone, Copy, Debug)]
+pub struct Agreement {
+    pub block: u32,
+    pub runs: u64,
+    pub first_seed: u64,
+    pub k: f64,
+    pub min_blocks: usize,
+}
+
+impl Agreement {
+    /// Renders `scene` with `options` by light tracing and by path
+    /// tracing (`options.integrator` is replaced) and checks every block
+    /// that `keep` keeps; returns the path tracer's block statistics.
+    pub fn check(
+        &self,
+        name: &str,
+        scene: &Scene,
+        options: RenderOptions,
+        keep: impl Fn(usize) -> bool,
+    ) -> Vec<(f64, f64)> {
+        let at = |integrator| RenderOptions {
+            integrator,
+            ..options
+        };
+        let stats = |integrator| {
+            block_stats(
+                scene,
+                at(integrator),
+                self.block,
+                self.runs,
+                self.first_seed,
+            )
+        };
+        let light = stats(flatray_tracer::Integrator::Light);
+        let path = stats(flatray_tracer::Integrator::Path);
+        let k = self.k;
+        let mut checked = 0;
+        for (b, ((ml, sl), (mp, sp))) in light.iter().zip(&path).enumerate() {
+            if !keep(b) {
+                continue;
+            }
+            let se = (sl * sl + sp * sp).sqrt();
+            assert!(
+                (ml - mp).abs() <= k * se + 1e-9 * mp.abs(),
+                "{name}, block {b}: light {ml}, path {mp}, {k} SE = {}",
+                k * se
+            );
+            checked += 1;
+        }
+        assert!(checked >= self.min_blocks, "{name}: only {checked} blocks");
+        path
+    }
+}

@@ -5,7 +5,7 @@
 //! seeds.
 
 use flatray_geometry::DVec2;
-use flatray_tests::{block_stats, pixel_moments, render, scene};
+use flatray_tests::{Agreement, pixel_moments, render, scene};
 use flatray_tracer::{Integrator, MemoOptions, RenderOptions, Scene};
 
 /// `I * 2 asin(R / d)` outside the disk, nothing inside.
@@ -92,19 +92,14 @@ fn assert_agree(name: &str, scene: &Scene, bounces: u32) {
         },
         ..RenderOptions::default()
     };
-    let light = block_stats(scene, at(Integrator::Light), BLOCK, RUNS, 1000);
-    let path = block_stats(scene, at(Integrator::Path), BLOCK, RUNS, 1000);
-    let mut checked = 0;
-    for (b, ((ml, sl), (mp, sp))) in light.iter().zip(&path).enumerate() {
-        let se = (sl * sl + sp * sp).sqrt();
-        assert!(
-            (ml - mp).abs() <= K * se + 1e-9 * mp.abs(),
-            "{name}, block {b}: light {ml}, path {mp}, {K} SE = {}",
-            K * se
-        );
-        checked += 1;
-    }
-    assert!(checked >= 30, "{name}: only {checked} blocks");
+    let agreement = Agreement {
+        block: BLOCK,
+        runs: RUNS,
+        first_seed: 1000,
+        k: K,
+        min_blocks: 30,
+    };
+    agreement.check(name, scene, at(Integrator::Path), |_| true);
 }
 
 /// A rotated, non-convex room (an L) with a circle light in one arm,

@@ -6,7 +6,7 @@
 use std::f64::consts::TAU;
 
 use flatray_geometry::DVec2;
-use flatray_tests::{render, scene, workspace_root};
+use flatray_tests::{Agreement, render, scene, workspace_root};
 use flatray_tracer::{Integrator, MemoOptions, RenderOptions, Scene};
 
 const BLOCK: u32 = 8;
@@ -39,27 +39,18 @@ const K: f64 = 5.0;
 /// Light and path tracing agree on every kept block within `K` combined
 /// standard errors.
 fn assert_agree(name: &str, scene: &Scene, scale: f64, bounces: u32, keep: impl Fn(usize) -> bool) {
-    let at = |integrator| RenderOptions {
-        scale,
-        ..options(integrator, 8, bounces)
+    let agreement = Agreement {
+        block: BLOCK,
+        runs: RUNS,
+        first_seed: 1000,
+        k: K,
+        min_blocks: 10,
     };
-    let light = block_stats(scene, at(Integrator::Light), RUNS);
-    let path = block_stats(scene, at(Integrator::Path), RUNS);
-    let k = K;
-    let mut checked = 0;
-    for (b, ((ml, sl), (mp, sp))) in light.iter().zip(&path).enumerate() {
-        if !keep(b) {
-            continue;
-        }
-        let se = (sl * sl + sp * sp).sqrt();
-        assert!(
-            (ml - mp).abs() <= k * se + 1e-9 * mp.abs(),
-            "{name}, block {b}: light {ml}, path {mp}, {k} SE = {}",
-            k * se
-        );
-        checked += 1;
-    }
-    assert!(checked >= 10, "{name}: only {checked} blocks");
+    let options = RenderOptions {
+        scale,
+        ..options(Integrator::Path, 8, bounces)
+    };
+    agreement.check(name, scene, options, keep);
 }
 
 fn polygon(n: usize, centre: DVec2, radius: f64, extra: &str) -> String {
