@@ -51,6 +51,21 @@ impl Numbers {
     fn between(&mut self, a: f64, b: f64) -> f64 {
         a + (b - a) * self.uniform()
     }
+
+    /// The `n + 1` lines of a grid of `n` rooms, the inner ones moved by
+    /// up to `jitter` either way.
+    fn grid_lines(&mut self, n: usize, jitter: f64) -> Vec<f64> {
+        (0..=n)
+            .map(|i| {
+                let moved = if i == 0 || i == n {
+                    0.0
+                } else {
+                    self.between(-jitter, jitter)
+                };
+                MARGIN + i as f64 * ROOM + moved
+            })
+            .collect()
+    }
 }
 
 /// Room size in world units (a pixel each at scale 1).
@@ -79,26 +94,8 @@ impl Apartment {
         let mut rng = Numbers(self.seed ^ 0x5eed_f1a7_a9a7_7e47);
         // Jittered grid lines, shared by neighbouring rooms so corners
         // meet exactly.
-        let xs: Vec<f64> = (0..=cols)
-            .map(|i| {
-                let jitter = if i == 0 || i == cols {
-                    0.0
-                } else {
-                    rng.between(-15.0, 15.0)
-                };
-                MARGIN + i as f64 * ROOM + jitter
-            })
-            .collect();
-        let ys: Vec<f64> = (0..=rows)
-            .map(|j| {
-                let jitter = if j == 0 || j == rows {
-                    0.0
-                } else {
-                    rng.between(-12.0, 12.0)
-                };
-                MARGIN + j as f64 * ROOM + jitter
-            })
-            .collect();
+        let xs = rng.grid_lines(cols, 15.0);
+        let ys = rng.grid_lines(rows, 12.0);
         let width = (2.0 * MARGIN + cols as f64 * ROOM).ceil() as u32;
         let height = (2.0 * MARGIN + rows as f64 * ROOM).ceil() as u32;
         let exists = |c: usize, r: usize| r * cols + c < rooms;
