@@ -40,9 +40,10 @@ use crate::{Rgb, Stats};
 
 /// Caustic photons per pixel sample of the render. Every photon is aimed
 /// at a mirror or glass edge, and a photon's track covers many pixels: on
-/// the bathroom (`scenes/bathroom.ron`, 64 spp) one photon per 16 samples
-/// adds a tenth to the time, and more photons leave the noise estimate
-/// where the path samples hold it (2.15 % at 1/32, 2.11 % at 1/2).
+/// the bathroom (`scenes/bathroom.ron`) the pass takes about a third of
+/// the render at 256 spp (`docs/performance.md`), and more photons leave
+/// the noise estimate where the path samples hold it (at 64 spp, 2.15 %
+/// with one photon per 32 samples, 2.11 % with one per 2).
 pub const PHOTONS_PER_SAMPLE: f64 = 0.0625;
 /// Fixed work chunks, as the light tracer's: at least two (the noise
 /// estimate compares halves), at most sixteen.
