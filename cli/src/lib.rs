@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use flatray_io::{Format, Loaded};
-use flatray_tracer::{Integrator, MemoOptions, RenderOptions, image_size};
+use flatray_tracer::{Integrator, LightChoice, MemoOptions, RenderOptions, image_size};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Exit code: success.
@@ -77,6 +77,9 @@ enum Command {
         /// glass (on by default).
         #[arg(long, value_enum)]
         caustics: Option<Switch>,
+        /// Which lights each point's shadow rays go to.
+        #[arg(long, value_enum, default_value_t = LightsArg::Auto)]
+        lights: LightsArg,
         /// The estimator (overrides the scene).
         #[arg(long, value_enum)]
         integrator: Option<IntegratorArg>,
@@ -184,6 +187,9 @@ struct RenderArgs {
     /// missing).
     #[arg(long, value_enum)]
     caustics: Option<Switch>,
+    /// Which lights each point's shadow rays go to.
+    #[arg(long, value_enum, default_value_t = LightsArg::Auto)]
+    lights: LightsArg,
     /// Render the canvas at this many pixels per world unit (0.25 for a
     /// preview, 2 for a sharper image); the geometry is unchanged.
     #[arg(long, default_value_t = 1.0)]
@@ -226,6 +232,29 @@ struct RenderArgs {
 enum Switch {
     On,
     Off,
+}
+
+/// Which lights each receiver's shadow rays go to.
+#[derive(Clone, Copy, Debug, Default, ValueEnum)]
+enum LightsArg {
+    /// The plan decides: `table` for a scene of more than 8 lights.
+    #[default]
+    Auto,
+    /// One shadow ray to every light.
+    Every,
+    /// The brightest lights where the point lies, and one of the rest at
+    /// random: a shadow ray or two per point however many lights.
+    Table,
+}
+
+impl LightsArg {
+    fn choice(self) -> LightChoice {
+        match self {
+            LightsArg::Auto => LightChoice::Auto,
+            LightsArg::Every => LightChoice::Every,
+            LightsArg::Table => LightChoice::Table,
+        }
+    }
 }
 
 impl IntegratorArg {
@@ -288,12 +317,13 @@ where
             bounces,
             cache,
             caustics,
+            lights,
             integrator,
             verbose,
         } => plan(
             &scene,
             bounces,
-            (cache, caustics),
+            (cache, caustics, lights),
             integrator,
             verbose,
             &mut out,
@@ -472,7 +502,7 @@ fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
 fn plan(
     scene: &Path,
     bounces: Option<u32>,
-    (cache, caustics): (Option<Switch>, Option<Switch>),
+    (cache, caustics, lights): (Option<Switch>, Option<Switch>, LightsArg),
     integrator: Option<IntegratorArg>,
     verbose: bool,
     out: &mut dyn Write,
@@ -490,6 +520,7 @@ fn plan(
             ..loaded.options.memo
         },
         caustics: !matches!(caustics, Some(Switch::Off)),
+        light_choice: lights.choice(),
         ..loaded.options
     };
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
@@ -549,6 +580,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         },
         caustics: !matches!(args.caustics, Some(Switch::Off)),
         reference: args.reference,
+        light_choice: args.lights.choice(),
     };
     let (width, height) = checked_size(&loaded, options.scale)?;
     let pixels = width as u64 * height as u64;

@@ -8,7 +8,7 @@
 //! in `scenes/` and on random rooms of every kind of wall and light.
 
 use flatray_tests::{render, scene, workspace_root};
-use flatray_tracer::{Integrator, MemoOptions, Plan, RenderOptions, Scene};
+use flatray_tracer::{Integrator, LightChoice, MemoOptions, Plan, RenderOptions, Scene};
 use proptest::prelude::*;
 
 /// Renders `scene` both ways and compares.
@@ -159,6 +159,7 @@ proptest! {
         bounces in 1u32..4,
         memo in any::<bool>(),
         tiles in any::<bool>(),
+        table in any::<bool>(),
         scale in prop::sample::select(vec![0.5, 1.0, 1.3]),
         seed in 0u64..1000,
     ) {
@@ -170,6 +171,9 @@ proptest! {
             scale,
             seed,
             memo: MemoOptions { enabled: memo, ..MemoOptions::default() },
+            // The lights chosen by a table, as a scene of many lights
+            // would have them.
+            light_choice: if table { LightChoice::Table } else { LightChoice::Auto },
             ..RenderOptions::default()
         };
         assert_identical(&text, &loaded.scene, options);

@@ -2,6 +2,7 @@
 
 use flatray_geometry::{DVec2, Ray, Skip};
 
+use crate::lights::choice::{LightTable, NUMBERS};
 use crate::lights::{arriving, point_incident};
 use crate::sampling::{Stream, angle_sample_lanes};
 use crate::scene::{EMITTING_SIDE, Light, LightShape, Material, Scene};
@@ -70,18 +71,64 @@ impl Visibility {
 }
 
 /// The light that reaches `x` directly from every light: fluence for the
-/// floor, irradiance for a wall side. One shadow ray per light; each light
-/// draws its numbers from `stream` (`LightShape::numbers`).
+/// floor, irradiance for a wall side. Without a `table`, one shadow ray
+/// per light, each light drawing its numbers from `stream`
+/// (`LightShape::numbers`); with one, the lights the table chooses, from
+/// [`NUMBERS`] numbers.
 pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
     receiver: Receiver,
     shadows: bool,
+    table: Option<&LightTable>,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
     let vis = Visibility::of(shadows);
-    direct_light_with(scene, x, receiver, |_| vis, stream, stats)
+    match table {
+        Some(table) => {
+            let numbers = std::array::from_fn(|_| stream.uniform());
+            table.direct_light(scene, x, receiver, &numbers, |_| vis, stats)
+        }
+        None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
+    }
+}
+
+/// How many numbers each floor stratum draws for its direct light.
+pub(crate) fn numbers_per_point(scene: &Scene, table: Option<&LightTable>) -> usize {
+    match table {
+        Some(_) => NUMBERS,
+        None => scene.lights.iter().map(|l| l.shape.numbers()).sum(),
+    }
+}
+
+/// The direct light at every point of `strata`, each from the lights that
+/// `table` chooses with the point's [`NUMBERS`] numbers: the same for the
+/// reference model and the fast paths.
+fn direct_light_chosen(
+    scene: &Scene,
+    table: &LightTable,
+    strata: &mut Strata,
+    visibility: &[Visibility],
+    stats: &mut Stats,
+) {
+    let Strata {
+        points,
+        numbers,
+        values,
+    } = strata;
+    values.clear();
+    for (&x, numbers) in points.iter().zip(numbers.chunks_exact(NUMBERS)) {
+        let numbers: &[f64; NUMBERS] = numbers.try_into().unwrap_or(&[0.0; NUMBERS]);
+        values.push(table.direct_light(
+            scene,
+            x,
+            Receiver::FLOOR,
+            numbers,
+            |light| visibility[light],
+            stats,
+        ));
+    }
 }
 
 /// [`direct_light`] with each light's visibility given by `vis(light)`:
@@ -148,8 +195,12 @@ pub(crate) fn direct_light_strata(
     strata: &mut Strata,
     visibility: &[Visibility],
     shadow_walls: Option<&[Option<Vec<u32>>]>,
+    table: Option<&LightTable>,
     stats: &mut Stats,
 ) {
+    if let Some(table) = table {
+        return direct_light_chosen(scene, table, strata, visibility, stats);
+    }
     let Strata {
         points,
         numbers,
@@ -262,8 +313,12 @@ pub(crate) fn direct_light_points(
     scene: &Scene,
     strata: &mut Strata,
     visibility: &[Visibility],
+    table: Option<&LightTable>,
     stats: &mut Stats,
 ) {
+    if let Some(table) = table {
+        return direct_light_chosen(scene, table, strata, visibility, stats);
+    }
     let Strata {
         points,
         numbers,
@@ -488,9 +543,9 @@ mod tests {
         ] {
             for shadow_walls in [None, Some(&all[..])] {
                 let (mut a, mut b) = (Stats::default(), Stats::default());
-                direct_light_strata(&scene, &mut strata, &visibility, shadow_walls, &mut a);
+                direct_light_strata(&scene, &mut strata, &visibility, shadow_walls, None, &mut a);
                 let fast = strata.values.clone();
-                direct_light_points(&scene, &mut strata, &visibility, &mut b);
+                direct_light_points(&scene, &mut strata, &visibility, None, &mut b);
                 assert_eq!(fast, strata.values);
                 assert_eq!(a.work.shadow_rays, b.work.shadow_rays);
             }

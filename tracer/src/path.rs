@@ -10,6 +10,7 @@ use crate::bsdf::{Bsdf, Sampling, Transport};
 use crate::caustics::Caustics;
 use crate::glass::{GlassState, absorption, transmit};
 use crate::light::{Receiver, direct_light};
+use crate::lights::choice::LightTable;
 use crate::lights::line_emitted;
 use crate::mirror::MirrorArcs;
 use crate::sampling::{Stream, circle_in_arc};
@@ -70,7 +71,15 @@ pub(crate) fn path_begin(
             shadow_walls,
             ..Receiver::FLOOR
         };
-        direct_light(trace.scene, p, receiver, trace.shadows, stream, stats)
+        direct_light(
+            trace.scene,
+            p,
+            receiver,
+            trace.shadows,
+            trace.light_table,
+            stream,
+            stats,
+        )
     } else {
         Rgb::ZERO
     };
@@ -115,6 +124,7 @@ pub(crate) fn path_finish(
         shadows,
         mirror_emission,
         force,
+        light_table,
         ..
     } = *trace;
     if let Some((index, h)) = first_hit
@@ -225,7 +235,7 @@ pub(crate) fn path_finish(
                         wall: Some(index),
                         shadow_walls: None,
                     };
-                    direct_light(scene, x, receiver, shadows, stream, stats)
+                    direct_light(scene, x, receiver, shadows, light_table, stream, stats)
                 }
             };
             if let Some(caustics) = trace.caustics {
@@ -345,6 +355,9 @@ pub(crate) struct Trace<'a> {
     /// The walls that rays leaving each mirror can meet, when the plan
     /// culls rays by direction.
     pub mirror_arcs: Option<&'a MirrorArcs>,
+    /// The lights each receiver's next-event estimation takes, where the
+    /// plan chooses them (`lights::choice`); `None`: every light.
+    pub light_table: Option<&'a LightTable>,
 }
 
 /// The common case of [`path_finish`], straight: one bounce, the first

@@ -11,7 +11,10 @@ use flatray_cache::WallMemo;
 use crate::caustics::Caustics;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::film::{Estimator, Film, Part, run};
-use crate::light::{Strata, Visibility, direct_light_points, direct_light_strata};
+use crate::light::{
+    Strata, Visibility, direct_light_points, direct_light_strata, numbers_per_point,
+};
+use crate::lights::choice::LightTable;
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::mirror::MirrorArcs;
 use crate::path::{Trace, memo_bounce, path_begin, path_finish, path_sample};
@@ -63,7 +66,27 @@ pub struct RenderOptions {
     /// bit (`tests/tests/identity.rs`), more slowly: for tests, debugging
     /// and benchmarks.
     pub reference: bool,
+    /// How next-event estimation picks its lights.
+    pub light_choice: LightChoice,
 }
+
+/// Which lights next-event estimation sends shadow rays to.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightChoice {
+    /// The plan decides: a light table for scenes of more than
+    /// [`MANY_LIGHTS`] lights, every light otherwise.
+    #[default]
+    Auto,
+    /// One shadow ray to every light at every receiver.
+    Every,
+    /// The lights a table of the plan's cells chooses
+    /// (`lights::choice`): the brightest there always, one of the rest
+    /// at random.
+    Table,
+}
+
+/// Over this many lights, the plan chooses lights by a table.
+pub const MANY_LIGHTS: usize = 8;
 
 impl Default for RenderOptions {
     fn default() -> RenderOptions {
@@ -77,6 +100,7 @@ impl Default for RenderOptions {
             memo: MemoOptions::default(),
             caustics: true,
             reference: false,
+            light_choice: LightChoice::Auto,
         }
     }
 }
@@ -148,6 +172,14 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         .floor_ray_culling
         .then(|| MirrorArcs::build(scene, options.scale))
         .flatten();
+    let light_table = plan
+        .light_table
+        .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
+        .flatten();
+    if let Some(table) = &light_table {
+        memo_stats.work.light_table_bytes += table.memory_bytes() as u64;
+        memo_stats.work.light_table_rays += table.probe_rays;
+    }
     let coherence = plan
         .floor_coherence
         .then(|| FloorCoherence::build(scene, (width, height)))
@@ -172,6 +204,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             &plan,
             (memo.as_ref(), caustics.as_ref()),
             mirror_arcs.as_ref(),
+            light_table.as_ref(),
         ),
         render_pixel: if options.reference {
             render_pixel
@@ -325,6 +358,7 @@ fn trace_for<'a>(
     plan: &Plan,
     (memo, caustics): (Option<&'a WallMemo>, Option<&'a Caustics>),
     mirror_arcs: Option<&'a MirrorArcs>,
+    light_table: Option<&'a LightTable>,
 ) -> Trace<'a> {
     let bounces = if plan.indirect { options.bounces } else { 0 };
     let force = options.reference;
@@ -341,6 +375,7 @@ fn trace_for<'a>(
         caustics,
         one_bounce_memo: memo.filter(|_| bounces == 1 && !force),
         mirror_arcs,
+        light_table,
     }
 }
 
@@ -403,6 +438,7 @@ fn render_pixel(
         let floor = &mut batch.floor;
         floor.points.clear();
         floor.numbers.clear();
+        let numbers = numbers_per_point(scene, trace.light_table);
         // Stratum `k` is cell `(k % grid, k / grid)`, without dividing.
         let cells = (0..grid).flat_map(|row| (0..grid).map(move |column| (column, row)));
         for (k, (column, row)) in cells.enumerate() {
@@ -411,17 +447,22 @@ fn render_pixel(
             let (jx, jy) = stream.uniform_pair();
             let jitter = (cell + DVec2::new(jx, jy)) / grid as f64;
             floor.points.push(corner + jitter * step);
-            for light in &scene.lights {
-                for _ in 0..light.shape.numbers() {
-                    floor.numbers.push(stream.uniform());
-                }
+            for _ in 0..numbers {
+                floor.numbers.push(stream.uniform());
             }
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
         if options.reference {
-            direct_light_points(scene, floor, visibility, stats);
+            direct_light_points(scene, floor, visibility, trace.light_table, stats);
         } else {
-            direct_light_strata(scene, floor, visibility, shadow_walls, stats);
+            direct_light_strata(
+                scene,
+                floor,
+                visibility,
+                shadow_walls,
+                trace.light_table,
+                stats,
+            );
         }
         direct = strata_sum(&floor.values, (x, y), stats) / (grid * grid) as f64;
         stats.work.floor_memo_reuses += options.samples as u64;
@@ -834,7 +875,8 @@ struct Batch {
 /// `size`, without the memo, exactly as a render with the memo off draws
 /// it: it can be re-run alone for debugging. The caustic pass's light is
 /// not part of a sample (the pass traces it from the lights, for the
-/// whole image at once).
+/// whole image at once). In a scene whose plan chooses lights by a table,
+/// the table is built for each call.
 pub fn pixel_sample(
     scene: &Scene,
     options: &RenderOptions,
@@ -852,13 +894,25 @@ pub fn pixel_sample(
         ..*options
     };
     let plan = Plan::new(scene, &options);
+    // The render's own table, built again: the same from the same seed.
+    let light_table = plan
+        .light_table
+        .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
+        .flatten();
     let context = Context {
         options: &options,
         size,
         floor_memo: false,
         coherence: None,
         culling: false,
-        trace: trace_for(scene, &options, &plan, (None, None), None),
+        trace: trace_for(
+            scene,
+            &options,
+            &plan,
+            (None, None),
+            None,
+            light_table.as_ref(),
+        ),
         render_pixel,
     };
     sample_with(

@@ -83,6 +83,13 @@ pub struct Work {
     pub floor_albedo_reads: u64,
     /// Path rays tested against lights they can meet (after a mirror).
     pub emission_tests: u64,
+    /// Lights chosen by the light table beside its always-lights (each a
+    /// part of `shadow_rays`).
+    pub chosen_lights: u64,
+    /// Bytes held by the light table, and the shadow rays its probes cast
+    /// (not in `shadow_rays`).
+    pub light_table_bytes: u64,
+    pub light_table_rays: u64,
 }
 
 /// A render's estimate of its own error, from the samples themselves: each
@@ -234,6 +241,9 @@ impl Work {
         self.floor_shared_visibility += other.floor_shared_visibility;
         self.floor_albedo_reads += other.floor_albedo_reads;
         self.emission_tests += other.emission_tests;
+        self.chosen_lights += other.chosen_lights;
+        self.light_table_bytes += other.light_table_bytes;
+        self.light_table_rays += other.light_table_rays;
     }
 }
 
@@ -307,7 +317,10 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  wall fill rays   {:>14}", w.memo_fill_rays)?;
             writeln!(f, "  wall cache hits  {:>14}", w.memo_lookups)?;
             writeln!(f, "  floor reuses     {:>14}", w.floor_memo_reuses)?;
-            write!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
+            writeln!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
+            writeln!(f, "  chosen lights    {:>14}", w.chosen_lights)?;
+            writeln!(f, "  light table rays {:>14}", w.light_table_rays)?;
+            write!(f, "  light table bytes {:>13}", w.light_table_bytes)?;
         }
         Ok(())
     }

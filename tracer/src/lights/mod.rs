@@ -26,6 +26,7 @@
 //! (`coherence::supports`, `light::direct_light_strata`) and fall back to
 //! these functions for every other.
 
+pub(crate) mod choice;
 mod circle;
 mod line;
 mod point;

@@ -8,7 +8,7 @@ mod wording;
 
 use flatray_geometry::Strategy;
 
-use crate::render::{Integrator, RenderOptions};
+use crate::render::{Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Floor, Rgb};
 
@@ -123,6 +123,11 @@ pub struct Plan {
     /// The floor's rays test only the walls that rays from their block of
     /// pixels, in their arc of directions, can meet (`ArcCandidates`).
     pub floor_ray_culling: bool,
+    /// The light choice as given.
+    pub light_choice: LightChoice,
+    /// Next-event estimation takes the lights a table of cells chooses
+    /// (`lights::choice`), not every light.
+    pub light_table: bool,
 }
 
 impl Plan {
@@ -183,8 +188,20 @@ impl Plan {
         let pairs = scene.walls.len() * scene.lights.len();
         let (width, height) = crate::render::image_size(scene, options.scale);
         let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
+        // Path tracing's next-event estimation, wherever it runs, takes
+        // the table's lights in a scene of many (the same in the reference:
+        // it is the estimator, not a fast path).
+        let light_table = !tracing_light
+            && match options.light_choice {
+                LightChoice::Auto => scene.lights.len() > MANY_LIGHTS,
+                LightChoice::Every => false,
+                LightChoice::Table => !no_lights,
+            };
+        // The masks hold every light's visibility per pixel: a table that
+        // picks a few lights per point needs no such thing.
         let floor_coherence = floor_memo
             && shadows
+            && !light_table
             && !options.reference
             && pairs <= crate::coherence::MAX_PAIRS
             && mask_cells <= crate::coherence::MAX_CELLS;
@@ -194,6 +211,8 @@ impl Plan {
             && brute_force
             && !options.reference;
         Plan {
+            light_choice: options.light_choice,
+            light_table,
             inventory,
             bounces: options.bounces,
             tracing_light,

@@ -6,6 +6,7 @@ use std::fmt;
 use super::{Inventory, Plan};
 use crate::mirror::MIRROR_PIECE;
 use crate::render::CULL_BLOCK;
+use crate::render::{LightChoice, MANY_LIGHTS};
 use crate::sampling::ARCS;
 
 /// One effect: whether it runs, and a reason in plain words.
@@ -75,6 +76,8 @@ impl Plan {
             floor_memo,
             floor_coherence,
             floor_ray_culling,
+            light_choice,
+            light_table,
             ..
         } = *self;
         let force = reference;
@@ -125,6 +128,28 @@ impl Plan {
                 "forced on (nothing occludes)".into()
             } else {
                 "nothing occludes: no wall, or only clear transparent walls".into()
+            },
+        );
+        add(
+            "shadow rays to chosen lights",
+            light_table,
+            if tracing_light {
+                "light tracing casts none".into()
+            } else if no_lights {
+                "no light in the scene".into()
+            } else if light_table {
+                format!(
+                    "{}: at each point, the up to {} brightest there (estimated per cell of the plan) and one of the rest at random",
+                    n(lights, "light"),
+                    crate::lights::choice::ALWAYS
+                )
+            } else if light_choice == LightChoice::Every {
+                "one shadow ray to every light (--lights every)".into()
+            } else {
+                format!(
+                    "{}, at most {MANY_LIGHTS}: one shadow ray to every light",
+                    n(lights, "light")
+                )
             },
         );
         add(
@@ -242,6 +267,8 @@ impl Plan {
                 "no shadow rays".into()
             } else if reference {
                 "the reference model runs no fast path".into()
+            } else if light_table {
+                "lights are chosen per point, not all tested per pixel".into()
             } else if pairs > crate::coherence::MAX_PAIRS {
                 format!(
                     "{pairs} wall-light pairs, over {}: drawing the shadow edges would cost more than it saves",
