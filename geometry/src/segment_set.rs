@@ -251,8 +251,10 @@ impl SegmentSet {
 
     /// Calls `visit(index, hit)` for every crossing with `0 < t < t_max`
     /// until `visit` returns `false`. Returns `false` when it was stopped
-    /// early. The order of the calls is fixed for a given set, but depends
-    /// on its strategy.
+    /// early. The order of the calls is fixed for a given set and ray, but
+    /// depends on its strategy: brute force calls in index order, the BVH
+    /// roughly from near to far (by the boxes it enters), so that a query
+    /// that stops at its first blocker stops early.
     pub fn for_each_crossing(
         &self,
         ray: &Ray,
@@ -267,14 +269,16 @@ impl SegmentSet {
                 .crossings(self.kernel(), ray, all, t_max, skip, &mut visit);
         }
         let inv = DVec2::new(1.0 / ray.dir.x, 1.0 / ray.dir.y);
+        if enter(&self.nodes[0], ray, inv, t_max).is_none() {
+            return true;
+        }
+        // Nearer boxes first, as for the closest hit: a query that stops
+        // at its first blocker (a shadow ray) then tends to stop early.
         let mut stack = [0u32; STACK];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let node = self.nodes[stack[top] as usize];
-            if enter(&node, ray, inv, t_max).is_none() {
-                continue;
-            }
+        let mut top = 0;
+        let mut node_index = 0u32;
+        loop {
+            let node = self.nodes[node_index as usize];
             if node.count > 0 {
                 if !self.lanes.crossings(
                     Kernel::Scalar,
@@ -287,12 +291,36 @@ impl SegmentSet {
                     return false;
                 }
             } else {
-                stack[top] = node.first + 1;
-                stack[top + 1] = node.first;
-                top += 2;
+                let (l, r) = (node.first, node.first + 1);
+                let tl = enter(&self.nodes[l as usize], ray, inv, t_max);
+                let tr = enter(&self.nodes[r as usize], ray, inv, t_max);
+                match (tl, tr) {
+                    (Some(a), Some(b)) => {
+                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
+                        // The depth bound of the build keeps `top` below
+                        // STACK.
+                        stack[top] = far;
+                        top += 1;
+                        node_index = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node_index = l;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node_index = r;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
             }
+            if top == 0 {
+                return true;
+            }
+            top -= 1;
+            node_index = stack[top];
         }
-        true
     }
 }
 

@@ -74,6 +74,11 @@ fn main() {
         scene.lights.len(),
         (rendered.stats.rays() + rendered.stats.work.memo_fill_rays) as f64 / seconds / 1e6
     );
+    let w = &rendered.stats.work;
+    println!(
+        "rays: {} shadow, {} bounce, {} to fill the wall cache, {} to build the light table",
+        w.shadow_rays, w.bounce_rays, w.memo_fill_rays, w.light_table_rays
+    );
     if let Some(path) = args.get(3) {
         let tonemap = flatray_io::ToneMap::Reinhard {
             white: flatray_io::format::Positive(4.0),

@@ -50,7 +50,7 @@ const ALWAYS_SHARE: f64 = 0.05;
 pub(crate) const MAX_ENTRIES: usize = 1 << 20;
 
 /// At most this many probe shadow rays to build a table.
-const PROBE_RAYS: usize = 1 << 22;
+const PROBE_RAYS: usize = 1 << 20;
 
 /// The smallest cell, in pixels of the rendered image per side.
 const MIN_CELL_PIXELS: f64 = 8.0;
@@ -101,7 +101,7 @@ impl LightTable {
         let rows = (size.y / side).ceil().clamp(1.0, 4096.0) as u32;
         let cell = DVec2::new(size.x / columns as f64, size.y / rows as f64);
         let count = columns as usize * rows as usize;
-        let probes = (PROBE_RAYS / (count * lights)).clamp(1, 16);
+        let probes = (PROBE_RAYS / (count * lights)).clamp(1, 8);
         let origin = scene.canvas.origin;
         let per_cell: Vec<([u32; ALWAYS], Vec<Entry>)> = (0..count)
             .into_par_iter()
@@ -281,8 +281,10 @@ fn cell_choice(
             cumulative,
         });
     }
-    // With no always-light the rest is every light: it is always chosen.
+    // With no always-light, where the probes saw light, the rest is every
+    // light and its shares sum to 1 (up to rounding): one is always chosen.
     if always[0] == u32::MAX
+        && total > 0.0
         && let Some(last) = rest.last_mut()
     {
         last.cumulative = 1.0;
@@ -301,10 +303,12 @@ fn brightness(c: Rgb) -> f64 {
     if b.is_finite() { b.max(0.0) } else { 0.0 }
 }
 
-/// Each light's probability of being chosen, summing to 1: its share with
-/// shadows, with weight `1 - UNSHADOWED - EVEN`, its share without, with
-/// weight `UNSHADOWED`, and an even share, with weight `EVEN`. A share
-/// whose total is zero gives its weight to the next.
+/// Each light's probability of being chosen: its share with shadows,
+/// with weight `1 - UNSHADOWED - EVEN`, its share without, with weight
+/// `UNSHADOWED`, and an even share, with weight `EVEN`. Where the probes
+/// saw no light at all, the first weight goes to no light (the shares sum
+/// to `UNSHADOWED + EVEN`: most points there cast no shadow ray); a share
+/// without shadows whose total is zero gives its weight to the even one.
 fn mixed_shares(shadowed: &[f64], unshadowed: &[f64]) -> Vec<f64> {
     let n = shadowed.len();
     let total_shadowed: f64 = shadowed.iter().sum();
@@ -312,7 +316,6 @@ fn mixed_shares(shadowed: &[f64], unshadowed: &[f64]) -> Vec<f64> {
     let mut w_shadowed = 1.0 - UNSHADOWED - EVEN;
     let mut w_unshadowed = UNSHADOWED;
     if !(total_shadowed > 0.0 && total_shadowed.is_finite()) {
-        w_unshadowed += w_shadowed;
         w_shadowed = 0.0;
     }
     let mut w_even = EVEN;
@@ -348,7 +351,14 @@ mod tests {
         ] {
             let p = mixed_shares(&shadowed, &unshadowed);
             assert!(p.iter().all(|&p| p > 0.0 && p.is_finite()), "{p:?}");
-            assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-12, "{p:?}");
+            // Where no probe saw light, most points choose no light.
+            let seen: f64 = shadowed.iter().sum();
+            let sum = if seen > 0.0 && seen.is_finite() {
+                1.0
+            } else {
+                UNSHADOWED + EVEN
+            };
+            assert!((p.iter().sum::<f64>() - sum).abs() < 1e-12, "{p:?}");
         }
     }
 }
