@@ -13,11 +13,13 @@
 //! - and, with probability `P(l)`, one more light `l` of the rest, its
 //!   contribution divided by `P(l)`; with the remaining probability, none.
 //!
-//! `P(l)` mixes the light's estimated share (with shadows), its share
-//! without shadows and an even share, so that it is positive for every
-//! light: the estimator is unbiased whatever the probes missed (light
-//! through a door that no probe saw), and the probes decide only its
-//! noise. A lookup is one cell and one binary search over the cell's
+//! `P(l)` mixes the light's estimated share (with shadows), its share of
+//! what it could bring the cell without shadows (`LightShape::importance`:
+//! its intensity and falloff at the cell's nearest point, not sampled, so
+//! no probe can miss a bright light next door) and an even share. It is
+//! positive for every light: the estimator is unbiased whatever the
+//! probes missed (light through a door that no probe saw), and the probes
+//! decide only its noise. A lookup is one cell and one binary search over the cell's
 //! cumulative table: its cost grows like `log(lights)`.
 
 use flatray_geometry::DVec2;
@@ -35,8 +37,8 @@ pub(crate) const ALWAYS: usize = 4;
 /// the rest, and that light's own number.
 pub(crate) const NUMBERS: usize = ALWAYS + 2;
 
-/// The share of the choice's probability given to the lights' estimated
-/// shares without shadows, and to an even share of every light: what
+/// The share of the choice's probability given to the lights' shares of
+/// importance without shadows, and to an even share of every light: what
 /// keeps every light's probability above zero.
 const UNSHADOWED: f64 = 0.19;
 const EVEN: f64 = 0.01;
@@ -224,8 +226,13 @@ fn cell_choice(
         .collect();
     let mut stats = Stats::default();
     let mut shadowed = vec![0.0; lights];
-    let mut unshadowed = vec![0.0; lights];
-    for light in 0..lights {
+    // Without shadows, no probe: a bound that sees every light.
+    let unshadowed: Vec<f64> = scene
+        .lights
+        .iter()
+        .map(|l| l.shape.importance(l, (lo, lo + size), scene.small_radius))
+        .collect();
+    for (light, estimate) in shadowed.iter_mut().enumerate() {
         for &(x, u) in &points {
             let open = light_contribution(
                 scene,
@@ -237,9 +244,8 @@ fn cell_choice(
                 &mut stats,
             );
             let open = brightness(open);
-            unshadowed[light] += open;
             if open > 0.0 {
-                shadowed[light] += if shadows {
+                *estimate += if shadows {
                     brightness(light_contribution(
                         scene,
                         light,

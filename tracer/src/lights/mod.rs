@@ -205,6 +205,38 @@ impl LightShape {
         }
     }
 
+    /// About the most that light `light` (of this shape) brings a floor
+    /// point of the box `[lo, hi]`, without shadows, spot windows or one
+    /// side: its intensity times its falloff at the box's nearest point
+    /// (for a light with an area, times the largest angle it can
+    /// subtend there). For choosing lights (`choice.rs`), never for an
+    /// estimate: zero only where the light can bring nothing.
+    pub(crate) fn importance(&self, light: &Light, (lo, hi): (DVec2, DVec2), r0: f64) -> f64 {
+        let distance = |p: DVec2| (p.clamp(lo, hi) - p).length();
+        let falloff = light.falloff;
+        let value = match *self {
+            LightShape::Point { at } | LightShape::Spot { at, .. } => falloff.g(distance(at), r0),
+            LightShape::Line { segment, .. } => {
+                // The nearest of the box to the segment, at most: the
+                // nearer of the segment's ends and middle to the box.
+                let d = [segment.a, segment.b, segment.point_at(0.5)]
+                    .map(distance)
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min)
+                    - 0.5 * segment.length();
+                let d = d.max(r0);
+                falloff.per_radian(d, r0) * (segment.length() / d).min(std::f64::consts::PI)
+            }
+            LightShape::Circle { at, radius } => {
+                let d = (distance(at) - radius).max(r0);
+                falloff.per_radian(d + radius, r0) * (2.0 * radius / d).min(std::f64::consts::PI)
+            }
+            LightShape::Directional { .. } => 1.0,
+        };
+        let v = light.intensity * value * (light.color.x + light.color.y + light.color.z) / 3.0;
+        if v.is_finite() { v.max(0.0) } else { 0.0 }
+    }
+
     /// Points whose convex hull holds every point a shadow ray towards the
     /// light aims at; `None` for light from a direction.
     pub(crate) fn hull(&self) -> Option<[DVec2; 4]> {
