@@ -1,11 +1,13 @@
 //! The direct-light memo of flatray (the original project's "dynamic
 //! programming"): direct irradiance on walls, binned along each wall, per
-//! side and per light, so that a path landing on a wall reads it instead
-//! of casting shadow rays.
+//! side, so that a path landing on a wall reads it instead of casting
+//! shadow rays.
 //!
 //! What it is for: a compact table keyed by (wall, side, bin along the
-//! wall, light), filled once before a render from a function of the key
-//! alone, and read by linear interpolation between bin centres. Because
+//! wall), filled once before a render from a function of (wall, side,
+//! position, light) summed over the lights in their order, and read by
+//! linear interpolation between bin centres. Only the sums are kept, so
+//! its memory grows with the walls' length, not with the lights. Because
 //! every stored value is a pure function of its key, the table is the same
 //! whatever the number of threads that filled it.
 //!
@@ -32,9 +34,8 @@ pub struct WallMemo {
     /// lookup finds its span with.
     walls: Vec<SpanRange>,
     spans: Vec<Span>,
-    /// Per (span, side, bin, light), laid out span by span.
-    per_light: Vec<Value>,
     /// Per (span, side, bin): the sum over lights, what a lookup reads.
+    /// Only the sum is kept, so the memory does not grow with the lights.
     total: Vec<Value>,
 }
 
@@ -143,38 +144,29 @@ impl WallMemo {
             .enumerate()
             .flat_map(|(w, range)| std::iter::repeat_n(w as u32, range.count as usize))
             .collect();
-        let per_light: Vec<Value> = spans
+        // Each bin's lights summed in their order, as it is filled.
+        let total: Vec<Value> = spans
             .par_iter()
             .zip(owner.par_iter())
             .flat_map_iter(|(span, &wall)| {
                 let fill = &fill;
                 let span = *span;
                 (0..2usize).flat_map(move |side| {
-                    (0..span.bins).flat_map(move |bin| {
+                    (0..span.bins).map(move |bin| {
                         let u =
                             span.u0 + (span.u1 - span.u0) * (bin as f64 + 0.5) / span.bins as f64;
-                        (0..lights).map(move |light| fill(wall, side, u, light))
+                        (0..lights).fold([0.0f32; 3], |acc, light| {
+                            let v = fill(wall, side, u, light);
+                            [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
+                        })
                     })
                 })
             })
             .collect();
-        let total = if lights == 0 {
-            vec![[0.0f32; 3]; next]
-        } else {
-            per_light
-                .chunks(lights)
-                .map(|chunk| {
-                    chunk.iter().fold([0.0f32; 3], |acc, v| {
-                        [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
-                    })
-                })
-                .collect()
-        };
         WallMemo {
             lights,
             walls,
             spans,
-            per_light,
             total,
         }
     }
@@ -198,24 +190,25 @@ impl WallMemo {
         self.walls[wall as usize].count
     }
 
-    /// Entries stored per light: (wall, side, bin, light) keys.
+    /// Values filled: (wall, side, bin, light) keys.
     pub fn entries(&self) -> usize {
-        self.per_light.len()
+        self.total.len() * self.lights
     }
 
-    /// Bytes held by the tables.
+    /// Bytes held by the tables: per bin, not per light.
     pub fn memory_bytes(&self) -> usize {
-        (self.per_light.len() + self.total.len()) * std::mem::size_of::<Value>()
+        self.total.len() * std::mem::size_of::<Value>()
+            + self.spans.len() * std::mem::size_of::<Span>()
+            + self.walls.len() * std::mem::size_of::<SpanRange>()
             + self.spans.len() * std::mem::size_of::<Span>()
             + self.walls.len() * std::mem::size_of::<SpanRange>()
     }
 
-    /// The value stored for one light in bin `bin` of span `span` of
-    /// `wall`.
-    pub fn entry(&self, wall: u32, span: u32, side: usize, bin: u32, light: usize) -> Value {
+    /// The value stored in bin `bin` of span `span` of `wall`: the sum
+    /// over lights.
+    pub fn bin_value(&self, wall: u32, span: u32, side: usize, bin: u32) -> Value {
         let s = self.spans[(self.walls[wall as usize].first + span) as usize];
-        let base = s.offset + side * s.bins as usize + bin as usize;
-        self.per_light[base * self.lights + light]
+        self.total[s.offset + side * s.bins as usize + bin as usize]
     }
 
     /// The span of `wall` that holds `u`: the first whose end is not
@@ -275,11 +268,10 @@ mod tests {
         });
         assert_eq!((memo.bins(0), memo.bins(1), memo.bins(2)), (10, 3, 1));
         assert_eq!(memo.entries(), (10 + 3 + 1) * 2 * 2);
-        assert_eq!(
-            memo.entry(1, 0, 1, 2, 1),
-            [1.0, 1.0 + (2.5 / 3.0) as f32, 1.0]
-        );
-        assert_eq!(memo.entry(0, 0, 0, 0, 0), [0.0, 0.05, 0.0]);
+        // Two lights, 0 and 1, summed.
+        let u = (2.5 / 3.0) as f32;
+        assert_eq!(memo.bin_value(1, 0, 1, 2), [2.0, 2.0 * (1.0 + u), 1.0]);
+        assert_eq!(memo.bin_value(0, 0, 0, 0), [0.0, 0.1, 1.0]);
     }
 
     #[test]
@@ -407,19 +399,23 @@ mod tests {
         let junctions: Vec<Vec<f64>> = (0..200).map(|k| vec![0.3 + k as f64 * 1e-3]).collect();
         let a = one.install(|| WallMemo::build(&lengths, &junctions, 0.5, 2, fill));
         let b = four.install(|| WallMemo::build(&lengths, &junctions, 0.5, 2, fill));
-        assert_eq!(a.per_light, b.per_light);
         assert_eq!(a.total, b.total);
     }
 
     #[test]
-    fn memory_is_proportional_to_wall_length_times_lights() {
+    fn memory_is_proportional_to_wall_length_not_lights() {
         let fill = |_: u32, _: usize, _: f64, _: usize| [0.0; 3];
         let small = WallMemo::build(&[100.0; 10], &[], 1.0, 2, fill);
         let long = WallMemo::build(&[100.0; 20], &[], 1.0, 2, fill);
         let lit = WallMemo::build(&[100.0; 10], &[], 1.0, 4, fill);
         assert_eq!(small.entries() * 2, long.entries());
         assert_eq!(small.entries() * 2, lit.entries());
-        let per_entry = small.memory_bytes() as f64 / small.entries() as f64;
-        assert!(per_entry < 2.0 * std::mem::size_of::<Value>() as f64 + 1.0);
+        assert_eq!(small.memory_bytes() * 2, long.memory_bytes());
+        assert_eq!(small.memory_bytes(), lit.memory_bytes());
+        let per_bin = small.memory_bytes() as f64 / (10 * 100 * 2) as f64;
+        assert!(
+            per_bin < std::mem::size_of::<Value>() as f64 + 1.0,
+            "{per_bin}"
+        );
     }
 }

@@ -1,6 +1,6 @@
 //! Filling and reading the direct-light memo (`flatray-cache`): wall
-//! irradiance per (wall, side, bin, light), and the floor's direct fluence
-//! once per pixel.
+//! irradiance per (wall, side, bin), summed over the lights, and the
+//! floor's direct fluence once per pixel.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -45,7 +45,7 @@ pub const WALL_MEMO_BUDGET: u64 = 256 << 20;
 /// At most the bytes the wall memo of `scene` at `scale` would take,
 /// counted without building it: each diffuse wall's bins (its length over
 /// the bin length, plus one per span that a junction starts), per side,
-/// per light and their sum. `None` as soon as the count passes `budget`,
+/// summed over the lights. `None` as soon as the count passes `budget`,
 /// so walls that cross very often cost no more than the budget to count.
 pub(crate) fn wall_memo_bytes(
     scene: &Scene,
@@ -54,7 +54,8 @@ pub(crate) fn wall_memo_bytes(
     budget: u64,
 ) -> Option<u64> {
     let bin_length = options.bin_length / scale;
-    let per_bin = 2 * (scene.lights.len() as u64 + 1) * std::mem::size_of::<Value>() as u64;
+    // Both sides' sums over the lights.
+    let per_bin = 2 * std::mem::size_of::<Value>() as u64;
     let mut bytes = 0u64;
     for (index, w) in scene.walls.iter().enumerate() {
         if !matches!(w.material, Material::Diffuse { .. }) {
