@@ -4,23 +4,31 @@
 //! With every light sampled at every receiver (the plain estimator of
 //! `model.md`), a sample costs a shadow ray per light, though on a floor
 //! plan most lights sit behind walls in other rooms. A [`LightTable`]
-//! cuts the plan into cells and, per cell, estimates each light's share
-//! of the direct light there from a few probe points (shadow rays and
-//! all). A receiver in the cell then takes
+//! cuts the plan into cells and casts, from a few probe points per cell, a
+//! shadow ray to every light. Each cell reads its own probes and its eight
+//! neighbours' and keeps
 //!
-//! - every light of its cell's *always* list (at most [`ALWAYS`] lights,
-//!   those of the largest shares), each by one shadow ray as before;
-//! - and, with probability `P(l)`, one more light `l` of the rest, its
-//!   contribution divided by `P(l)`; with the remaining probability, none.
+//! - its *always-lights*: at most [`ALWAYS`], those of the largest shares
+//!   of the light the probes received, each at least 5 % of it;
+//! - its *seen* lights: the others that reached a probe, each with the
+//!   fraction of its light (without shadows) that got through;
+//! - a *defensive* share of every other light, by what it could bring the
+//!   cell without shadows (`LightShape::importance`: intensity and falloff
+//!   at the cell's nearest point, not sampled, so nothing next door is
+//!   missed), and a little evenly.
 //!
-//! `P(l)` mixes the light's estimated share (with shadows), its share of
-//! what it could bring the cell without shadows (`LightShape::importance`:
-//! its intensity and falloff at the cell's nearest point, not sampled, so
-//! no probe can miss a bright light next door) and an even share. It is
-//! positive for every light: the estimator is unbiased whatever the
-//! probes missed (light through a door that no probe saw), and the probes
-//! decide only its noise. A lookup is one cell and one binary search over the cell's
-//! cumulative table: its cost grows like `log(lights)`.
+//! A receiver `x` in the cell takes every always-light (a shadow ray each,
+//! as before) and, with probability `P(l | x)`, one more light `l`, its
+//! contribution divided by `P(l | x)`; with the remaining probability,
+//! none. `P(l | x)` is [`SEEN`] times `l`'s part of the seen lights'
+//! weights at `x` (fraction through, times intensity, times falloff at
+//! `x`: `LightShape::reach`), plus [`DEFENSIVE`] times its defensive
+//! share. Every light but the always-lights has a defensive share above
+//! zero, so the estimator is unbiased whatever the probes missed (light
+//! through a door that no probe saw); the probes decide only its noise.
+//! A choice costs a pass over the cell's seen lights and a binary search
+//! over its defensive table: a shadow ray or two per point, whatever the
+//! number of lights.
 
 use flatray_geometry::DVec2;
 use rayon::prelude::*;
@@ -37,18 +45,28 @@ pub(crate) const ALWAYS: usize = 4;
 /// the rest, and that light's own number.
 pub(crate) const NUMBERS: usize = ALWAYS + 2;
 
-/// The share of the choice's probability given to the lights' shares of
-/// importance without shadows, and to an even share of every light: what
-/// keeps every light's probability above zero.
-const UNSHADOWED: f64 = 0.19;
-const EVEN: f64 = 0.01;
+/// The probability that a point chooses among the lights its cell's
+/// probes saw (beside the always-lights), where there are any.
+const SEEN: f64 = 0.8;
+
+/// The probability that a point chooses from the cell's defensive share
+/// of every light: what keeps every light's probability above zero.
+const DEFENSIVE: f64 = 0.2;
+
+/// Of the defensive share, the part spread evenly over the lights (the
+/// rest goes by importance).
+const EVEN: f64 = 0.1;
 
 /// A light whose estimated share is at least this is always evaluated
 /// (if among the [`ALWAYS`] largest).
 const ALWAYS_SHARE: f64 = 0.05;
 
+/// The most lights a cell keeps as seen, the brightest first; the others
+/// are chosen by the defensive share alone.
+const MAX_SEEN: usize = 64;
+
 /// At most this many (cell, light) entries: the table's memory, about
-/// 16 MiB.
+/// 8 MiB.
 pub(crate) const MAX_ENTRIES: usize = 1 << 20;
 
 /// At most this many probe shadow rays to build a table.
@@ -57,12 +75,22 @@ const PROBE_RAYS: usize = 1 << 20;
 /// The smallest cell, in pixels of the rendered image per side.
 const MIN_CELL_PIXELS: f64 = 8.0;
 
-/// One light of a cell's rest: its index and the cumulative probability
-/// up to and including it.
+/// A light that a cell's probes saw: its index, and the fraction of its
+/// light (without shadows) that reached them times its intensity and
+/// brightness: its weight at a point is this times its reach there.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Entry {
+struct Seen {
     light: u32,
-    cumulative: f64,
+    scale: f64,
+}
+
+/// One cell's choice, as built.
+struct Cell {
+    always: [u32; ALWAYS],
+    seen: Vec<Seen>,
+    /// The defensive share, cumulative over every light in index order
+    /// (the always-lights take none): ends at 1, or is all zero.
+    defensive: Vec<f64>,
 }
 
 /// The cells' choices of lights (see the module's documentation).
@@ -73,11 +101,15 @@ pub(crate) struct LightTable {
     cell: DVec2,
     columns: u32,
     rows: u32,
+    lights: usize,
     /// Per cell, its always-lights (`u32::MAX` past the last).
     always: Vec<[u32; ALWAYS]>,
-    /// Per cell, where its entries start in `rest`; one more at the end.
-    starts: Vec<u32>,
-    rest: Vec<Entry>,
+    /// Per cell, where its seen lights start in `seen`; one more at the
+    /// end.
+    seen_starts: Vec<u32>,
+    seen: Vec<Seen>,
+    /// Per cell, `lights` cumulative defensive shares.
+    defensive: Vec<f64>,
     /// Probe shadow rays cast to build the table.
     pub probe_rays: u64,
 }
@@ -105,32 +137,68 @@ impl LightTable {
         let count = columns as usize * rows as usize;
         let probes = (PROBE_RAYS / (count * lights)).clamp(1, 8);
         let origin = scene.canvas.origin;
-        let per_cell: Vec<([u32; ALWAYS], Vec<Entry>)> = (0..count)
+        let corner = |index: usize| {
+            let column = (index % columns as usize) as f64;
+            let row = (index / columns as usize) as f64;
+            origin + DVec2::new(column, row) * cell
+        };
+        // Each cell's probes: per light, what they received without and
+        // with shadows.
+        let probed: Vec<Vec<(f64, f64)>> = (0..count)
             .into_par_iter()
             .map(|index| {
-                let column = (index % columns as usize) as f64;
-                let row = (index / columns as usize) as f64;
-                let lo = origin + DVec2::new(column, row) * cell;
-                cell_choice(scene, lo, cell, probes, (seed, index as u64), shadows)
+                probe_cell(
+                    scene,
+                    corner(index),
+                    cell,
+                    probes,
+                    (seed, index as u64),
+                    shadows,
+                )
+            })
+            .collect();
+        // Each cell chooses from its own probes and its neighbours' (the
+        // 3 x 3 cells around it): nine times the probes, where the light
+        // changes little from cell to cell.
+        let per_cell: Vec<Cell> = (0..count)
+            .into_par_iter()
+            .map(|index| {
+                let (column, row) = (index % columns as usize, index / columns as usize);
+                let mut sums = vec![(0.0, 0.0); lights];
+                for r in row.saturating_sub(1)..(row + 2).min(rows as usize) {
+                    for c in column.saturating_sub(1)..(column + 2).min(columns as usize) {
+                        for (sum, &(open, shadowed)) in
+                            sums.iter_mut().zip(&probed[r * columns as usize + c])
+                        {
+                            sum.0 += open;
+                            sum.1 += shadowed;
+                        }
+                    }
+                }
+                choose_cell(scene, corner(index), cell, &sums)
             })
             .collect();
         let mut always = Vec::with_capacity(count);
-        let mut starts = Vec::with_capacity(count + 1);
-        let mut rest = Vec::with_capacity(count * lights);
-        for (a, r) in per_cell {
-            always.push(a);
-            starts.push(rest.len() as u32);
-            rest.extend(r);
+        let mut seen_starts = Vec::with_capacity(count + 1);
+        let mut seen = Vec::new();
+        let mut defensive = Vec::with_capacity(count * lights);
+        for c in per_cell {
+            always.push(c.always);
+            seen_starts.push(seen.len() as u32);
+            seen.extend(c.seen);
+            defensive.extend(c.defensive);
         }
-        starts.push(rest.len() as u32);
+        seen_starts.push(seen.len() as u32);
         Some(LightTable {
             origin,
             cell,
             columns,
             rows,
+            lights,
             always,
-            starts,
-            rest,
+            seen_starts,
+            seen,
+            defensive,
             probe_rays: if shadows {
                 (count * lights * probes) as u64
             } else {
@@ -142,8 +210,9 @@ impl LightTable {
     /// Bytes the table holds.
     pub(crate) fn memory_bytes(&self) -> usize {
         self.always.len() * std::mem::size_of::<[u32; ALWAYS]>()
-            + self.starts.len() * 4
-            + self.rest.len() * std::mem::size_of::<Entry>()
+            + self.seen_starts.len() * 4
+            + self.seen.len() * std::mem::size_of::<Seen>()
+            + self.defensive.len() * 8
     }
 
     /// The cell that holds `x`; a point off the canvas takes the nearest.
@@ -178,19 +247,7 @@ impl LightTable {
             let index = light as usize;
             sum += light_contribution(scene, index, x, receiver, numbers[k], vis(index), stats);
         }
-        let rest = &self.rest[self.starts[cell] as usize..self.starts[cell + 1] as usize];
-        let u = numbers[ALWAYS];
-        // The first entry whose cumulative probability passes `u`; past
-        // the last, no light.
-        let at = rest.partition_point(|e| e.cumulative <= u);
-        if let Some(entry) = rest.get(at) {
-            let before = if at == 0 {
-                0.0
-            } else {
-                rest[at - 1].cumulative
-            };
-            let p = entry.cumulative - before;
-            let index = entry.light as usize;
+        if let Some((index, p)) = self.choose(scene, cell, x, numbers[ALWAYS]) {
             let v = light_contribution(
                 scene,
                 index,
@@ -205,18 +262,74 @@ impl LightTable {
         }
         sum
     }
+
+    /// The light that the number `u` chooses at `x` in cell `cell`, with
+    /// the probability of choosing it there, or none.
+    #[inline]
+    fn choose(&self, scene: &Scene, cell: usize, x: DVec2, u: f64) -> Option<(usize, f64)> {
+        let seen = &self.seen[self.seen_starts[cell] as usize..self.seen_starts[cell + 1] as usize];
+        let defensive = &self.defensive[cell * self.lights..(cell + 1) * self.lights];
+        let a = if seen.is_empty() { 0.0 } else { SEEN };
+        let b = if defensive.last().is_some_and(|&c| c > 0.0) {
+            DEFENSIVE
+        } else {
+            0.0
+        };
+        // Each seen light's weight at `x`: its visibility in the cell
+        // times what it could bring `x` without shadows.
+        let mut weights = [0.0; MAX_SEEN];
+        let mut total = 0.0;
+        for (w, s) in weights.iter_mut().zip(seen) {
+            let light = &scene.lights[s.light as usize];
+            *w = s.scale * light.shape.reach(light, (x, x), scene.small_radius);
+            total += *w;
+        }
+        let weights = &weights[..seen.len()];
+        let chosen = if u < a {
+            let target = u / a * total;
+            let mut cumulative = 0.0;
+            let mut found = None;
+            for (s, &w) in seen.iter().zip(weights) {
+                cumulative += w;
+                if target < cumulative {
+                    found = Some(s.light as usize);
+                    break;
+                }
+            }
+            found?
+        } else if u < a + b {
+            let v = (u - a) / b;
+            defensive.partition_point(|&c| c <= v).min(self.lights - 1)
+        } else {
+            return None;
+        };
+        // Its probability, by either way.
+        let mut p = 0.0;
+        if total > 0.0
+            && let Some(k) = seen.iter().position(|s| s.light as usize == chosen)
+        {
+            p += a * weights[k] / total;
+        }
+        let before = if chosen == 0 {
+            0.0
+        } else {
+            defensive[chosen - 1]
+        };
+        p += b * (defensive[chosen] - before);
+        (p > 0.0).then_some((chosen, p))
+    }
 }
 
-/// One cell's always-lights and the cumulative table of the rest.
-fn cell_choice(
+/// Per light, what a cell's probes received from it without shadows and
+/// with them.
+fn probe_cell(
     scene: &Scene,
     lo: DVec2,
     size: DVec2,
     probes: usize,
     (seed, index): (u64, u64),
     shadows: bool,
-) -> ([u32; ALWAYS], Vec<Entry>) {
-    let lights = scene.lights.len();
+) -> Vec<(f64, f64)> {
     let mut stream = Stream::new(seed, index, PROBE_STREAM);
     let points: Vec<(DVec2, f64)> = (0..probes)
         .map(|_| {
@@ -225,77 +338,90 @@ fn cell_choice(
         })
         .collect();
     let mut stats = Stats::default();
-    let mut shadowed = vec![0.0; lights];
-    // Without shadows, no probe: a bound that sees every light.
-    let unshadowed: Vec<f64> = scene
-        .lights
-        .iter()
-        .map(|l| l.shape.importance(l, (lo, lo + size), scene.small_radius))
-        .collect();
-    for (light, estimate) in shadowed.iter_mut().enumerate() {
-        for &(x, u) in &points {
-            let open = light_contribution(
-                scene,
-                light,
-                x,
-                Receiver::FLOOR,
-                u,
-                Visibility::Known(Rgb::ONE),
-                &mut stats,
-            );
-            let open = brightness(open);
-            if open > 0.0 {
-                *estimate += if shadows {
-                    brightness(light_contribution(
-                        scene,
-                        light,
-                        x,
-                        Receiver::FLOOR,
-                        u,
-                        Visibility::Trace,
-                        &mut stats,
-                    ))
-                } else {
-                    open
-                };
+    (0..scene.lights.len())
+        .map(|light| {
+            let (mut open, mut shadowed) = (0.0, 0.0);
+            for &(x, u) in &points {
+                let unblocked = brightness(light_contribution(
+                    scene,
+                    light,
+                    x,
+                    Receiver::FLOOR,
+                    u,
+                    Visibility::Known(Rgb::ONE),
+                    &mut stats,
+                ));
+                open += unblocked;
+                if unblocked > 0.0 {
+                    shadowed += if shadows {
+                        brightness(light_contribution(
+                            scene,
+                            light,
+                            x,
+                            Receiver::FLOOR,
+                            u,
+                            Visibility::Trace,
+                            &mut stats,
+                        ))
+                    } else {
+                        unblocked
+                    };
+                }
             }
-        }
-    }
-    let share = mixed_shares(&shadowed, &unshadowed);
+            (open, shadowed)
+        })
+        .collect()
+}
+
+/// One cell's always-lights, seen lights and defensive shares, from the
+/// probes' sums per light (without shadows, with them) around it.
+fn choose_cell(scene: &Scene, lo: DVec2, size: DVec2, sums: &[(f64, f64)]) -> Cell {
+    let lights = scene.lights.len();
+    let shadowed = |l: usize| sums[l].1;
     // The always-lights: the largest estimated shares, over the threshold.
-    let total: f64 = shadowed.iter().sum();
+    let total: f64 = sums.iter().map(|s| s.1).sum();
     let mut order: Vec<usize> = (0..lights).collect();
-    order.sort_by(|&a, &b| shadowed[b].total_cmp(&shadowed[a]).then(a.cmp(&b)));
+    order.sort_by(|&a, &b| shadowed(b).total_cmp(&shadowed(a)).then(a.cmp(&b)));
     let mut always = [u32::MAX; ALWAYS];
     let mut taken = vec![false; lights];
     for (slot, &light) in always.iter_mut().zip(&order) {
-        if !(total > 0.0 && shadowed[light] >= ALWAYS_SHARE * total) {
+        if !(total > 0.0 && shadowed(light) >= ALWAYS_SHARE * total) {
             break;
         }
         *slot = light as u32;
         taken[light] = true;
     }
-    let mut cumulative = 0.0;
-    let mut rest = Vec::with_capacity(lights);
-    for light in 0..lights {
-        if taken[light] {
-            continue;
-        }
-        cumulative += share[light];
-        rest.push(Entry {
-            light: light as u32,
-            cumulative,
-        });
+    let seen: Vec<Seen> = order
+        .iter()
+        .filter(|&&l| !taken[l] && sums[l].1 > 0.0 && sums[l].0 > 0.0)
+        .take(MAX_SEEN)
+        .map(|&l| {
+            let light = &scene.lights[l];
+            let visibility = (sums[l].1 / sums[l].0).min(1.0);
+            let brightness = (light.color.x + light.color.y + light.color.z) / 3.0;
+            let scale = visibility * light.intensity * brightness;
+            Seen {
+                light: l as u32,
+                scale: if scale.is_finite() {
+                    scale.max(0.0)
+                } else {
+                    0.0
+                },
+            }
+        })
+        .collect();
+    // Without shadows, no probe: a bound that sees every light.
+    let importance: Vec<f64> = scene
+        .lights
+        .iter()
+        .map(|l| l.shape.importance(l, (lo, lo + size), scene.small_radius))
+        .collect();
+    let defensive = defensive_shares(&importance, &taken);
+    Cell {
+        always,
+        seen,
+        defensive,
     }
-    // With no always-light, where the probes saw light, the rest is every
-    // light and its shares sum to 1 (up to rounding): one is always chosen.
-    if always[0] == u32::MAX
-        && total > 0.0
-        && let Some(last) = rest.last_mut()
-    {
-        last.cumulative = 1.0;
-    }
-    (always, rest)
 }
 
 /// Probes draw from stream index `PROBE_STREAM` of their cell's key,
@@ -309,38 +435,43 @@ fn brightness(c: Rgb) -> f64 {
     if b.is_finite() { b.max(0.0) } else { 0.0 }
 }
 
-/// Each light's probability of being chosen: its share with shadows,
-/// with weight `1 - UNSHADOWED - EVEN`, its share without, with weight
-/// `UNSHADOWED`, and an even share, with weight `EVEN`. Where the probes
-/// saw no light at all, the first weight goes to no light (the shares sum
-/// to `UNSHADOWED + EVEN`: most points there cast no shadow ray); a share
-/// without shadows whose total is zero gives its weight to the even one.
-fn mixed_shares(shadowed: &[f64], unshadowed: &[f64]) -> Vec<f64> {
-    let n = shadowed.len();
-    let total_shadowed: f64 = shadowed.iter().sum();
-    let total_unshadowed: f64 = unshadowed.iter().sum();
-    let mut w_shadowed = 1.0 - UNSHADOWED - EVEN;
-    let mut w_unshadowed = UNSHADOWED;
-    if !(total_shadowed > 0.0 && total_shadowed.is_finite()) {
-        w_shadowed = 0.0;
+/// The cumulative defensive shares over every light: `1 - EVEN` by
+/// importance and `EVEN` evenly, over the lights not `taken` (which get
+/// none). The last is exactly 1; all are 0 when every light is taken.
+fn defensive_shares(importance: &[f64], taken: &[bool]) -> Vec<f64> {
+    let free = taken.iter().filter(|&&t| !t).count();
+    if free == 0 {
+        return vec![0.0; taken.len()];
     }
-    let mut w_even = EVEN;
-    if !(total_unshadowed > 0.0 && total_unshadowed.is_finite()) {
-        w_even += w_unshadowed;
-        w_unshadowed = 0.0;
-    }
-    (0..n)
-        .map(|l| {
-            let mut p = w_even / n as f64;
-            if w_shadowed > 0.0 {
-                p += w_shadowed * shadowed[l] / total_shadowed;
+    let total: f64 = importance
+        .iter()
+        .zip(taken)
+        .filter(|(_, t)| !**t)
+        .map(|(i, _)| i)
+        .sum();
+    let by_importance = total > 0.0 && total.is_finite();
+    let even = if by_importance { EVEN } else { 1.0 };
+    let mut cumulative = 0.0;
+    let mut shares: Vec<f64> = importance
+        .iter()
+        .zip(taken)
+        .map(|(&i, &t)| {
+            if !t {
+                cumulative += even / free as f64;
+                if by_importance {
+                    cumulative += (1.0 - EVEN) * i / total;
+                }
             }
-            if w_unshadowed > 0.0 {
-                p += w_unshadowed * unshadowed[l] / total_unshadowed;
-            }
-            p
+            cumulative
         })
-        .collect()
+        .collect();
+    // The last free light ends the table at exactly 1.
+    if let Some(last) = taken.iter().rposition(|&t| !t) {
+        for share in &mut shares[last..] {
+            *share = 1.0;
+        }
+    }
+    shares
 }
 
 #[cfg(test)]
@@ -348,23 +479,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_light_keeps_a_positive_share_and_the_shares_sum_to_one() {
-        for (shadowed, unshadowed) in [
-            (vec![0.0, 3.0, 1.0, 0.0], vec![1.0, 3.0, 1.0, 0.0]),
-            (vec![0.0; 4], vec![1.0, 0.0, 2.0, 0.0]),
-            (vec![0.0; 4], vec![0.0; 4]),
-            (vec![f64::INFINITY, 1.0, 0.0, 0.0], vec![1.0; 4]),
+    fn every_free_light_keeps_a_positive_defensive_share_and_they_end_at_one() {
+        for (importance, taken) in [
+            (vec![0.0, 3.0, 1.0, 0.0], vec![false, false, true, false]),
+            (vec![0.0; 4], vec![false; 4]),
+            (vec![f64::INFINITY, 1.0, 0.0, 0.0], vec![false; 4]),
+            (vec![1.0, 2.0, 3.0, 4.0], vec![false, false, false, true]),
         ] {
-            let p = mixed_shares(&shadowed, &unshadowed);
-            assert!(p.iter().all(|&p| p > 0.0 && p.is_finite()), "{p:?}");
-            // Where no probe saw light, most points choose no light.
-            let seen: f64 = shadowed.iter().sum();
-            let sum = if seen > 0.0 && seen.is_finite() {
-                1.0
-            } else {
-                UNSHADOWED + EVEN
-            };
-            assert!((p.iter().sum::<f64>() - sum).abs() < 1e-12, "{p:?}");
+            let c = defensive_shares(&importance, &taken);
+            let mut before = 0.0;
+            for (l, &cumulative) in c.iter().enumerate() {
+                let p = cumulative - before;
+                if taken[l] {
+                    assert_eq!(p, 0.0, "{c:?}");
+                } else {
+                    assert!(p > 0.0, "{c:?}");
+                }
+                before = cumulative;
+            }
+            assert_eq!(c[c.len() - 1], 1.0, "{c:?}");
         }
+        assert_eq!(defensive_shares(&[1.0, 2.0], &[true, true]), vec![0.0, 0.0]);
     }
 }

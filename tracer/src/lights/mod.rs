@@ -206,16 +206,36 @@ impl LightShape {
     }
 
     /// About the most that light `light` (of this shape) brings a floor
-    /// point of the box `[lo, hi]`, without shadows, spot windows or one
-    /// side: its intensity times its falloff at the box's nearest point
-    /// (for a light with an area, times the largest angle it can
-    /// subtend there). For choosing lights (`choice.rs`), never for an
+    /// point of the box `[lo, hi]`, without shadows or one side: its
+    /// intensity times its falloff at the box's nearest point (for a light
+    /// with an area, times the largest angle it can subtend there; for a
+    /// spot, times its window when the box is a point). For choosing lights (`choice.rs`), never for an
     /// estimate: zero only where the light can bring nothing.
-    pub(crate) fn importance(&self, light: &Light, (lo, hi): (DVec2, DVec2), r0: f64) -> f64 {
+    pub(crate) fn importance(&self, light: &Light, bounds: (DVec2, DVec2), r0: f64) -> f64 {
+        let v = light.intensity
+            * self.reach(light, bounds, r0)
+            * (light.color.x + light.color.y + light.color.z)
+            / 3.0;
+        if v.is_finite() { v.max(0.0) } else { 0.0 }
+    }
+
+    /// [`LightShape::importance`] per unit intensity, without the light's
+    /// colour.
+    #[inline]
+    pub(crate) fn reach(&self, light: &Light, (lo, hi): (DVec2, DVec2), r0: f64) -> f64 {
         let distance = |p: DVec2| (p.clamp(lo, hi) - p).length();
         let falloff = light.falloff;
         let value = match *self {
-            LightShape::Point { at } | LightShape::Spot { at, .. } => falloff.g(distance(at), r0),
+            LightShape::Point { at } => falloff.g(distance(at), r0),
+            LightShape::Spot { at, .. } => {
+                // At a point (a box of no size), the spot's window there.
+                let window = if lo == hi && lo != at {
+                    light.spot_window((lo - at).normalize())
+                } else {
+                    1.0
+                };
+                falloff.g(distance(at), r0) * window
+            }
             LightShape::Line { segment, .. } => {
                 // The nearest of the box to the segment, at most: the
                 // nearer of the segment's ends and middle to the box.
@@ -233,8 +253,11 @@ impl LightShape {
             }
             LightShape::Directional { .. } => 1.0,
         };
-        let v = light.intensity * value * (light.color.x + light.color.y + light.color.z) / 3.0;
-        if v.is_finite() { v.max(0.0) } else { 0.0 }
+        if value.is_finite() {
+            value.max(0.0)
+        } else {
+            0.0
+        }
     }
 
     /// Points whose convex hull holds every point a shadow ray towards the
