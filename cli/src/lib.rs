@@ -16,7 +16,9 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use flatray_io::{Format, Loaded};
-use flatray_tracer::{Integrator, LightChoice, MemoOptions, RenderOptions, image_size};
+use flatray_tracer::{
+    FastPath, FastPaths, Integrator, LightChoice, MemoOptions, RenderOptions, image_size,
+};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Exit code: success.
@@ -226,12 +228,40 @@ struct RenderArgs {
     /// effect on and no fast path (the same image, more slowly).
     #[arg(long, hide = true)]
     reference: bool,
+    /// Benchmarking: leave out these fast paths (comma-separated), each of
+    /// which computes the same image as the model (the same bits).
+    #[arg(long, hide = true, value_enum, value_delimiter = ',')]
+    without: Vec<FastPathArg>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum Switch {
     On,
     Off,
+}
+
+/// A fast path that `--without` leaves out.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum FastPathArg {
+    Culling,
+    Coherence,
+    StrataLoops,
+    Shortcut,
+    Tables,
+    Avx,
+}
+
+impl FastPathArg {
+    fn path(self) -> FastPath {
+        match self {
+            FastPathArg::Culling => FastPath::Culling,
+            FastPathArg::Coherence => FastPath::Coherence,
+            FastPathArg::StrataLoops => FastPath::StrataLoops,
+            FastPathArg::Shortcut => FastPath::Shortcut,
+            FastPathArg::Tables => FastPath::Tables,
+            FastPathArg::Avx => FastPath::Avx,
+        }
+    }
 }
 
 /// Which lights each receiver's shadow rays go to.
@@ -580,6 +610,10 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         },
         caustics: !matches!(args.caustics, Some(Switch::Off)),
         reference: args.reference,
+        fast_paths: args
+            .without
+            .iter()
+            .fold(FastPaths::ALL, |paths, p| paths.without(p.path())),
         light_choice: args.lights.choice(),
     };
     let (width, height) = checked_size(&loaded, options.scale)?;

@@ -6,7 +6,7 @@ use flatray_geometry::{DVec2, Segment, Side};
 use flatray_tracer::scene::{
     Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall,
 };
-use flatray_tracer::{Integrator, LightChoice, MemoOptions, RenderOptions, Rgb};
+use flatray_tracer::{FastPaths, Integrator, LightChoice, MemoOptions, RenderOptions, Rgb};
 use ron::extensions::Extensions;
 
 use crate::error::SceneError;
@@ -387,6 +387,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         },
         caustics: true,
         reference: false,
+        fast_paths: FastPaths::ALL,
         light_choice: LightChoice::Auto,
     };
     Ok(Loaded {

@@ -8,7 +8,9 @@
 //! in `scenes/` and on random rooms of every kind of wall and light.
 
 use flatray_tests::{render, scene, workspace_root};
-use flatray_tracer::{Integrator, LightChoice, MemoOptions, Plan, RenderOptions, Scene};
+use flatray_tracer::{
+    FastPath, FastPaths, Integrator, LightChoice, MemoOptions, Plan, RenderOptions, Scene,
+};
 use proptest::prelude::*;
 
 /// Renders `scene` both ways and compares.
@@ -60,6 +62,20 @@ fn every_example_scene_renders_the_same_with_and_without_fast_paths() {
             };
             let label = format!("{name}, {bounces} bounces, memo {memo}");
             assert_identical(&label, &loaded.scene, options);
+            if bounces == loaded.options.bounces && memo {
+                // And each fast path left out alone.
+                let fast = render(&loaded.scene, &options).image;
+                for path in FastPath::ALL {
+                    let without = RenderOptions {
+                        fast_paths: FastPaths::ALL.without(path),
+                        ..options
+                    };
+                    assert!(
+                        render(&loaded.scene, &without).image == fast,
+                        "{label}: without {path:?}, the image changed"
+                    );
+                }
+            }
             if options.integrator != Integrator::Light {
                 // And the light tracer, which has no fast path of its own
                 // but shares the lights and materials.

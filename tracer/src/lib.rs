@@ -47,8 +47,8 @@ pub type Rgb = glam::DVec3;
 pub use memo::MemoOptions;
 pub use plan::Plan;
 pub use render::{
-    Image, Integrator, LightChoice, MANY_LIGHTS, RenderOptions, Rendered, TILE, image_size,
-    pixel_sample, render,
+    FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS, RenderOptions, Rendered,
+    TILE, image_size, pixel_sample, render,
 };
 pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
 pub use stats::{Noise, Physics, Stats, Work};

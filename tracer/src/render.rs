@@ -66,8 +66,81 @@ pub struct RenderOptions {
     /// bit (`tests/tests/identity.rs`), more slowly: for tests, debugging
     /// and benchmarks.
     pub reference: bool,
+    /// The fast paths a render may take (all, by default); `reference`
+    /// takes none. Each computes what the model computes, bit for bit: a
+    /// fast path is left out only to measure what it buys.
+    pub fast_paths: FastPaths,
     /// How next-event estimation picks its lights.
     pub light_choice: LightChoice,
+}
+
+impl RenderOptions {
+    /// Whether the render takes fast path `path`.
+    #[inline]
+    pub fn takes(&self, path: FastPath) -> bool {
+        !self.reference && self.fast_paths.contains(path)
+    }
+}
+
+/// A fast path beside the model (`ARCHITECTURE.md`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FastPath {
+    /// The floor's rays, the rays off mirrors and the floor's shadow rays
+    /// test only the walls their block of pixels (or piece of mirror) and
+    /// arc of directions can meet, where the walls are few.
+    Culling,
+    /// The floor memo's strata share one shadow ray per light where no
+    /// shadow edge crosses their pixel (`coherence.rs`).
+    Coherence,
+    /// The floor memo's light-by-light loops, with line lights' angle
+    /// samples in lanes (`light::direct_light_strata`).
+    StrataLoops,
+    /// One bounce read straight from the wall memo (`path::memo_bounce`).
+    Shortcut,
+    /// The floor's albedo along walls read from a table.
+    Tables,
+    /// The pixel loop compiled a second time with AVX2.
+    Avx,
+}
+
+impl FastPath {
+    /// Every fast path, in a fixed order.
+    pub const ALL: [FastPath; 6] = [
+        FastPath::Culling,
+        FastPath::Coherence,
+        FastPath::StrataLoops,
+        FastPath::Shortcut,
+        FastPath::Tables,
+        FastPath::Avx,
+    ];
+
+    fn bit(self) -> u8 {
+        1 << (self as u8)
+    }
+}
+
+/// A set of fast paths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct FastPaths(u8);
+
+impl FastPaths {
+    /// Every fast path.
+    pub const ALL: FastPaths = FastPaths(0b11_1111);
+
+    /// All but `path`.
+    pub fn without(self, path: FastPath) -> FastPaths {
+        FastPaths(self.0 & !path.bit())
+    }
+
+    pub fn contains(self, path: FastPath) -> bool {
+        self.0 & path.bit() != 0
+    }
+}
+
+impl Default for FastPaths {
+    fn default() -> FastPaths {
+        FastPaths::ALL
+    }
 }
 
 /// Which lights next-event estimation sends shadow rays to.
@@ -100,6 +173,7 @@ impl Default for RenderOptions {
             memo: MemoOptions::default(),
             caustics: true,
             reference: false,
+            fast_paths: FastPaths::ALL,
             light_choice: LightChoice::Auto,
         }
     }
@@ -206,10 +280,10 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             mirror_arcs.as_ref(),
             light_table.as_ref(),
         ),
-        render_pixel: if options.reference {
-            render_pixel
-        } else {
+        render_pixel: if options.takes(FastPath::Avx) {
             pixel_fn()
+        } else {
+            render_pixel
         },
     };
     let tiles_x = width.div_ceil(TILE);
@@ -371,9 +445,10 @@ fn trace_for<'a>(
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
         force,
-        tables: !force,
+        tables: options.takes(FastPath::Tables),
         caustics,
-        one_bounce_memo: memo.filter(|_| bounces == 1 && !force),
+        one_bounce_memo: memo
+            .filter(|_| bounces == 1 && !force && options.takes(FastPath::Shortcut)),
         mirror_arcs,
         light_table,
     }
@@ -452,7 +527,7 @@ fn render_pixel(
             }
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
-        if options.reference {
+        if !options.takes(FastPath::StrataLoops) {
             direct_light_points(scene, floor, visibility, trace.light_table, stats);
         } else {
             direct_light_strata(

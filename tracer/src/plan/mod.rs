@@ -8,7 +8,7 @@ mod wording;
 
 use flatray_geometry::Strategy;
 
-use crate::render::{Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
+use crate::render::{FastPath, FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Floor, Rgb};
 
@@ -123,6 +123,8 @@ pub struct Plan {
     /// The floor's rays test only the walls that rays from their block of
     /// pixels, in their arc of directions, can meet (`ArcCandidates`).
     pub floor_ray_culling: bool,
+    /// The fast paths the settings allow (`reference` aside).
+    pub fast_paths: FastPaths,
     /// The light choice as given.
     pub light_choice: LightChoice,
     /// Next-event estimation takes the lights a table of cells chooses
@@ -202,15 +204,16 @@ impl Plan {
         let floor_coherence = floor_memo
             && shadows
             && !light_table
-            && !options.reference
+            && options.takes(FastPath::Coherence)
             && pairs <= crate::coherence::MAX_PAIRS
             && mask_cells <= crate::coherence::MAX_CELLS;
         let floor_ray_culling = !tracing_light
             && indirect
             && !scene.walls.is_empty()
             && brute_force
-            && !options.reference;
+            && options.takes(FastPath::Culling);
         Plan {
+            fast_paths: options.fast_paths,
             light_choice: options.light_choice,
             light_table,
             inventory,

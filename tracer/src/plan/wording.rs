@@ -6,7 +6,7 @@ use std::fmt;
 use super::{Inventory, Plan};
 use crate::mirror::MIRROR_PIECE;
 use crate::render::CULL_BLOCK;
-use crate::render::{LightChoice, MANY_LIGHTS};
+use crate::render::{FastPath, LightChoice, MANY_LIGHTS};
 use crate::sampling::ARCS;
 
 /// One effect: whether it runs, and a reason in plain words.
@@ -78,6 +78,7 @@ impl Plan {
             floor_ray_culling,
             light_choice,
             light_table,
+            fast_paths,
             ..
         } = *self;
         let force = reference;
@@ -267,6 +268,8 @@ impl Plan {
                 "no shadow rays".into()
             } else if reference {
                 "the reference model runs no fast path".into()
+            } else if !fast_paths.contains(FastPath::Coherence) {
+                "left out (--without coherence)".into()
             } else if light_table {
                 "lights are chosen per point, not all tested per pixel".into()
             } else if pairs > crate::coherence::MAX_PAIRS {
@@ -339,6 +342,8 @@ impl Plan {
                 "the BVH culls walls for every ray".into()
             } else if reference {
                 "the reference model runs no fast path".into()
+            } else if !fast_paths.contains(FastPath::Culling) {
+                "left out (--without culling)".into()
             } else {
                 let off_mirrors = if mirrors > 0 {
                     format!(", and so for rays off mirrors per {MIRROR_PIECE} pixels of mirror")
