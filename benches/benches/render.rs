@@ -3,7 +3,8 @@
 //! BVH), four rays at a time, rays culled by direction as the floor's are,
 //! where the BVH starts to pay, and the room
 //! rendered end to end at a reduced size with the memo on and off (in rays
-//! per second).
+//! per second), and a generated plan of 17 to 193 lights with a shadow ray
+//! to every light and with the light table.
 //!
 //! Run: `cargo bench -p flatray-benches` (all), or with a filter, e.g.
 //! `cargo bench -p flatray-benches -- closest_hit`.
@@ -14,7 +15,7 @@ use std::path::Path;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use flatray_benches::{Inputs, maze, room_walls};
 use flatray_geometry::{ArcCandidates, DVec2, Kernel, Ray, Segment, SegmentSet, Skip, Strategy};
-use flatray_tracer::{MemoOptions, RenderOptions};
+use flatray_tracer::{LightChoice, MemoOptions, RenderOptions};
 
 /// Nanoseconds per query: `rays` closest-hit queries against `set`.
 fn bench_set(
@@ -213,5 +214,50 @@ fn plan(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, closest_hit, bvh_threshold, room_render, plan);
+/// A generated 16-room plan with 1, 3 and 12 lamps a room (17, 49 and 193
+/// lights, 3 bounces, at a quarter of its size, 16 spp), with a shadow
+/// ray to every light and with the light table: how a sample's cost grows
+/// with the lights.
+fn many_lights(c: &mut Criterion) {
+    let mut group = c.benchmark_group("many_lights");
+    group.sample_size(10);
+    for lamps in [1, 3, 12] {
+        let plan = flatray_io::generate::Apartment {
+            lamps_per_room: lamps,
+            ..flatray_io::generate::Apartment::default()
+        };
+        let loaded = match flatray_io::parse(&plan.to_ron(), Path::new("plan.ron"), Path::new("."))
+        {
+            Ok(l) => l,
+            Err(e) => panic!("{e}"),
+        };
+        let lights = loaded.scene.lights.len();
+        for choice in [LightChoice::Every, LightChoice::Table] {
+            let options = RenderOptions {
+                scale: 0.25,
+                light_choice: choice,
+                ..loaded.options
+            };
+            let label = format!("{lights}-lights");
+            let name = if choice == LightChoice::Every {
+                "every"
+            } else {
+                "table"
+            };
+            group.bench_function(BenchmarkId::new(name, label), |b| {
+                b.iter(|| flatray_tracer::render(&loaded.scene, &options, &|_| {}))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    closest_hit,
+    bvh_threshold,
+    room_render,
+    plan,
+    many_lights
+);
 criterion_main!(benches);
