@@ -39,7 +39,9 @@ pub mod plan;
 mod render;
 pub mod sampling;
 pub mod scene;
+mod shortcut;
 mod stats;
+mod strata;
 
 /// A linear RGB triple: a colour, an albedo, or a light quantity.
 pub type Rgb = glam::DVec3;

@@ -64,7 +64,7 @@ impl MirrorArcs {
     /// The walls that a ray leaving mirror `wall` from its point at `u`,
     /// in direction `dir`, can meet; `None` for a wall that is no mirror.
     #[inline(always)]
-    pub(crate) fn walls(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]> {
+    fn lists(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]> {
         let pieces = self.walls.get(wall as usize)?;
         let n = pieces.len();
         // u in [0, 1]: the cast saturates (NaN gives 0).
@@ -121,6 +121,13 @@ const EDGE_TANGENTS: [f64; 15] = [
     5.027339492125846,
     10.153170387608842,
 ];
+
+impl crate::path::MirrorWalls for MirrorArcs {
+    #[inline]
+    fn walls(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]> {
+        self.lists(wall, u, dir)
+    }
+}
 
 #[cfg(test)]
 mod tests {

@@ -12,9 +12,8 @@ use crate::glass::{GlassState, absorption, transmit};
 use crate::light::{Receiver, direct_light};
 use crate::lights::choice::LightTable;
 use crate::lights::line_emitted;
-use crate::mirror::MirrorArcs;
 use crate::sampling::{Stream, circle_in_arc};
-use crate::scene::{Light, LightShape, Material, Scene};
+use crate::scene::{Light, LightShape, Scene};
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
@@ -127,11 +126,6 @@ pub(crate) fn path_finish(
         light_table,
         ..
     } = *trace;
-    if let Some((index, h)) = first_hit
-        && let Some(value) = memo_bounce(trace, fluence, index, h.u, ray.dir, stats)
-    {
-        return value;
-    }
     if first_hit.is_none() && !force {
         // Escaped at once, as the loop below would find, with nothing met
         // on the way (emission is looked for only after a mirror).
@@ -323,6 +317,13 @@ pub(crate) fn diffuse_albedo(
     }
 }
 
+/// The walls that a ray leaving mirror `wall` at `u` in direction `dir`
+/// can meet, in index order, where a fast path knows them (`mirror.rs`);
+/// the path loop then tests only those. `None`: every wall.
+pub(crate) trait MirrorWalls: Sync {
+    fn walls(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]>;
+}
+
 /// What one path sample needs to know beyond its position: the scene and
 /// the switches of the render plan.
 #[derive(Clone, Copy)]
@@ -349,55 +350,17 @@ pub(crate) struct Trace<'a> {
     /// the scene's table along the walls (the same values) rather than
     /// from the floor.
     pub tables: bool,
-    /// The wall memo when paths take the one-bounce shortcut of
-    /// [`path_finish`] (one bounce, not forced): one test per path.
-    pub one_bounce_memo: Option<&'a WallMemo>,
     /// The walls that rays leaving each mirror can meet, when the plan
-    /// culls rays by direction.
-    pub mirror_arcs: Option<&'a MirrorArcs>,
+    /// culls rays by direction (a fast path: `mirror.rs`).
+    pub mirror_arcs: Option<&'a dyn MirrorWalls>,
     /// The lights each receiver's next-event estimation takes, where the
     /// plan chooses them (`lights::choice`); `None`: every light.
     pub light_table: Option<&'a LightTable>,
 }
 
-/// The common case of [`path_finish`], straight: one bounce, the first
-/// ray from the floor (direction `dir`) meeting diffuse wall `index` at
-/// `u`, its light read from the memo. The same operations, in the same
-/// order, as the path loop would make (a first flight crosses no glass it
-/// knows of, so its transmittance is exactly 1). `None` where the path
-/// takes the loop: another material, a wall's end, no memo or more
-/// bounces, and an `index` of no wall.
-#[inline(always)]
-pub(crate) fn memo_bounce(
-    trace: &Trace,
-    fluence: Rgb,
-    index: u32,
-    u: f64,
-    dir: DVec2,
-    stats: &mut Stats,
-) -> Option<Rgb> {
-    let memo = trace.one_bounce_memo?;
-    let scene = trace.scene;
-    let wall = scene.walls.get(index as usize)?;
-    let Material::Diffuse { albedo } = wall.material else {
-        return None;
-    };
-    if u == 0.0 || u == 1.0 {
-        return None;
-    }
-    let side = wall.segment.arrival_side(dir)?;
-    stats.work.bounce_rays += 1;
-    stats.work.memo_lookups += 1;
-    stats.physics.paths_bounce_limit += 1;
-    let x = wall.segment.point_at(u);
-    let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
-    let irradiance = memo_irradiance(memo, index, side, u);
-    Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
-}
-
 /// The memo's irradiance on side `side` of wall `index` at `u`.
 #[inline(always)]
-fn memo_irradiance(memo: &WallMemo, index: u32, side: Side, u: f64) -> Rgb {
+pub(crate) fn memo_irradiance(memo: &WallMemo, index: u32, side: Side, u: f64) -> Rgb {
     let v = memo.lookup(Key {
         wall: index,
         side: side.index(),

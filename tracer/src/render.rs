@@ -4,23 +4,23 @@
 use std::iter::StepBy;
 use std::ops::Range;
 
-use flatray_geometry::{ArcCandidates, DVec2, RayLanes, Skip, hull_candidates};
+use flatray_geometry::{ArcCandidates, DVec2, Hit, Ray, RayLanes, Skip, hull_candidates};
 
 use flatray_cache::WallMemo;
 
 use crate::caustics::Caustics;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::film::{Estimator, Film, Part, run};
-use crate::light::{
-    Strata, Visibility, direct_light_points, direct_light_strata, numbers_per_point,
-};
+use crate::light::{Strata, Visibility, direct_light_points, numbers_per_point};
 use crate::lights::choice::LightTable;
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::mirror::MirrorArcs;
-use crate::path::{Trace, memo_bounce, path_begin, path_finish, path_sample};
+use crate::path::{MirrorWalls, Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
 use crate::sampling::{ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc};
 use crate::scene::Scene;
+use crate::shortcut::memo_bounce;
+use crate::strata::direct_light_strata;
 use crate::{Rgb, Stats};
 
 /// Which estimator a render uses.
@@ -95,7 +95,7 @@ pub enum FastPath {
     /// The floor memo's light-by-light loops, with line lights' angle
     /// samples in lanes (`light::direct_light_strata`).
     StrataLoops,
-    /// One bounce read straight from the wall memo (`path::memo_bounce`).
+    /// One bounce read straight from the wall memo (`shortcut.rs`).
     Shortcut,
     /// The floor's albedo along walls read from a table.
     Tables,
@@ -277,9 +277,12 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
             options,
             &plan,
             (memo.as_ref(), caustics.as_ref()),
-            mirror_arcs.as_ref(),
+            mirror_arcs.as_ref().map(|arcs| arcs as &dyn MirrorWalls),
             light_table.as_ref(),
         ),
+        one_bounce_memo: memo
+            .as_ref()
+            .filter(|_| plan.indirect && options.bounces == 1 && options.takes(FastPath::Shortcut)),
         render_pixel: if options.takes(FastPath::Avx) {
             pixel_fn()
         } else {
@@ -391,6 +394,9 @@ struct Context<'a> {
     /// Whether the floor's rays test only their arc's walls.
     culling: bool,
     trace: Trace<'a>,
+    /// The wall memo, where paths take the one-bounce shortcut
+    /// (`shortcut.rs`: one bounce, the memo, not the reference).
+    one_bounce_memo: Option<&'a WallMemo>,
     /// [`render_pixel`], compiled for this processor.
     render_pixel: PixelFn,
 }
@@ -431,7 +437,7 @@ fn trace_for<'a>(
     options: &RenderOptions,
     plan: &Plan,
     (memo, caustics): (Option<&'a WallMemo>, Option<&'a Caustics>),
-    mirror_arcs: Option<&'a MirrorArcs>,
+    mirror_arcs: Option<&'a dyn MirrorWalls>,
     light_table: Option<&'a LightTable>,
 ) -> Trace<'a> {
     let bounces = if plan.indirect { options.bounces } else { 0 };
@@ -447,8 +453,6 @@ fn trace_for<'a>(
         force,
         tables: options.takes(FastPath::Tables),
         caustics,
-        one_bounce_memo: memo
-            .filter(|_| bounces == 1 && !force && options.takes(FastPath::Shortcut)),
         mirror_arcs,
         light_table,
     }
@@ -681,7 +685,36 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
     let p = pixel.receiver(scene, &mut stream);
     stats.physics.camera_samples += 1;
     let arc = sample_arc(pixel.arc_offset, sample);
-    path_sample(trace, p, arc, &mut stream, stats)
+    if context.one_bounce_memo.is_none() {
+        return path_sample(trace, p, arc, &mut stream, stats);
+    }
+    // `path_sample`, with the one-bounce shortcut tried first.
+    let begun = path_begin(trace, p, arc, None, &mut stream, stats);
+    let Some(ray) = begun.ray else {
+        return begun.fluence;
+    };
+    let hit = scene.segments.closest_hit(&ray, f64::INFINITY, Skip::NONE);
+    finish(context, begun.fluence, ray, hit, None, &mut stream, stats)
+}
+
+/// [`path_finish`], after the one-bounce shortcut where the render takes
+/// it: the same value.
+#[inline(always)]
+fn finish(
+    context: &Context,
+    fluence: Rgb,
+    ray: Ray,
+    hit: Option<(u32, Hit)>,
+    line_walls: Option<&[u32]>,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    if let (Some(memo), Some((index, h))) = (context.one_bounce_memo, hit)
+        && let Some(value) = memo_bounce(&context.trace, memo, fluence, index, h.u, ray.dir, stats)
+    {
+        return value;
+    }
+    path_finish(&context.trace, fluence, ray, hit, line_walls, stream, stats)
 }
 
 /// The order in which a pixel's samples are taken and summed, whether
@@ -757,8 +790,8 @@ fn culled_samples<const CHECKED: bool>(
                         scene
                             .segments
                             .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
-                    path_finish(
-                        trace,
+                    finish(
+                        context,
                         begun.fluence,
                         ray,
                         hit,
@@ -879,7 +912,10 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
     for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
         // `path_finish`'s common case first, from the lanes as they are.
         let dir = DVec2::new(rays.dx[k], rays.dy[k]);
-        let value = match memo_bounce(trace, Rgb::ZERO, hits.index[k], hits.u[k], dir, stats) {
+        let shortcut = context.one_bounce_memo.and_then(|memo| {
+            memo_bounce(trace, memo, Rgb::ZERO, hits.index[k], hits.u[k], dir, stats)
+        });
+        let value = match shortcut {
             Some(value) => value,
             None => path_finish(
                 trace,
@@ -988,6 +1024,7 @@ pub fn pixel_sample(
             None,
             light_table.as_ref(),
         ),
+        one_bounce_memo: None,
         render_pixel,
     };
     sample_with(

@@ -1,0 +1,50 @@
+//! A fast path beside the model: the one-bounce shortcut. Where a render
+//! has one bounce and the wall memo, most paths go from the floor to one
+//! diffuse wall and stop; this reads that case straight from the memo,
+//! with the same operations as the path loop, and leaves every other case
+//! to it (`path::path_finish`).
+
+use std::f64::consts::TAU;
+
+use flatray_cache::WallMemo;
+use flatray_geometry::DVec2;
+
+use crate::path::{Trace, diffuse_albedo, memo_irradiance};
+use crate::scene::Material;
+use crate::{Rgb, Stats};
+
+/// The common case of `path::path_finish`, straight: one bounce, the first
+/// ray from the floor (direction `dir`) meeting diffuse wall `index` at
+/// `u`, its light read from the memo. The same operations, in the same
+/// order, as the path loop would make (a first flight crosses no glass it
+/// knows of, so its transmittance is exactly 1). The caller takes it only
+/// for one bounce with the memo, not in the reference. `None` where the
+/// path takes the loop: another material, a wall's end, and an `index` of
+/// no wall.
+#[inline(always)]
+pub(crate) fn memo_bounce(
+    trace: &Trace,
+    memo: &WallMemo,
+    fluence: Rgb,
+    index: u32,
+    u: f64,
+    dir: DVec2,
+    stats: &mut Stats,
+) -> Option<Rgb> {
+    let scene = trace.scene;
+    let wall = scene.walls.get(index as usize)?;
+    let Material::Diffuse { albedo } = wall.material else {
+        return None;
+    };
+    if u == 0.0 || u == 1.0 {
+        return None;
+    }
+    let side = wall.segment.arrival_side(dir)?;
+    stats.work.bounce_rays += 1;
+    stats.work.memo_lookups += 1;
+    stats.physics.paths_bounce_limit += 1;
+    let x = wall.segment.point_at(u);
+    let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
+    let irradiance = memo_irradiance(memo, index, side, u);
+    Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
+}
