@@ -183,6 +183,28 @@ impl SegmentSet {
         first..first + node.count as usize
     }
 
+    /// The children of inner node `node` whose boxes the ray enters within
+    /// `t_max`: the nearer, then the farther.
+    #[inline(always)]
+    fn children(
+        &self,
+        node: &Node,
+        ray: &Ray,
+        inv: DVec2,
+        t_max: f64,
+    ) -> (Option<u32>, Option<u32>) {
+        let (l, r) = (node.first, node.first + 1);
+        let tl = enter(&self.nodes[l as usize], ray, inv, t_max);
+        let tr = enter(&self.nodes[r as usize], ray, inv, t_max);
+        match (tl, tr) {
+            (Some(a), Some(b)) if a <= b => (Some(l), Some(r)),
+            (Some(_), Some(_)) => (Some(r), Some(l)),
+            (Some(_), None) => (Some(l), None),
+            (None, Some(_)) => (Some(r), None),
+            (None, None) => (None, None),
+        }
+    }
+
     /// The nearest crossing with `0 < t < t_max`, with its segment index.
     /// Ties are won by the lower index, so the answer is deterministic and
     /// the same for every strategy.
@@ -210,28 +232,15 @@ impl SegmentSet {
                     &mut best,
                 );
             } else {
-                let (l, r) = (node.first, node.first + 1);
-                let tl = enter(&self.nodes[l as usize], ray, inv, best.t);
-                let tr = enter(&self.nodes[r as usize], ray, inv, best.t);
-                match (tl, tr) {
-                    (Some(a), Some(b)) => {
-                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
-                        // The depth bound of the build keeps `top` below
-                        // STACK.
-                        stack[top] = far;
-                        top += 1;
-                        node_index = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node_index = l;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node_index = r;
-                        continue;
-                    }
-                    (None, None) => {}
+                let (near, far) = self.children(&node, ray, inv, best.t);
+                if let Some(far) = far {
+                    // The depth bound of the build keeps `top` below STACK.
+                    stack[top] = far;
+                    top += 1;
+                }
+                if let Some(near) = near {
+                    node_index = near;
+                    continue;
                 }
             }
             // Pop the next node that may still hold a nearer hit.
@@ -291,28 +300,15 @@ impl SegmentSet {
                     return false;
                 }
             } else {
-                let (l, r) = (node.first, node.first + 1);
-                let tl = enter(&self.nodes[l as usize], ray, inv, t_max);
-                let tr = enter(&self.nodes[r as usize], ray, inv, t_max);
-                match (tl, tr) {
-                    (Some(a), Some(b)) => {
-                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
-                        // The depth bound of the build keeps `top` below
-                        // STACK.
-                        stack[top] = far;
-                        top += 1;
-                        node_index = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node_index = l;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node_index = r;
-                        continue;
-                    }
-                    (None, None) => {}
+                let (near, far) = self.children(&node, ray, inv, t_max);
+                if let Some(far) = far {
+                    // The depth bound of the build keeps `top` below STACK.
+                    stack[top] = far;
+                    top += 1;
+                }
+                if let Some(near) = near {
+                    node_index = near;
+                    continue;
                 }
             }
             if top == 0 {

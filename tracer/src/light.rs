@@ -180,12 +180,8 @@ pub(crate) fn direct_light_points(
     scene: &Scene,
     strata: &mut Strata,
     visibility: &[Visibility],
-    table: Option<&LightTable>,
     stats: &mut Stats,
 ) {
-    if let Some(table) = table {
-        return direct_light_chosen(scene, table, strata, visibility, stats);
-    }
     let Strata {
         points,
         numbers,

@@ -11,7 +11,9 @@ use flatray_cache::WallMemo;
 use crate::caustics::Caustics;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::film::{Estimator, Film, Part, run};
-use crate::light::{Strata, Visibility, direct_light_points, numbers_per_point};
+use crate::light::{
+    Strata, Visibility, direct_light_chosen, direct_light_points, numbers_per_point,
+};
 use crate::lights::choice::LightTable;
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::mirror::MirrorArcs;
@@ -531,17 +533,12 @@ fn render_pixel(
             }
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
-        if !options.takes(FastPath::StrataLoops) {
-            direct_light_points(scene, floor, visibility, trace.light_table, stats);
-        } else {
-            direct_light_strata(
-                scene,
-                floor,
-                visibility,
-                shadow_walls,
-                trace.light_table,
-                stats,
-            );
+        match trace.light_table {
+            Some(table) => direct_light_chosen(scene, table, floor, visibility, stats),
+            None if options.takes(FastPath::StrataLoops) => {
+                direct_light_strata(scene, floor, visibility, shadow_walls, stats)
+            }
+            None => direct_light_points(scene, floor, visibility, stats),
         }
         direct = strata_sum(&floor.values, (x, y), stats) / (grid * grid) as f64;
         stats.work.floor_memo_reuses += options.samples as u64;

@@ -6,10 +6,7 @@
 
 use flatray_geometry::{DVec2, Ray};
 
-use crate::light::{
-    Receiver, Strata, Visibility, direct_light_chosen, light_contribution, transmittance,
-};
-use crate::lights::choice::LightTable;
+use crate::light::{Receiver, Strata, Visibility, light_contribution, transmittance};
 use crate::lights::{arriving, point_incident};
 use crate::sampling::angle_sample_lanes;
 use crate::scene::{EMITTING_SIDE, LightShape, Scene};
@@ -37,12 +34,8 @@ pub(crate) fn direct_light_strata(
     strata: &mut Strata,
     visibility: &[Visibility],
     shadow_walls: Option<&[Option<Vec<u32>>]>,
-    table: Option<&LightTable>,
     stats: &mut Stats,
 ) {
-    if let Some(table) = table {
-        return direct_light_chosen(scene, table, strata, visibility, stats);
-    }
     let Strata {
         points,
         numbers,
@@ -261,9 +254,9 @@ mod tests {
         ] {
             for shadow_walls in [None, Some(&all[..])] {
                 let (mut a, mut b) = (Stats::default(), Stats::default());
-                direct_light_strata(&scene, &mut strata, &visibility, shadow_walls, None, &mut a);
+                direct_light_strata(&scene, &mut strata, &visibility, shadow_walls, &mut a);
                 let fast = strata.values.clone();
-                direct_light_points(&scene, &mut strata, &visibility, None, &mut b);
+                direct_light_points(&scene, &mut strata, &visibility, &mut b);
                 assert_eq!(fast, strata.values);
                 assert_eq!(a.work.shadow_rays, b.work.shadow_rays);
             }
