@@ -18,14 +18,15 @@
 //!   missed), and a little evenly.
 //!
 //! A receiver `x` in the cell takes every always-light (a shadow ray each,
-//! as before) and, with probability `P(l | x)`, one more light `l`, its
-//! contribution divided by `P(l | x)`; with the remaining probability,
-//! none. `P(l | x)` is [`SEEN`] times `l`'s part of the seen lights'
-//! weights at `x` (fraction through, times intensity, times falloff at
-//! `x`: `LightShape::reach`), plus [`DEFENSIVE`] times its defensive
-//! share. Every light but the always-lights has a defensive share above
-//! zero, so the estimator is unbiased whatever the probes missed (light
-//! through a door that no probe saw); the probes decide only its noise.
+//! as without the table) and, with probability `P(l | x)`, one more light
+//! `l`, its contribution divided by `P(l | x)`; with the remaining
+//! probability, none. `P(l | x)` is [`SEEN`] times `l`'s part of the seen
+//! lights' weights at `x` (fraction through, times intensity, times
+//! falloff at `x`: `LightShape::reach`), plus [`DEFENSIVE`] times its
+//! defensive share. Every light but the always-lights has a defensive
+//! share above zero, so the estimator is unbiased whatever the probes
+//! missed (light through a door that no probe saw); the probes decide
+//! only its noise.
 //! A choice costs a pass over the cell's seen lights and a binary search
 //! over its defensive table: a shadow ray or two per point, whatever the
 //! number of lights.
