@@ -140,7 +140,7 @@ impl Plan {
                 "no light in the scene".into()
             } else if light_table {
                 format!(
-                    "{}: at each point, the up to {} brightest there (estimated per cell of the plan) and one of the rest at random",
+                    "{}: at each point, the up to {} brightest there (estimated per cell of the plan), and at most one more drawn at random by what each brings",
                     n(lights, "light"),
                     crate::lights::choice::ALWAYS
                 )
