@@ -62,7 +62,8 @@ pub(crate) struct ConvergeArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// A reference image (linear EXR of the same size) instead of
-    /// rendering one.
+    /// rendering one. Its own noise is read from the `.noise.txt` file
+    /// beside it, as `converge` saves one, and taken as 0 without it.
     #[arg(long)]
     reference: Option<PathBuf>,
     /// Samples per pixel of the rendered reference (path tracing, memo
@@ -156,9 +157,18 @@ pub(crate) fn converge(
                     image.height
                 )));
             }
+            // Its own noise, where a `converge` run saved it beside it;
+            // otherwise taken as none.
+            let noise = read_noise(&path.with_extension("noise.txt"));
             let info = ReferenceInfo {
-                description: format!("`{}` (given)", path.display()),
-                relative_noise: 0.0,
+                description: match noise {
+                    Some(_) => format!("`{}` (given, with its noise)", path.display()),
+                    None => format!(
+                        "`{}` (given, its noise unknown: taken as 0)",
+                        path.display()
+                    ),
+                },
+                relative_noise: noise.unwrap_or(0.0),
             };
             (image, info)
         }

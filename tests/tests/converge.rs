@@ -121,4 +121,33 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
         std::fs::metadata(&reference).unwrap().modified().unwrap(),
         before
     );
+
+    // The same reference given with `--reference` keeps its noise, read
+    // from the file saved beside it, and the errors lose it as before.
+    let given = dir.path().join("given");
+    let run = flatray(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--out",
+        given.to_str().unwrap(),
+        "--reference",
+        reference.to_str().unwrap(),
+        "--max-spp",
+        "2",
+        "--configs",
+        "path",
+        "--quiet",
+    ]);
+    assert_eq!(run.code, 0, "{run:?}");
+    let noise_line = |folder: &std::path::Path| {
+        std::fs::read_to_string(folder.join("convergence.md"))
+            .unwrap()
+            .lines()
+            .find(|l| l.starts_with("Reference:"))
+            .and_then(|l| l.split("relative RMSE is ").nth(1))
+            .map(|rest| rest.split(' ').next().unwrap_or_default().to_string())
+            .unwrap()
+    };
+    assert_eq!(noise_line(&given), noise_line(&out));
+    assert_ne!(noise_line(&given), "0.000");
 }
