@@ -248,10 +248,7 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
         .floor_ray_culling
         .then(|| MirrorArcs::build(scene, options.scale))
         .flatten();
-    let light_table = plan
-        .light_table
-        .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
-        .flatten();
+    let light_table = light_table_for(scene, options, &plan);
     if let Some(table) = &light_table {
         memo_stats.work.light_table_bytes += table.memory_bytes() as u64;
         memo_stats.work.light_table_rays += table.probe_rays;
@@ -433,6 +430,13 @@ fn pixel_fn() -> PixelFn {
     render_pixel
 }
 
+/// The light table of a render, where its plan chooses lights by one.
+fn light_table_for(scene: &Scene, options: &RenderOptions, plan: &Plan) -> Option<LightTable> {
+    plan.light_table
+        .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
+        .flatten()
+}
+
 /// The switches of a path sample, from the plan.
 fn trace_for<'a>(
     scene: &'a Scene,
@@ -496,22 +500,35 @@ fn render_pixel(
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
         let visibility = &mut batch.visibility;
-        visibility.clear();
         match coherence {
-            Some(coherence) => visibility.extend(coherence.pixel(x, y).iter().enumerate().map(
-                |(light, state)| match state {
-                    Coherence::Varies => Visibility::Trace,
-                    Coherence::Same => {
-                        stats.work.floor_shared_visibility += 1;
-                        Visibility::Known(centre_transmittance(scene, light, centre, stats))
-                    }
-                    Coherence::Clear => {
-                        stats.work.floor_shared_visibility += 1;
-                        Visibility::Known(Rgb::ONE)
-                    }
-                },
-            )),
-            None => visibility.resize(scene.lights.len(), Visibility::of(trace.shadows)),
+            Some(coherence) => {
+                visibility.clear();
+                visibility.extend(
+                    coherence
+                        .pixel(x, y)
+                        .iter()
+                        .enumerate()
+                        .map(|(light, state)| match state {
+                            Coherence::Varies => Visibility::Trace,
+                            Coherence::Same => {
+                                stats.work.floor_shared_visibility += 1;
+                                Visibility::Known(centre_transmittance(scene, light, centre, stats))
+                            }
+                            Coherence::Clear => {
+                                stats.work.floor_shared_visibility += 1;
+                                Visibility::Known(Rgb::ONE)
+                            }
+                        }),
+                )
+            }
+            // The same for every pixel of the render: filled once per
+            // batch, not per pixel (a pass over every light).
+            None => {
+                if visibility.len() != scene.lights.len() {
+                    visibility.clear();
+                    visibility.resize(scene.lights.len(), Visibility::of(trace.shadows));
+                }
+            }
         }
         // The strata's points, and the number each line light draws, in
         // the order `direct_light_with` draws them; then the lights one
@@ -973,7 +990,8 @@ impl BlockCulling {
 /// no allocation per pixel.
 #[derive(Default)]
 struct Batch {
-    /// Each light's visibility over the pixel.
+    /// Each light's visibility over the pixel (without coherence masks,
+    /// the same for every pixel, and filled once).
     visibility: Vec<Visibility>,
     /// The floor memo's strata of one pixel.
     floor: Strata,
@@ -1003,10 +1021,7 @@ pub fn pixel_sample(
     };
     let plan = Plan::new(scene, &options);
     // The render's own table, built again: the same from the same seed.
-    let light_table = plan
-        .light_table
-        .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
-        .flatten();
+    let light_table = light_table_for(scene, &options, &plan);
     let context = Context {
         options: &options,
         size,
