@@ -195,6 +195,11 @@ impl WallMemo {
         self.total.len() * self.lights
     }
 
+    /// Values held: one per (span, side, bin), whatever the lights.
+    pub fn values(&self) -> usize {
+        self.total.len()
+    }
+
     /// Bytes held by the tables: per bin, not per light.
     pub fn memory_bytes(&self) -> usize {
         self.total.len() * std::mem::size_of::<Value>()

@@ -216,7 +216,9 @@ pub(crate) fn converge(
                 config: config.name().to_string(),
                 samples,
                 seconds,
-                rays: rendered.stats.rays() + rendered.stats.work.memo_fill_rays,
+                rays: rendered.stats.rays()
+                    + rendered.stats.work.memo_fill_rays
+                    + rendered.stats.work.onward_rays,
                 rmse: error.rmse,
                 raw_relative_rmse: raw,
                 relative_rmse,

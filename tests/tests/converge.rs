@@ -83,8 +83,10 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
             "path" | "original" => {
                 assert!((-0.8..=-0.45).contains(&slope), "{config}: slope {slope}")
             }
-            // The memo's bias may flatten it a little.
-            "path+memo" => assert!((-0.8..=-0.35).contains(&slope), "{config}: slope {slope}"),
+            // The memo's bias may flatten it a little; its onward part
+            // gathers more stratified directions per wall bin as the
+            // samples grow, which steepens it over this ladder.
+            "path+memo" => assert!((-1.0..=-0.35).contains(&slope), "{config}: slope {slope}"),
             // Independent photons: samples^(-1/2); the light tracer's
             // different estimate of the pixel holding the point light may
             // flatten it a little.

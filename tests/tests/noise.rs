@@ -1,8 +1,8 @@
 //! Every render estimates its own noise from two halves of its samples.
 //! The estimate is checked against the true error: the relative RMS
 //! difference from a reference rendered with 64 times the samples (whose
-//! own noise, estimated the same way, is taken out in quadrature), on two
-//! scenes and both integrators. Fixed seeds.
+//! own noise, estimated the same way, is taken out in quadrature), on
+//! three scenes and both integrators. Fixed seeds.
 
 use flatray_tests::{render, workspace_root};
 use flatray_tracer::metrics::compare;
@@ -39,6 +39,8 @@ fn the_noise_estimate_agrees_with_the_true_error() {
     for (name, scale, samples, integrator) in [
         ("room", 0.2, 64, Integrator::Path),
         ("first-flat", 0.25, 64, Integrator::Path),
+        // Three bounces, many lights: the onward memo and the light table.
+        ("apartment", 0.25, 16, Integrator::Path),
         ("room", 0.2, 2, Integrator::Light),
         ("first-flat", 0.25, 2, Integrator::Light),
     ] {

@@ -33,6 +33,7 @@ mod lights;
 mod memo;
 pub mod metrics;
 mod mirror;
+mod onward;
 pub mod optics;
 mod path;
 pub mod plan;

@@ -26,6 +26,11 @@ pub struct MemoOptions {
     /// Stratified points per line or circle light for a wall bin's
     /// irradiance.
     pub line_samples: u32,
+    /// Whether, with the memo on and more than one bounce, paths end at
+    /// their first diffuse wall and read the rest of their light from the
+    /// onward memo (`onward.rs`), rather than being followed from wall to
+    /// wall.
+    pub onward: bool,
 }
 
 impl Default for MemoOptions {
@@ -35,6 +40,7 @@ impl Default for MemoOptions {
             bin_length: 1.0,
             floor_samples: 1,
             line_samples: 64,
+            onward: true,
         }
     }
 }
@@ -102,28 +108,7 @@ pub(crate) fn build_wall_memo(
     stats: &mut Stats,
 ) -> WallMemo {
     let lengths = scene.diffuse_lengths();
-    // Where other walls meet or cross each diffuse wall: bins and
-    // interpolation stop there.
-    let junctions: Vec<Vec<f64>> = scene
-        .walls
-        .iter()
-        .enumerate()
-        .map(|(index, w)| {
-            let mut cuts = Vec::new();
-            if matches!(w.material, Material::Diffuse { .. }) {
-                let along = Ray::new(w.segment.a, w.segment.edge());
-                scene
-                    .segments
-                    .for_each_crossing(&along, 1.0, Skip::one(index as u32), |_, hit| {
-                        if hit.t > 0.0 {
-                            cuts.push(hit.t);
-                        }
-                        true
-                    });
-            }
-            cuts
-        })
-        .collect();
+    let junctions = junctions(scene);
     let bin_length = options.bin_length / scale;
     let rays = AtomicU64::new(0);
     let line_samples = options.line_samples.max(1);
@@ -189,7 +174,32 @@ pub(crate) fn build_wall_memo(
     memo
 }
 
-fn to_value(v: Rgb) -> Value {
+/// Where other walls meet or cross each diffuse wall, as positions along
+/// it: the memo's bins and its interpolation stop there.
+pub(crate) fn junctions(scene: &Scene) -> Vec<Vec<f64>> {
+    scene
+        .walls
+        .iter()
+        .enumerate()
+        .map(|(index, w)| {
+            let mut cuts = Vec::new();
+            if matches!(w.material, Material::Diffuse { .. }) {
+                let along = Ray::new(w.segment.a, w.segment.edge());
+                scene
+                    .segments
+                    .for_each_crossing(&along, 1.0, Skip::one(index as u32), |_, hit| {
+                        if hit.t > 0.0 {
+                            cuts.push(hit.t);
+                        }
+                        true
+                    });
+            }
+            cuts
+        })
+        .collect()
+}
+
+pub(crate) fn to_value(v: Rgb) -> Value {
     [v.x as f32, v.y as f32, v.z as f32]
 }
 

@@ -12,6 +12,7 @@ use crate::glass::{GlassState, absorption, transmit};
 use crate::light::{Receiver, direct_light};
 use crate::lights::choice::LightTable;
 use crate::lights::line_emitted;
+use crate::onward::Onward;
 use crate::sampling::{Stream, circle_in_arc};
 use crate::scene::{Light, LightShape, Scene};
 use crate::{Integrator, Rgb, Stats};
@@ -30,6 +31,7 @@ pub(crate) fn path_sample(
     trace: &Trace,
     p: DVec2,
     arc: usize,
+    sample: u32,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
@@ -41,7 +43,7 @@ pub(crate) fn path_sample(
         .scene
         .segments
         .closest_hit(&ray, f64::INFINITY, Skip::NONE);
-    path_finish(trace, begun.fluence, ray, hit, None, stream, stats)
+    path_finish(trace, begun.fluence, ray, hit, None, sample, stream, stats)
 }
 
 /// A path sample up to its first ray: the floor's direct light (when the
@@ -105,6 +107,10 @@ pub(crate) fn path_begin(
 /// far inside the lists' margin), so the answers are the same. A ray off a
 /// mirror likewise tests only its mirror piece's list for its direction
 /// (`Trace::mirror_arcs`), as do those that continue it.
+///
+/// `sample` is the pixel sample's index: it picks which half of the
+/// onward memo the path reads (`onward.rs`).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn path_finish(
     trace: &Trace,
@@ -112,6 +118,60 @@ pub(crate) fn path_finish(
     ray: Ray,
     first_hit: Option<(u32, Hit)>,
     line_walls: Option<&[u32]>,
+    sample: u32,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    if first_hit.is_none() && !trace.force {
+        // Escaped at once, as the loop below would find, with nothing met
+        // on the way (emission is looked for only after a mirror).
+        stats.work.bounce_rays += 1;
+        stats.physics.paths_escaped += 1;
+        return fluence;
+    }
+    let leg = Leg {
+        throughput: Rgb::splat(TAU),
+        bounce: 0,
+        skip: Skip::NONE,
+    };
+    let onward = trace.onward.map(|onward| onward.for_sample(sample));
+    follow(
+        trace,
+        fluence,
+        ray,
+        Some(first_hit),
+        line_walls,
+        leg,
+        onward,
+        stream,
+        stats,
+    )
+}
+
+/// Where a path's loop takes over: the throughput so far (`2pi` from the
+/// floor), the reflections counted so far, and the wall the ray leaves.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Leg {
+    pub throughput: Rgb,
+    pub bounce: u32,
+    pub skip: Skip,
+}
+
+/// The path loop from `ray` on: `first_hit`, where known, is where `ray`
+/// meets the walls. With `onward` (the onward memo's tables of one half,
+/// `onward[m - 1]` for `m` reflections left), the path ends at its first
+/// diffuse wall that leaves it a reflection, reading there what the rest
+/// of the path would bring on average.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn follow(
+    trace: &Trace,
+    fluence: Rgb,
+    ray: Ray,
+    first_hit: Option<Option<(u32, Hit)>>,
+    line_walls: Option<&[u32]>,
+    leg: Leg,
+    onward: Option<&[WallMemo]>,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
@@ -126,19 +186,14 @@ pub(crate) fn path_finish(
         light_table,
         ..
     } = *trace;
-    if first_hit.is_none() && !force {
-        // Escaped at once, as the loop below would find, with nothing met
-        // on the way (emission is looked for only after a mirror).
-        stats.work.bounce_rays += 1;
-        stats.physics.paths_escaped += 1;
-        return fluence;
-    }
     let mut fluence = fluence;
     let mut ray = ray;
-    let mut first_hit = Some(first_hit);
-    let mut throughput = Rgb::splat(TAU);
-    let mut skip = Skip::NONE;
-    let mut bounce = 0;
+    let mut first_hit = first_hit;
+    let Leg {
+        mut throughput,
+        mut skip,
+        mut bounce,
+    } = leg;
     // After a mirror the path can carry light from a line light that no
     // shadow ray found, so emission met by the ray then counts.
     let mut after_mirror = false;
@@ -238,6 +293,17 @@ pub(crate) fn path_finish(
             fluence += throughput * rho * 0.5 * irradiance;
             if bounce == bounces {
                 stats.physics.paths_bounce_limit += 1;
+                break;
+            }
+            // The rest of the path, on average over its directions from
+            // this wall: the onward memo, where it holds that many
+            // reflections left.
+            if let Some(table) =
+                onward.and_then(|tables| tables.get((bounces - bounce - 1) as usize))
+            {
+                stats.work.onward_lookups += 1;
+                stats.physics.paths_onward += 1;
+                fluence += throughput * rho * memo_irradiance(table, index, side, h.u);
                 break;
             }
         }
@@ -356,6 +422,9 @@ pub(crate) struct Trace<'a> {
     /// The lights each receiver's next-event estimation takes, where the
     /// plan chooses them (`lights::choice`); `None`: every light.
     pub light_table: Option<&'a LightTable>,
+    /// The onward memo: what the rest of a path brings from a diffuse
+    /// wall, read instead of following it (`onward.rs`).
+    pub onward: Option<Onward<'a>>,
 }
 
 /// The memo's irradiance on side `side` of wall `index` at `u`.

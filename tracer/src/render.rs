@@ -17,6 +17,7 @@ use crate::light::{
 use crate::lights::choice::LightTable;
 use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
 use crate::mirror::MirrorArcs;
+use crate::onward::Onward;
 use crate::path::{MirrorWalls, Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
 use crate::sampling::{ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc};
@@ -265,20 +266,45 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
     } else {
         None
     };
+    let trace = trace_for(
+        scene,
+        options,
+        &plan,
+        (memo.as_ref(), caustics.as_ref()),
+        mirror_arcs.as_ref().map(|arcs| arcs as &dyn MirrorWalls),
+        light_table.as_ref(),
+    );
+    // The rest of a path from each diffuse wall, gathered after the
+    // direct light and the caustic pass that its paths read.
+    let onward = (plan.onward && trace.memo.is_some()).then(|| {
+        let values = memo.as_ref().map_or(0, |m| m.values() as u64);
+        let gathers = crate::onward::gathers(
+            options.samples,
+            width as u64 * height as u64,
+            values,
+            options.bounces.saturating_sub(1),
+        );
+        crate::onward::build_onward(
+            &trace,
+            &options.memo,
+            options.scale,
+            gathers,
+            options.seed,
+            &mut memo_stats,
+        )
+    });
     let context = Context {
         options,
         size: (width, height),
         floor_memo: plan.floor_memo,
         coherence: coherence.as_ref(),
         culling: plan.floor_ray_culling,
-        trace: trace_for(
-            scene,
-            options,
-            &plan,
-            (memo.as_ref(), caustics.as_ref()),
-            mirror_arcs.as_ref().map(|arcs| arcs as &dyn MirrorWalls),
-            light_table.as_ref(),
-        ),
+        trace: Trace {
+            onward: onward
+                .as_ref()
+                .map(|memo| Onward::of(memo, options.samples)),
+            ..trace
+        },
         one_bounce_memo: memo
             .as_ref()
             .filter(|_| plan.indirect && options.bounces == 1 && options.takes(FastPath::Shortcut)),
@@ -461,6 +487,7 @@ fn trace_for<'a>(
         caustics,
         mirror_arcs,
         light_table,
+        onward: None,
     }
 }
 
@@ -700,7 +727,7 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
     stats.physics.camera_samples += 1;
     let arc = sample_arc(pixel.arc_offset, sample);
     if context.one_bounce_memo.is_none() {
-        return path_sample(trace, p, arc, &mut stream, stats);
+        return path_sample(trace, p, arc, sample, &mut stream, stats);
     }
     // `path_sample`, with the one-bounce shortcut tried first.
     let begun = path_begin(trace, p, arc, None, &mut stream, stats);
@@ -708,7 +735,15 @@ fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats)
         return begun.fluence;
     };
     let hit = scene.segments.closest_hit(&ray, f64::INFINITY, Skip::NONE);
-    finish(context, begun.fluence, ray, hit, None, &mut stream, stats)
+    finish(
+        context,
+        begun.fluence,
+        ray,
+        hit,
+        (None, sample),
+        &mut stream,
+        stats,
+    )
 }
 
 /// [`path_finish`], after the one-bounce shortcut where the render takes
@@ -719,7 +754,7 @@ fn finish(
     fluence: Rgb,
     ray: Ray,
     hit: Option<(u32, Hit)>,
-    line_walls: Option<&[u32]>,
+    (line_walls, sample): (Option<&[u32]>, u32),
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
@@ -728,7 +763,16 @@ fn finish(
     {
         return value;
     }
-    path_finish(&context.trace, fluence, ray, hit, line_walls, stream, stats)
+    path_finish(
+        &context.trace,
+        fluence,
+        ray,
+        hit,
+        line_walls,
+        sample,
+        stream,
+        stats,
+    )
 }
 
 /// The order in which a pixel's samples are taken and summed, whether
@@ -809,7 +853,7 @@ fn culled_samples<const CHECKED: bool>(
                         begun.fluence,
                         ray,
                         hit,
-                        Some(walls),
+                        (Some(walls), sample),
                         &mut stream,
                         stats,
                     )
@@ -937,6 +981,7 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
                 rays.ray(k),
                 hits.hit(k),
                 Some(walls),
+                sample,
                 stream,
                 stats,
             ),

@@ -32,6 +32,9 @@ pub struct Physics {
     pub paths_escaped: u64,
     /// Paths stopped by the bounce limit.
     pub paths_bounce_limit: u64,
+    /// Paths that read the rest of their light from the onward memo at a
+    /// diffuse wall, and stopped there.
+    pub paths_onward: u64,
     /// Paths whose throughput became exactly zero.
     pub paths_absorbed: u64,
     /// Reflections off mirrors.
@@ -90,6 +93,12 @@ pub struct Work {
     /// (not in `shadow_rays`).
     pub light_table_bytes: u64,
     pub light_table_rays: u64,
+    /// Onward-memo reads, each replacing the rest of a path.
+    pub onward_lookups: u64,
+    /// Rays cast to fill the onward memo (not in `bounce_rays`), and the
+    /// bytes it holds (a part of `memo_bytes`).
+    pub onward_rays: u64,
+    pub onward_bytes: u64,
 }
 
 /// A render's estimate of its own error, from the samples themselves: each
@@ -214,6 +223,7 @@ impl Physics {
         self.paths_to_walls += other.paths_to_walls;
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
+        self.paths_onward += other.paths_onward;
         self.paths_absorbed += other.paths_absorbed;
         self.mirror_reflections += other.mirror_reflections;
         self.transparent_passes += other.transparent_passes;
@@ -244,6 +254,9 @@ impl Work {
         self.chosen_lights += other.chosen_lights;
         self.light_table_bytes += other.light_table_bytes;
         self.light_table_rays += other.light_table_rays;
+        self.onward_lookups += other.onward_lookups;
+        self.onward_rays += other.onward_rays;
+        self.onward_bytes += other.onward_bytes;
     }
 }
 
@@ -275,6 +288,9 @@ impl fmt::Display for Physics {
         if p.paths_to_walls > 0 {
             writeln!(f, "  at a diffuse wall {:>13}", p.paths_to_walls)?;
         }
+        if p.paths_onward > 0 {
+            writeln!(f, "  onward memo      {:>14}", p.paths_onward)?;
+        }
         writeln!(f, "events")?;
         writeln!(f, "  mirror bounces   {:>14}", p.mirror_reflections)?;
         writeln!(f, "  transparent      {:>14}", p.transparent_passes)?;
@@ -302,6 +318,9 @@ impl fmt::Display for StatsText<'_> {
         writeln!(f, "work")?;
         writeln!(f, "  shadow rays      {:>14}", w.shadow_rays)?;
         writeln!(f, "  bounce rays      {:>14}", w.bounce_rays)?;
+        if w.onward_rays > 0 {
+            writeln!(f, "  onward fill rays {:>14}", w.onward_rays)?;
+        }
         if verbose {
             writeln!(f, "  culled rays      {:>14}", w.culled_rays)?;
             writeln!(f, "  walls tested     {:>14}", w.culled_walls_tested)?;
@@ -320,6 +339,8 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
             writeln!(f, "  chosen lights    {:>14}", w.chosen_lights)?;
             writeln!(f, "  light table rays {:>14}", w.light_table_rays)?;
+            writeln!(f, "  onward hits      {:>14}", w.onward_lookups)?;
+            writeln!(f, "  onward bytes     {:>14}", w.onward_bytes)?;
             write!(f, "  light table bytes {:>13}", w.light_table_bytes)?;
         }
         Ok(())

@@ -115,6 +115,13 @@ pub struct Plan {
     pub caustics: bool,
     /// The wall half of the memo.
     pub wall_memo: bool,
+    /// The onward memo: the rest of a path, read at its first diffuse
+    /// wall (`onward.rs`).
+    pub onward: bool,
+    /// Whether the integrator is the original project's.
+    pub original: bool,
+    /// Whether the render options allow the onward memo.
+    pub onward_enabled: bool,
     /// The floor half of the memo: direct light once per pixel.
     pub floor_memo: bool,
     /// The floor memo's strata share one shadow ray per light where no
@@ -174,15 +181,29 @@ impl Plan {
             && (force || (diffuse > 0 && reflectors > 0));
         // Counted before anything is allocated; over its budget the memo
         // is off (the same image, estimated by shadow rays).
-        let wall_memo_fits = !wall_memo_wanted
-            || crate::memo::wall_memo_bytes(
-                scene,
-                &options.memo,
-                options.scale,
-                crate::memo::WALL_MEMO_BUDGET,
-            )
-            .is_some();
+        let wall_memo_bytes = wall_memo_wanted
+            .then(|| {
+                crate::memo::wall_memo_bytes(
+                    scene,
+                    &options.memo,
+                    options.scale,
+                    crate::memo::WALL_MEMO_BUDGET,
+                )
+            })
+            .flatten();
+        let wall_memo_fits = !wall_memo_wanted || wall_memo_bytes.is_some();
         let wall_memo = wall_memo_wanted && wall_memo_fits;
+        // The rest of a path read at its first diffuse wall: where paths
+        // take more than one reflection, through no glass body (whose
+        // inside a wall's bins cannot tell), within its budget.
+        let onward = wall_memo
+            && options.memo.onward
+            && options.integrator == Integrator::Path
+            && options.bounces >= 2
+            && glass_edges == 0
+            && wall_memo_bytes.is_some_and(|bytes| {
+                crate::onward::onward_bytes(bytes, options.bounces) <= crate::onward::ONWARD_BUDGET
+            });
         // The reference never changes how the floor's direct light is
         // estimated: that would change the image.
         let floor_memo =
@@ -232,6 +253,9 @@ impl Plan {
             mirror_emission,
             caustics,
             wall_memo,
+            onward,
+            original: options.integrator == Integrator::Original,
+            onward_enabled: options.memo.onward,
             floor_memo,
             floor_coherence,
             floor_ray_culling,

@@ -73,6 +73,9 @@ impl Plan {
             mirror_emission,
             caustics,
             wall_memo,
+            onward,
+            original,
+            onward_enabled,
             floor_memo,
             floor_coherence,
             floor_ray_culling,
@@ -238,6 +241,38 @@ impl Plan {
                 format!(
                     "{} binned every {} pixel",
                     n(diffuse, "diffuse wall"),
+                    bin_length
+                )
+            },
+        );
+        add(
+            "cache: light between walls",
+            onward,
+            if tracing_light {
+                "light tracing does not read it".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else if bounces < 2 {
+                "one bounce: no light goes on from a wall".into()
+            } else if !memo_enabled {
+                "the cache is switched off (--cache off)".into()
+            } else if !wall_memo {
+                "no wall cache".into()
+            } else if original {
+                "the original estimator follows its paths".into()
+            } else if !onward_enabled {
+                "switched off in the render options: paths are followed".into()
+            } else if glass_edges > 0 {
+                "glass in the scene: paths are followed through it".into()
+            } else if !onward {
+                format!(
+                    "its tables would take more than its budget of {} MiB: paths are followed",
+                    crate::onward::ONWARD_BUDGET >> 20
+                )
+            } else {
+                format!(
+                    "what the rest of a path brings from each diffuse wall (up to {} more), binned every {} pixel: paths end at their first diffuse wall",
+                    n(bounces as usize - 1, "reflection"),
                     bin_length
                 )
             },

@@ -1,0 +1,201 @@
+//! The onward memo: what the rest of a path brings from a diffuse wall,
+//! binned along the walls as the wall memo bins direct light.
+//!
+//! A path that reaches a diffuse wall with `m` reflections left adds the
+//! wall's direct light (next-event estimation, `(rho / 2) E`) and would go
+//! on in a cosine-weighted direction with its throughput times `rho`.
+//! What it goes on to bring, on average over that direction, is
+//!
+//! ```text
+//! C_m(y) = E_omega[ value of the path from y in direction omega,
+//!                   with m reflections left ],
+//! ```
+//!
+//! a function of the wall, the side and the position `y` alone. The memo
+//! holds `C_m` for `m = 1 .. D - 1`, per (wall, side, bin), filled order
+//! by order: a gather path for `C_m` is the path loop itself from the
+//! bin's centre (mirrors, panes, line lights after a mirror, the caustic
+//! pass's bins, the direct-light memo), ending at its first diffuse wall
+//! with a reflection left by reading `C` one order lower there. A path
+//! from the floor then ends at its first diffuse wall, adding
+//! `rho C_m` there: one ray per sample where the path loop would cast
+//! up to `D`.
+//!
+//! Each bin's gathers take `K` cosine-weighted directions stratified over
+//! the half circle, `K` growing with the render's samples per pixel, so
+//! the estimate converges as the samples grow (to the bin average, the
+//! wall memo's bias). The memo is kept twice, from independent gathers:
+//! the first half of a pixel's samples reads one copy and the second half
+//! the other, so the noise estimate from the two halves includes the
+//! memo's own error.
+
+use flatray_cache::WallMemo;
+use flatray_geometry::{Ray, Side, Skip};
+
+use crate::memo::{MemoOptions, to_value};
+use crate::path::{Leg, Trace, follow};
+use crate::sampling::{Stream, cosine_half_circle};
+use crate::scene::Material;
+use crate::{Rgb, Stats};
+
+/// Bytes the onward memo may take (both copies, every order): over it,
+/// the plan leaves paths to the path loop.
+pub const ONWARD_BUDGET: u64 = 256 << 20;
+
+/// The fewest gather directions per bin, order and copy.
+pub const MIN_GATHERS: u32 = 8;
+
+/// The stream sample numbers of gathers start here, apart from every
+/// pixel sample's.
+const ONWARD_STREAM: u64 = 1 << 43;
+
+/// Both copies of the onward memo: `copies[h][m - 1]` holds `C_m`.
+#[derive(Debug, Default)]
+pub(crate) struct OnwardMemo {
+    copies: [Vec<WallMemo>; 2],
+}
+
+/// What a path reads: one copy per half of a pixel's samples.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Onward<'a> {
+    copies: [&'a [WallMemo]; 2],
+    /// Samples below this read the first copy (`Sums::half` in the render
+    /// loop: the noise estimate's first half).
+    half: u32,
+}
+
+impl<'a> Onward<'a> {
+    /// The memo as a render of `samples` per pixel reads it.
+    pub fn of(memo: &'a OnwardMemo, samples: u32) -> Onward<'a> {
+        Onward {
+            copies: [&memo.copies[0], &memo.copies[1]],
+            half: samples / 2,
+        }
+    }
+
+    /// The tables that sample `sample` reads: `[m - 1]` for `C_m`.
+    #[inline(always)]
+    pub fn for_sample(self, sample: u32) -> &'a [WallMemo] {
+        self.copies[(sample >= self.half) as usize]
+    }
+}
+
+/// Gather directions per bin, order and copy for a render of `samples`
+/// per pixel over `pixels` pixels, with `values` (wall, side, bin) values
+/// per table and `orders` orders: as many as the samples (at least
+/// [`MIN_GATHERS`]), but all gathers together at most half as many paths
+/// as the pixels' samples (and at least one per bin).
+pub(crate) fn gathers(samples: u32, pixels: u64, values: u64, orders: u32) -> u32 {
+    let wanted = samples.max(MIN_GATHERS) as u64;
+    let tables = 2 * orders as u64 * values.max(1);
+    let cap = (pixels.saturating_mul(samples as u64) / 2) / tables;
+    wanted.min(cap).max(1) as u32
+}
+
+/// The bytes of the onward memo for `bounces` reflections, given the
+/// wall memo's: both copies of `bounces - 1` tables.
+pub(crate) fn onward_bytes(wall_memo_bytes: u64, bounces: u32) -> u64 {
+    wall_memo_bytes.saturating_mul(2 * bounces.saturating_sub(1) as u64)
+}
+
+/// Fills the onward memo for the paths `trace` describes (its wall memo
+/// set, its `onward` unset), on the wall memo's bins, with `gathers`
+/// directions per bin.
+pub(crate) fn build_onward(
+    trace: &Trace,
+    options: &MemoOptions,
+    scale: f64,
+    gathers: u32,
+    seed: u64,
+    stats: &mut Stats,
+) -> OnwardMemo {
+    let scene = trace.scene;
+    let lengths = scene.diffuse_lengths();
+    let junctions = crate::memo::junctions(scene);
+    let bin_length = options.bin_length / scale;
+    let bounces = trace.bounces;
+    let gathers = gathers.max(1);
+    let mut copies: [Vec<WallMemo>; 2] = [Vec::new(), Vec::new()];
+    let mut rays = 0u64;
+    for (copy, tables) in copies.iter_mut().enumerate() {
+        for m in 1..bounces {
+            let lower: &[WallMemo] = tables;
+            let gather_trace = Trace {
+                onward: Some(Onward {
+                    copies: [lower, lower],
+                    half: 0,
+                }),
+                floor_direct: false,
+                ..*trace
+            };
+            let counted = std::sync::atomic::AtomicU64::new(0);
+            let table = WallMemo::build(
+                &lengths,
+                &junctions,
+                bin_length,
+                gathers as usize,
+                |wall, side, u, k| {
+                    let w = &scene.walls[wall as usize];
+                    if !matches!(w.material, Material::Diffuse { .. }) {
+                        return [0.0; 3];
+                    }
+                    let side_of = if side == 0 {
+                        Side::Positive
+                    } else {
+                        Side::Negative
+                    };
+                    let key = gather_key(wall, side, u, m, copy);
+                    let mut stream = Stream::new(seed, key, ONWARD_STREAM + k as u64);
+                    // Stratum k of K over the half circle's cosine measure.
+                    let fraction = (k as f64 + stream.uniform()) / gathers as f64;
+                    let x = w.segment.point_at(u);
+                    let dir = cosine_half_circle(w.segment.normal_on(side_of), fraction);
+                    let leg = Leg {
+                        throughput: Rgb::ONE,
+                        bounce: bounces - m,
+                        skip: Skip::one(wall),
+                    };
+                    let mut local = Stats::default();
+                    let value = follow(
+                        &gather_trace,
+                        Rgb::ZERO,
+                        Ray::new(x, dir),
+                        None,
+                        None,
+                        leg,
+                        Some(lower),
+                        &mut stream,
+                        &mut local,
+                    );
+                    counted.fetch_add(
+                        local.work.bounce_rays + local.work.shadow_rays,
+                        std::sync::atomic::Ordering::Relaxed,
+                    );
+                    if value.is_finite() {
+                        to_value(value / gathers as f64)
+                    } else {
+                        [0.0; 3]
+                    }
+                },
+            );
+            rays += counted.into_inner();
+            stats.work.onward_bytes += table.memory_bytes() as u64;
+            tables.push(table);
+        }
+    }
+    stats.work.onward_rays += rays;
+    stats.work.memo_bytes += copies
+        .iter()
+        .flatten()
+        .map(|t| t.memory_bytes() as u64)
+        .sum::<u64>();
+    OnwardMemo { copies }
+}
+
+/// The stream index of a bin's gathers: its wall, side, centre, order and
+/// copy, mixed (the stream mixes it again).
+fn gather_key(wall: u32, side: usize, u: f64, order: u32, copy: usize) -> u64 {
+    let tag =
+        ((wall as u64) << 8) | ((order as u64 & 0x3f) << 2) | ((side as u64) << 1) | copy as u64;
+    u.to_bits().rotate_left(23) ^ tag.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+}
