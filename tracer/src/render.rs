@@ -527,7 +527,25 @@ fn render_pixel(
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
         let visibility = &mut batch.visibility;
+        batch.shared.clear();
         match coherence {
+            // With a light table, each point takes a few lights: a shared
+            // transmittance is traced when a point first takes its light.
+            Some(coherence) if trace.light_table.is_some() => {
+                visibility.clear();
+                for state in coherence.pixel(x, y) {
+                    let (vis, shared) = match state {
+                        Coherence::Varies => (Visibility::Trace, false),
+                        Coherence::Same => (Visibility::Trace, true),
+                        Coherence::Clear => {
+                            stats.work.floor_shared_visibility += 1;
+                            (Visibility::Known(Rgb::ONE), false)
+                        }
+                    };
+                    visibility.push(vis);
+                    batch.shared.push(shared);
+                }
+            }
             Some(coherence) => {
                 visibility.clear();
                 visibility.extend(
@@ -578,7 +596,10 @@ fn render_pixel(
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
         match trace.light_table {
-            Some(table) => direct_light_chosen(scene, table, floor, visibility, stats),
+            Some(table) => {
+                let shared = (&mut visibility[..], &mut batch.shared[..], centre);
+                direct_light_chosen(scene, table, floor, shared, stats)
+            }
             None if options.takes(FastPath::StrataLoops) => {
                 direct_light_strata(scene, floor, visibility, shadow_walls, stats)
             }
@@ -1038,6 +1059,9 @@ struct Batch {
     /// Each light's visibility over the pixel (without coherence masks,
     /// the same for every pixel, and filled once).
     visibility: Vec<Visibility>,
+    /// Per light, whether the pixel shares its transmittance and it is
+    /// not yet traced (with a light table and coherence masks).
+    shared: Vec<bool>,
     /// The floor memo's strata of one pixel.
     floor: Strata,
 }

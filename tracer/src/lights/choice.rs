@@ -236,7 +236,7 @@ impl LightTable {
         x: DVec2,
         receiver: Receiver,
         numbers: &[f64; NUMBERS],
-        vis: impl Fn(usize) -> Visibility,
+        mut vis: impl FnMut(usize) -> Visibility,
         stats: &mut Stats,
     ) -> Rgb {
         let cell = self.cell_of(x);

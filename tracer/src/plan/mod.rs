@@ -220,11 +220,10 @@ impl Plan {
                 LightChoice::Every => false,
                 LightChoice::Table => !no_lights,
             };
-        // The masks hold every light's visibility per pixel: a table that
-        // picks a few lights per point needs no such thing.
+        // With a table too: a pixel's points then trace a shared
+        // transmittance once, when one of them first takes that light.
         let floor_coherence = floor_memo
             && shadows
-            && !light_table
             && options.takes(FastPath::Coherence)
             && pairs <= crate::coherence::MAX_PAIRS
             && mask_cells <= crate::coherence::MAX_CELLS;

@@ -305,8 +305,6 @@ impl Plan {
                 "the reference model runs no fast path".into()
             } else if !fast_paths.contains(FastPath::Coherence) {
                 "left out (--without coherence)".into()
-            } else if light_table {
-                "lights are chosen per point, not all tested per pixel".into()
             } else if pairs > crate::coherence::MAX_PAIRS {
                 format!(
                     "{pairs} wall-light pairs, over {}: drawing the shadow edges would cost more than it saves",
