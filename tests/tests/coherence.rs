@@ -150,3 +150,72 @@ fn a_line_light_shares_one_ray_where_walls_cut_it_off_whole() {
     let behind_pane = with.get(54, 70)[0];
     assert!(behind_pane > 0.0 && with.get(20, 40) == [0.0; 3]);
 }
+
+/// Shadow edges stop where they enter an opaque wall's shadow: behind it
+/// the floor is dark on both sides of every edge. A lamp in a small room
+/// of furniture stubs (their edges fan out across the plan), a sun, a
+/// pane, a T-junction, a wall that an edge crosses near its end and one
+/// it crosses at a grazing angle, turned by 23 degrees; beyond the room's
+/// solid walls lies a large dark room. The image is the reference's, bit
+/// for bit, and the dark room shares one ray per pixel: most strata there
+/// cast none of their own.
+#[test]
+fn shadow_edges_stop_inside_an_opaque_walls_shadow() {
+    let turn = |x: f64, y: f64| {
+        let (s, c) = 23f64.to_radians().sin_cos();
+        let (x, y) = (x - 60.0, y - 50.0);
+        (60.0 + c * x - s * y, 50.0 + s * x + c * y)
+    };
+    let wall = |a: (f64, f64), b: (f64, f64), material: &str| {
+        let (a, b) = (turn(a.0, a.1), turn(b.0, b.1));
+        format!(
+            "Wall(a: ({}, {}), b: ({}, {}){material}),",
+            a.0, a.1, b.0, b.1
+        )
+    };
+    let mut walls = String::new();
+    // The lamp's room, closed but for a pane; a T-junction inside.
+    walls += &wall((30.0, 30.0), (60.0, 30.0), "");
+    walls += &wall((60.0, 30.0), (60.0, 70.0), "");
+    walls += &wall((60.0, 70.0), (30.0, 70.0), "");
+    walls += &wall((30.0, 70.0), (30.0, 55.0), "");
+    walls += &wall(
+        (30.0, 55.0),
+        (30.0, 45.0),
+        ", material: Transparent(tint: (0.6, 0.7, 0.8))",
+    );
+    walls += &wall((30.0, 45.0), (30.0, 30.0), "");
+    walls += &wall((45.0, 30.0), (45.0, 38.0), "");
+    // Furniture stubs, each casting two edges through the solid walls.
+    for k in 0..6 {
+        let x = 34.0 + 4.0 * k as f64;
+        walls += &wall((x, 60.0), (x + 1.5, 62.0), "");
+    }
+    // Beyond the right wall: a wall the edges cross near its end, one
+    // they cross at a grazing angle, and the dark room's far wall.
+    walls += &wall((75.0, 20.0), (75.0, 52.0), "");
+    walls += &wall((66.0, 80.0), (110.0, 84.0), "");
+    walls += &wall((110.0, 5.0), (110.0, 95.0), "");
+    let (lx, ly) = turn(40.0, 50.0);
+    let text = format!(
+        "Scene(canvas: (120, 100), floor: Color((0.8, 0.8, 0.8)),
+            walls: [{walls}],
+            lights: [Point(at: ({lx}, {ly}), intensity: 20.0),
+                     Directional(direction: (0.2, 1.0), intensity: 0.3)],
+            render: (samples: 16, bounces: 1))"
+    );
+    let loaded = scene(&text);
+    let options = RenderOptions {
+        samples: 16,
+        ..loaded.options
+    };
+    let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
+    let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
+    assert!(with == without, "the masks changed the image");
+    assert!(
+        with_stats.work.shadow_rays * 10 < without_stats.work.shadow_rays * 3,
+        "{} shadow rays with the masks, {} without",
+        with_stats.work.shadow_rays,
+        without_stats.work.shadow_rays
+    );
+}

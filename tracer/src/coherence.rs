@@ -4,7 +4,9 @@
 //!
 //! Which walls a shadow ray from floor point `x` to a point light crosses
 //! changes only where `x` crosses a wall or a shadow edge: the ray from
-//! the light through a wall's endpoint, beyond it. For a line light, the
+//! the light through a wall's endpoint, beyond it. An edge is drawn only
+//! until it enters an opaque wall's shadow: past that, the floor on both
+//! of its sides is dark ([`umbra_entry`]). For a line light, the
 //! walls that cut the triangle from `x` to the light change only where `x`
 //! crosses a wall, a ray from either end of the light through a wall's
 //! endpoint, or the light's own line. Every such boundary is drawn into a
@@ -27,10 +29,10 @@
 //! pixel traces), since drawing their boundaries would cost more than it
 //! saves.
 
-use flatray_geometry::{DVec2, Ray, Segment, Skip, clip_to_box};
+use flatray_geometry::{DVec2, Ray, Segment, Skip, clip_to_box, cross};
 use rayon::prelude::*;
 
-use crate::scene::{LightShape, Scene};
+use crate::scene::{LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
 /// Above this many (wall, light) pairs every pixel traces its strata.
@@ -121,10 +123,12 @@ impl FloorCoherence {
                             // A wall that all but touches the light leaves
                             // its shadow rays' `t < 1` test to rounding.
                             complete &= !near(at, &wall);
-                            mask.mark(e, e - to_pixels(at), 0.0, f64::INFINITY);
+                            let end_t = umbra_entry(scene, own, end, end - at, step);
+                            mask.mark(e, e - to_pixels(at), 0.0, end_t);
                         }
                         LightShape::Directional { direction } => {
-                            mask.mark(e, direction / step, 0.0, f64::INFINITY);
+                            let end_t = umbra_entry(scene, own, end, direction, step);
+                            mask.mark(e, direction / step, 0.0, end_t);
                         }
                         LightShape::Circle { .. } => {}
                         LightShape::Line { segment, .. } => {
@@ -208,6 +212,53 @@ impl FloorCoherence {
         let first = (y as usize * self.width + x as usize) * self.lights;
         &self.cells[first..first + self.lights]
     }
+}
+
+/// How far, in pixels, a shadow edge's crossing must lie from the ends of
+/// the opaque wall it enters, across the edge (its distance along the
+/// wall times the sine of the angle between them), and how far past the
+/// crossing the edge is still drawn.
+const UMBRA_MARGIN: f64 = 3.0;
+
+/// Where the shadow edge from wall end `from`, along `dir` away from a
+/// point light (or along a sun's direction), enters the inside of an
+/// opaque wall's shadow: the ray parameter of its first crossing of an
+/// opaque wall at least [`UMBRA_MARGIN`] pixels from that wall's ends,
+/// plus that margin; `INFINITY` where it enters none.
+///
+/// Past that crossing, every point within a few pixels of the edge sees
+/// the light through that wall, well inside it: its transmittance is
+/// exactly 0 on both sides of the edge, whatever other walls the edge
+/// separates. So the edge need not be drawn there: a pixel that no drawn
+/// boundary touches is either wholly in the shadow of opaque walls (the
+/// boundaries of that shadow are walls and the drawn parts of edges) or
+/// crosses the same walls everywhere, as before.
+fn umbra_entry(scene: &Scene, own: Option<u32>, from: DVec2, dir: DVec2, step: DVec2) -> f64 {
+    let ray = Ray::new(from, dir);
+    let dir_pixels = dir / step;
+    let dir_length = dir_pixels.length();
+    let mut first = f64::INFINITY;
+    let skip = Skip(own.unwrap_or(u32::MAX), u32::MAX);
+    scene
+        .segments
+        .for_each_crossing(&ray, f64::INFINITY, skip, |index, hit| {
+            let wall = &scene.walls[index as usize];
+            let opaque = matches!(
+                wall.material,
+                Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. }
+            );
+            if opaque && hit.t < first {
+                let edge = wall.segment.edge() / step;
+                let sine = (cross(edge, dir_pixels) / (edge.length() * dir_length)).abs();
+                let inside = hit.u.min(1.0 - hit.u) * edge.length() * sine;
+                if inside >= UMBRA_MARGIN && hit.t * dir_length >= UMBRA_MARGIN {
+                    first = hit.t;
+                }
+            }
+            true
+        });
+    let end = first + UMBRA_MARGIN / dir_length;
+    if end.is_finite() { end } else { f64::INFINITY }
 }
 
 /// Pixels a boundary passes near.
