@@ -72,9 +72,9 @@ enum Command {
         /// Most wall reflections (overrides the scene).
         #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
         bounces: Option<u32>,
-        /// The direct-light memo (overrides the scene).
+        /// The cache of light on walls (overrides the scene).
         #[arg(long, value_enum)]
-        cache: Option<Switch>,
+        cache: Option<CacheArg>,
         /// The caustic pass: points, spots and sun seen in mirrors and
         /// glass (on by default).
         #[arg(long, value_enum)]
@@ -181,9 +181,9 @@ struct RenderArgs {
     /// The estimator (overrides the scene).
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
-    /// The direct-light memo (overrides the scene).
+    /// The cache of light on walls (overrides the scene).
     #[arg(long, value_enum)]
-    cache: Option<Switch>,
+    cache: Option<CacheArg>,
     /// The caustic pass: points, spots and sun seen in mirrors and glass
     /// (on by default; off, their light through mirrors and glass is
     /// missing).
@@ -238,6 +238,45 @@ struct RenderArgs {
 enum Switch {
     On,
     Off,
+}
+
+/// What the cache holds.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum CacheArg {
+    /// Direct light on walls and on each pixel, and, with two or more
+    /// bounces, what light goes on from each wall: paths end at the first
+    /// diffuse wall they meet
+    On,
+    /// No cache: shadow rays at every diffuse wall, paths followed to the
+    /// end
+    Off,
+    /// Direct light only: paths are followed from wall to wall (to see
+    /// what the cache of light going on from walls buys)
+    Direct,
+}
+
+impl CacheArg {
+    /// The memo options that `cache` gives over `base` (the scene's,
+    /// kept where `cache` is `None`).
+    fn memo(cache: Option<CacheArg>, base: MemoOptions) -> MemoOptions {
+        match cache {
+            None => base,
+            Some(CacheArg::On) => MemoOptions {
+                enabled: true,
+                onward: true,
+                ..base
+            },
+            Some(CacheArg::Off) => MemoOptions {
+                enabled: false,
+                ..base
+            },
+            Some(CacheArg::Direct) => MemoOptions {
+                enabled: true,
+                onward: false,
+                ..base
+            },
+        }
+    }
 }
 
 /// A fast path that `--without` leaves out.
@@ -532,7 +571,7 @@ fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
 fn plan(
     scene: &Path,
     bounces: Option<u32>,
-    (cache, caustics, lights): (Option<Switch>, Option<Switch>, LightsArg),
+    (cache, caustics, lights): (Option<CacheArg>, Option<Switch>, LightsArg),
     integrator: Option<IntegratorArg>,
     verbose: bool,
     out: &mut dyn Write,
@@ -541,14 +580,7 @@ fn plan(
     let options = RenderOptions {
         bounces: bounces.unwrap_or(loaded.options.bounces),
         integrator: integrator.map_or(loaded.options.integrator, IntegratorArg::integrator),
-        memo: MemoOptions {
-            enabled: match cache {
-                None => loaded.options.memo.enabled,
-                Some(Switch::On) => true,
-                Some(Switch::Off) => false,
-            },
-            ..loaded.options.memo
-        },
+        memo: CacheArg::memo(cache, loaded.options.memo),
         caustics: !matches!(caustics, Some(Switch::Off)),
         light_choice: lights.choice(),
         ..loaded.options
@@ -600,14 +632,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         integrator: args
             .integrator
             .map_or(loaded.options.integrator, IntegratorArg::integrator),
-        memo: MemoOptions {
-            enabled: match args.cache {
-                None => loaded.options.memo.enabled,
-                Some(Switch::On) => true,
-                Some(Switch::Off) => false,
-            },
-            ..loaded.options.memo
-        },
+        memo: CacheArg::memo(args.cache, loaded.options.memo),
         caustics: !matches!(args.caustics, Some(Switch::Off)),
         reference: args.reference,
         fast_paths: args

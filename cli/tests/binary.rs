@@ -466,3 +466,35 @@ fn internals_need_verbose() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--cache on|off|direct` decide what the plan caches: with two bounces,
+/// light going on from walls only for `on`.
+#[test]
+fn the_cache_flag_says_what_is_cached() {
+    let flat = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/first-flat.ron");
+    let line = |cache: &str| {
+        let output = flatray()
+            .args(["plan", flat.to_str().unwrap(), "--cache", cache])
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{output:?}");
+        let text = String::from_utf8_lossy(&output.stdout).into_owned();
+        let find = |effect: &str| {
+            text.lines()
+                .find(|l| l.contains(effect))
+                .unwrap_or_else(|| panic!("no {effect} in {text}"))
+                .to_string()
+        };
+        (
+            find("cache: wall irradiance"),
+            find("cache: light between walls"),
+        )
+    };
+    let (walls, onward) = line("on");
+    assert!(walls.starts_with("runs") && onward.starts_with("runs"));
+    let (walls, onward) = line("direct");
+    assert!(walls.starts_with("runs") && onward.starts_with("skipped"));
+    assert!(onward.contains("--cache direct"), "{onward}");
+    let (walls, onward) = line("off");
+    assert!(walls.starts_with("skipped") && onward.starts_with("skipped"));
+}

@@ -129,7 +129,7 @@ fn the_plan_runs_the_onward_memo_only_where_it_applies() {
     let (one, why) = runs(options(true, 1));
     assert!(!one && why.contains("one bounce"), "{why}");
     let (off, why) = runs(options(false, 3));
-    assert!(!off && why.contains("switched off"), "{why}");
+    assert!(!off && why.contains("--cache direct"), "{why}");
     let (no_cache, why) = runs(RenderOptions {
         memo: MemoOptions {
             enabled: false,

@@ -261,7 +261,7 @@ impl Plan {
             } else if original {
                 "the original estimator follows its paths".into()
             } else if !onward_enabled {
-                "switched off in the render options: paths are followed".into()
+                "the cache holds direct light only (--cache direct): paths are followed".into()
             } else if glass_edges > 0 {
                 "glass in the scene: paths are followed through it".into()
             } else if !onward {
