@@ -205,8 +205,6 @@ impl WallMemo {
         self.total.len() * std::mem::size_of::<Value>()
             + self.spans.len() * std::mem::size_of::<Span>()
             + self.walls.len() * std::mem::size_of::<SpanRange>()
-            + self.spans.len() * std::mem::size_of::<Span>()
-            + self.walls.len() * std::mem::size_of::<SpanRange>()
     }
 
     /// The value stored in bin `bin` of span `span` of `wall`: the sum
