@@ -113,6 +113,17 @@ impl Side {
             Side::Negative => 1,
         }
     }
+
+    /// The side of index `index` (0: `Positive`, anything else:
+    /// `Negative`), the inverse of [`Side::index`].
+    #[inline]
+    pub fn of_index(index: usize) -> Side {
+        if index == 0 {
+            Side::Positive
+        } else {
+            Side::Negative
+        }
+    }
 }
 
 impl Segment {

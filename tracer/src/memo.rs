@@ -122,11 +122,7 @@ pub(crate) fn build_wall_memo(
             if !matches!(w.material, Material::Diffuse { .. }) {
                 return [0.0; 3];
             }
-            let side = if side == 0 {
-                Side::Positive
-            } else {
-                Side::Negative
-            };
+            let side = Side::of_index(side);
             let x = w.segment.point_at(u);
             let receiver = Receiver {
                 normal: Some(w.segment.normal_on(side)),

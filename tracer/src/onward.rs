@@ -139,11 +139,7 @@ pub(crate) fn build_onward(
                     if !matches!(w.material, Material::Diffuse { .. }) {
                         return [0.0; 3];
                     }
-                    let side_of = if side == 0 {
-                        Side::Positive
-                    } else {
-                        Side::Negative
-                    };
+                    let side_of = Side::of_index(side);
                     let key = gather_key(wall, side, u, m, copy);
                     let mut stream = Stream::new(seed, key, ONWARD_STREAM + k as u64);
                     // Stratum k of K over the half circle's cosine measure.
