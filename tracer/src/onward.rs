@@ -23,8 +23,8 @@
 //!
 //! Each bin's gathers take `K` cosine-weighted directions stratified over
 //! the half circle, `K` growing with the render's samples per pixel, so
-//! the estimate converges as the samples grow (to the bin average, the
-//! wall memo's bias). The memo is kept twice, from independent gathers:
+//! the estimate converges as the samples grow (to its value at the bin's
+//! centre: the wall memo's kind of bias). The memo is kept twice, from independent gathers:
 //! the first half of a pixel's samples reads one copy and the second half
 //! the other, so the noise estimate from the two halves includes the
 //! memo's own error.
@@ -87,7 +87,7 @@ impl<'a> Onward<'a> {
 /// as the pixels' samples (and at least one per bin).
 pub(crate) fn gathers(samples: u32, pixels: u64, values: u64, orders: u32) -> u32 {
     let wanted = samples.max(MIN_GATHERS) as u64;
-    let tables = 2 * orders as u64 * values.max(1);
+    let tables = (2 * orders as u64).saturating_mul(values).max(1);
     let cap = (pixels.saturating_mul(samples as u64) / 2) / tables;
     wanted.min(cap).max(1) as u32
 }
@@ -194,4 +194,27 @@ fn gather_key(wall: u32, side: usize, u: f64, order: u32, copy: usize) -> u64 {
     let tag =
         ((wall as u64) << 8) | ((order as u64 & 0x3f) << 2) | ((side as u64) << 1) | copy as u64;
     u.to_bits().rotate_left(23) ^ tag.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gathers_follow_the_samples_within_half_the_pixel_samples() {
+        // As many as the samples, at least MIN_GATHERS.
+        assert_eq!(gathers(64, 1_000_000, 1000, 2), 64);
+        assert_eq!(gathers(2, 1_000_000, 1000, 2), MIN_GATHERS);
+        // Capped at half the pixel samples over 2 copies x 2 orders x
+        // 1000 values: 100 x 64 / 2 / 4000 is below 1, so 1 per bin;
+        // 10,000 x 64 / 2 / 4000 = 80, above the 64 wanted; 2,000 pixels
+        // give 16.
+        assert_eq!(gathers(64, 100, 1000, 2), 1);
+        assert_eq!(gathers(64, 10_000, 1000, 2), 64);
+        assert_eq!(gathers(64, 2_000, 1000, 2), 16);
+        // No orders or no values: no division by zero.
+        assert_eq!(gathers(16, 100, 0, 0), 16);
+        assert_eq!(onward_bytes(1000, 1), 0);
+        assert_eq!(onward_bytes(1000, 3), 4000);
+    }
 }
