@@ -103,19 +103,14 @@ pub(crate) fn numbers_per_point(scene: &Scene, table: Option<&LightTable>) -> us
 }
 
 /// The direct light at every point of `strata`, each from the lights that
-/// `table` chooses with the point's [`NUMBERS`] numbers: the same for the
-/// reference model and the fast paths.
-///
-/// `shared` marks the lights whose transmittance the whole pixel shares
-/// (the coherence masks' `Same`): the first point that takes such a light
-/// traces it once from the pixel's `centre`, the very value each point's
-/// own ray would give, and the others reuse it. A light no point takes
-/// costs no ray.
+/// `table` chooses with the point's [`NUMBERS`] numbers, each light's
+/// visibility given by `vis(light)` when a point takes it: the same for
+/// the reference model and the fast paths.
 pub(crate) fn direct_light_chosen(
     scene: &Scene,
     table: &LightTable,
     strata: &mut Strata,
-    (visibility, shared, centre): (&mut [Visibility], &mut [bool], DVec2),
+    mut vis: impl FnMut(usize) -> Visibility,
     stats: &mut Stats,
 ) {
     let Strata {
@@ -124,25 +119,10 @@ pub(crate) fn direct_light_chosen(
         values,
     } = strata;
     values.clear();
-    let mut centre_stats = Stats::default();
     for (&x, numbers) in points.iter().zip(numbers.chunks_exact(NUMBERS)) {
         let numbers: &[f64; NUMBERS] = numbers.try_into().unwrap_or(&[0.0; NUMBERS]);
-        let vis = |light: usize| {
-            if shared.get(light).copied().unwrap_or(false) {
-                shared[light] = false;
-                centre_stats.work.floor_shared_visibility += 1;
-                visibility[light] = Visibility::Known(crate::coherence::centre_transmittance(
-                    scene,
-                    light,
-                    centre,
-                    &mut centre_stats,
-                ));
-            }
-            visibility[light]
-        };
-        values.push(table.direct_light(scene, x, Receiver::FLOOR, numbers, vis, stats));
+        values.push(table.direct_light(scene, x, Receiver::FLOOR, numbers, &mut vis, stats));
     }
-    stats.merge(&centre_stats);
 }
 
 /// [`direct_light`] with each light's visibility given by `vis(light)`:

@@ -597,8 +597,27 @@ fn render_pixel(
         let shadow_walls = culled.map(|c| &c.shadows[..]);
         match trace.light_table {
             Some(table) => {
-                let shared = (&mut visibility[..], &mut batch.shared[..], centre);
-                direct_light_chosen(scene, table, floor, shared, stats)
+                // A light the whole pixel shares is traced once, from the
+                // centre, when a point first takes it (the very value each
+                // point's own ray would give); a light no point takes
+                // costs no ray.
+                let shared = &mut batch.shared;
+                let mut centre_stats = Stats::default();
+                let vis = |light: usize| {
+                    if shared.get(light).copied().unwrap_or(false) {
+                        shared[light] = false;
+                        centre_stats.work.floor_shared_visibility += 1;
+                        visibility[light] = Visibility::Known(centre_transmittance(
+                            scene,
+                            light,
+                            centre,
+                            &mut centre_stats,
+                        ));
+                    }
+                    visibility[light]
+                };
+                direct_light_chosen(scene, table, floor, vis, stats);
+                stats.merge(&centre_stats);
             }
             None if options.takes(FastPath::StrataLoops) => {
                 direct_light_strata(scene, floor, visibility, shadow_walls, stats)
