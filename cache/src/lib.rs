@@ -7,7 +7,9 @@
 //! wall), filled once before a render from a function of (wall, side,
 //! position, light) summed over the lights in their order, and read by
 //! linear interpolation between bin centres. Only the sums are kept, so
-//! its memory grows with the walls' length, not with the lights. Because
+//! its memory grows with the walls' length, not with the lights. The
+//! tracer's onward memo fills more tables on the same bins
+//! (`WallMemo::build_like`), each term a gather direction. Because
 //! every stored value is a pure function of its key, the table is the same
 //! whatever the number of threads that filled it.
 //!
@@ -139,35 +141,28 @@ impl WallMemo {
             }
             walls.push(SpanRange { first, count, ends });
         }
-        let owner: Vec<u32> = walls
-            .iter()
-            .enumerate()
-            .flat_map(|(w, range)| std::iter::repeat_n(w as u32, range.count as usize))
-            .collect();
-        // Each bin's lights summed in their order, as it is filled.
-        let total: Vec<Value> = spans
-            .par_iter()
-            .zip(owner.par_iter())
-            .flat_map_iter(|(span, &wall)| {
-                let fill = &fill;
-                let span = *span;
-                (0..2usize).flat_map(move |side| {
-                    (0..span.bins).map(move |bin| {
-                        let u =
-                            span.u0 + (span.u1 - span.u0) * (bin as f64 + 0.5) / span.bins as f64;
-                        (0..lights).fold([0.0f32; 3], |acc, light| {
-                            let v = fill(wall, side, u, light);
-                            [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
-                        })
-                    })
-                })
-            })
-            .collect();
+        let total = fill_bins(&walls, &spans, lights, fill);
         WallMemo {
             lights,
             walls,
             spans,
             total,
+        }
+    }
+
+    /// A memo on the same walls, spans and bins as `self`, filled as
+    /// [`WallMemo::build`] fills one, from `fill(wall, side, u, term)`
+    /// summed over `terms` terms at each bin's centre.
+    pub fn build_like(
+        &self,
+        terms: usize,
+        fill: impl Fn(u32, usize, f64, usize) -> Value + Sync,
+    ) -> WallMemo {
+        WallMemo {
+            lights: terms,
+            walls: self.walls.clone(),
+            spans: self.spans.clone(),
+            total: fill_bins(&self.walls, &self.spans, terms, fill),
         }
     }
 
@@ -258,6 +253,38 @@ impl WallMemo {
             a[2] + (b[2] - a[2]) * f,
         ]
     }
+}
+
+/// Every (span, side, bin) value: `fill` at the bin's centre, summed over
+/// `lights` in their order, the spans in parallel.
+fn fill_bins(
+    walls: &[SpanRange],
+    spans: &[Span],
+    lights: usize,
+    fill: impl Fn(u32, usize, f64, usize) -> Value + Sync,
+) -> Vec<Value> {
+    let owner: Vec<u32> = walls
+        .iter()
+        .enumerate()
+        .flat_map(|(w, range)| std::iter::repeat_n(w as u32, range.count as usize))
+        .collect();
+    spans
+        .par_iter()
+        .zip(owner.par_iter())
+        .flat_map_iter(|(span, &wall)| {
+            let fill = &fill;
+            let span = *span;
+            (0..2usize).flat_map(move |side| {
+                (0..span.bins).map(move |bin| {
+                    let u = span.u0 + (span.u1 - span.u0) * (bin as f64 + 0.5) / span.bins as f64;
+                    (0..lights).fold([0.0f32; 3], |acc, light| {
+                        let v = fill(wall, side, u, light);
+                        [acc[0] + v[0], acc[1] + v[1], acc[2] + v[2]]
+                    })
+                })
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]

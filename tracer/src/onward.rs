@@ -32,7 +32,7 @@
 use flatray_cache::WallMemo;
 use flatray_geometry::{Ray, Side, Skip};
 
-use crate::memo::{MemoOptions, to_value};
+use crate::memo::to_value;
 use crate::path::{Leg, Trace, follow};
 use crate::sampling::{Stream, cosine_half_circle};
 use crate::scene::Material;
@@ -98,25 +98,21 @@ pub(crate) fn onward_bytes(wall_memo_bytes: u64, bounces: u32) -> u64 {
     wall_memo_bytes.saturating_mul(2 * bounces.saturating_sub(1) as u64)
 }
 
-/// Fills the onward memo for the paths `trace` describes (its wall memo
-/// set, its `onward` unset), on the wall memo's bins, with `gathers`
-/// directions per bin.
+/// Fills the onward memo for the paths `trace` describes (its `onward`
+/// unset), on the bins of `wall_memo` (the memo its paths read), with
+/// `gathers` directions per bin.
 pub(crate) fn build_onward(
     trace: &Trace,
-    options: &MemoOptions,
-    scale: f64,
+    wall_memo: &WallMemo,
     gathers: u32,
     seed: u64,
     stats: &mut Stats,
 ) -> OnwardMemo {
     let scene = trace.scene;
-    let lengths = scene.diffuse_lengths();
-    let junctions = crate::memo::junctions(scene);
-    let bin_length = options.bin_length / scale;
     let bounces = trace.bounces;
     let gathers = gathers.max(1);
     let mut copies: [Vec<WallMemo>; 2] = [Vec::new(), Vec::new()];
-    let mut rays = 0u64;
+    let (mut rays, mut bytes) = (0u64, 0u64);
     for (copy, tables) in copies.iter_mut().enumerate() {
         for m in 1..bounces {
             let lower: &[WallMemo] = tables;
@@ -129,62 +125,54 @@ pub(crate) fn build_onward(
                 ..*trace
             };
             let counted = std::sync::atomic::AtomicU64::new(0);
-            let table = WallMemo::build(
-                &lengths,
-                &junctions,
-                bin_length,
-                gathers as usize,
-                |wall, side, u, k| {
-                    let w = &scene.walls[wall as usize];
-                    if !matches!(w.material, Material::Diffuse { .. }) {
-                        return [0.0; 3];
-                    }
-                    let side_of = Side::of_index(side);
-                    let key = gather_key(wall, side, u, m, copy);
-                    let mut stream = Stream::new(seed, key, ONWARD_STREAM + k as u64);
-                    // Stratum k of K over the half circle's cosine measure.
-                    let fraction = (k as f64 + stream.uniform()) / gathers as f64;
-                    let x = w.segment.point_at(u);
-                    let dir = cosine_half_circle(w.segment.normal_on(side_of), fraction);
-                    let leg = Leg {
-                        throughput: Rgb::ONE,
-                        bounce: bounces - m,
-                        skip: Skip::one(wall),
-                    };
-                    let mut local = Stats::default();
-                    let value = follow(
-                        &gather_trace,
-                        Rgb::ZERO,
-                        Ray::new(x, dir),
-                        None,
-                        None,
-                        leg,
-                        Some(lower),
-                        &mut stream,
-                        &mut local,
-                    );
-                    counted.fetch_add(
-                        local.work.bounce_rays + local.work.shadow_rays,
-                        std::sync::atomic::Ordering::Relaxed,
-                    );
-                    if value.is_finite() {
-                        to_value(value / gathers as f64)
-                    } else {
-                        [0.0; 3]
-                    }
-                },
-            );
+            let table = wall_memo.build_like(gathers as usize, |wall, side, u, k| {
+                let w = &scene.walls[wall as usize];
+                if !matches!(w.material, Material::Diffuse { .. }) {
+                    return [0.0; 3];
+                }
+                let side_of = Side::of_index(side);
+                let key = gather_key(wall, side, u, m, copy);
+                let mut stream = Stream::new(seed, key, ONWARD_STREAM + k as u64);
+                // Stratum k of K over the half circle's cosine measure.
+                let fraction = (k as f64 + stream.uniform()) / gathers as f64;
+                let x = w.segment.point_at(u);
+                let dir = cosine_half_circle(w.segment.normal_on(side_of), fraction);
+                let leg = Leg {
+                    throughput: Rgb::ONE,
+                    bounce: bounces - m,
+                    skip: Skip::one(wall),
+                };
+                let mut local = Stats::default();
+                let value = follow(
+                    &gather_trace,
+                    Rgb::ZERO,
+                    Ray::new(x, dir),
+                    None,
+                    None,
+                    leg,
+                    Some(lower),
+                    &mut stream,
+                    &mut local,
+                );
+                counted.fetch_add(
+                    local.work.bounce_rays + local.work.shadow_rays,
+                    std::sync::atomic::Ordering::Relaxed,
+                );
+                if value.is_finite() {
+                    to_value(value / gathers as f64)
+                } else {
+                    [0.0; 3]
+                }
+            });
             rays += counted.into_inner();
-            stats.work.onward_bytes += table.memory_bytes() as u64;
+            bytes += table.memory_bytes() as u64;
             tables.push(table);
         }
     }
     stats.work.onward_rays += rays;
-    stats.work.memo_bytes += copies
-        .iter()
-        .flatten()
-        .map(|t| t.memory_bytes() as u64)
-        .sum::<u64>();
+    // A part of the wall cache's bytes, and apart.
+    stats.work.onward_bytes += bytes;
+    stats.work.memo_bytes += bytes;
     OnwardMemo { copies }
 }
 

@@ -276,22 +276,14 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
     );
     // The rest of a path from each diffuse wall, gathered after the
     // direct light and the caustic pass that its paths read.
-    let onward = (plan.onward && trace.memo.is_some()).then(|| {
-        let values = memo.as_ref().map_or(0, |m| m.values() as u64);
+    let onward = trace.memo.filter(|_| plan.onward).map(|wall_memo| {
         let gathers = crate::onward::gathers(
             options.samples,
             width as u64 * height as u64,
-            values,
+            wall_memo.values() as u64,
             options.bounces.saturating_sub(1),
         );
-        crate::onward::build_onward(
-            &trace,
-            &options.memo,
-            options.scale,
-            gathers,
-            options.seed,
-            &mut memo_stats,
-        )
+        crate::onward::build_onward(&trace, wall_memo, gathers, options.seed, &mut memo_stats)
     });
     let context = Context {
         options,
