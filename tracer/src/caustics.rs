@@ -30,9 +30,10 @@
 
 use flatray_geometry::{DVec2, Ray, Side, Skip};
 
-use crate::film::{Estimator, Film, Part, pixel_scale, run};
+use crate::film::{Estimator, Film, Part, run};
 use crate::light_tracer::{Deposits, Grid, follow_photon};
 use crate::lights::{Aperture, Photon};
+use crate::passes::Pass;
 use crate::render::{RenderOptions, image_size};
 use crate::sampling::Stream;
 use crate::scene::{Material, Scene};
@@ -162,13 +163,23 @@ impl WallBins {
 /// What the caustic pass measured: the fluence on the floor per pixel,
 /// and the irradiance on the diffuse walls.
 pub(crate) struct Caustics {
-    pub floor: Vec<Rgb>,
+    floor: Vec<Rgb>,
+    /// The floor deposits of the first half of the photons, and how many
+    /// photons that half and the whole traced.
+    first: Vec<Rgb>,
+    photons: (u64, u64),
     bins: WallBins,
     walls: Vec<Rgb>,
     bounces: u32,
 }
 
 impl Caustics {
+    /// The fluence on pixel `k` as the two halves of the photons estimate
+    /// it, each scaled to the whole.
+    pub fn floor_halves(&self, k: usize) -> (Rgb, Rgb) {
+        crate::film::split(&self.floor, &self.first, k, self.photons)
+    }
+
     /// The irradiance from caustic light on side `side` of wall `wall` at
     /// `u`, for a path at its `bounce`-th reflection: light that took at
     /// most `bounces - bounce` specular events to get there.
@@ -283,7 +294,6 @@ fn segments_meet(p0: DVec2, p1: DVec2, q0: DVec2, q1: DVec2) -> bool {
 /// summed into buffers of the floor and the walls.
 struct CausticPass<'a> {
     scene: &'a Scene,
-    options: &'a RenderOptions,
     size: (u32, u32),
     bounces: u32,
     emitters: Vec<Emitter>,
@@ -297,6 +307,8 @@ struct CausticPass<'a> {
     per_chunk: u64,
     grid: Grid,
     bins: WallBins,
+    /// The seed of the photons: the render pass's.
+    seed: u64,
 }
 
 /// Runs the caustic pass for a path-traced render of `scene`; `None` when
@@ -305,7 +317,7 @@ struct CausticPass<'a> {
 pub(crate) fn trace_caustics(
     scene: &Scene,
     options: &RenderOptions,
-    bounces: u32,
+    (bounces, pass): (u32, &Pass),
     stats: &mut Stats,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Option<Caustics> {
@@ -358,15 +370,13 @@ pub(crate) fn trace_caustics(
         .collect();
     let (width, height) = image_size(scene, options.scale);
     let pixels = width as usize * height as usize;
-    let photons =
-        ((options.samples as f64 * pixels as f64 * PHOTONS_PER_SAMPLE).ceil() as u64).max(1);
+    let photons = ((pass.count() as f64 * pixels as f64 * PHOTONS_PER_SAMPLE).ceil() as u64).max(1);
     let levels = bounces.saturating_sub(1) as usize;
     let bins = WallBins::new(scene, options.memo.bin_length / options.scale, levels);
     let chunk_bytes = (pixels + bins.len) * 24;
     let chunks = (CHUNK_BUDGET / chunk_bytes.max(1)).clamp(2, MAX_CHUNKS);
     let pass = CausticPass {
         scene,
-        options,
         size: (width, height),
         bounces,
         emitters,
@@ -377,6 +387,7 @@ pub(crate) fn trace_caustics(
         per_chunk: photons.div_ceil(chunks as u64),
         grid: Grid::new(scene, options.scale, width, height),
         bins,
+        seed: pass.seed,
     };
     let outcome = run(&pass, Stats::default(), progress);
     stats.merge(&outcome.stats);
@@ -411,7 +422,7 @@ impl Estimator for CausticPass<'_> {
             list.iter().position(|&c| u < c).unwrap_or(list.len() - 1)
         };
         for index in first..last {
-            let mut stream = Stream::new(self.options.seed, index, CAUSTIC_STREAM);
+            let mut stream = Stream::new(self.seed, index, CAUSTIC_STREAM);
             stats.physics.caustic_photons += 1;
             let emitter = &self.emitters[pick(&self.shares, stream.uniform())];
             let light = &scene.lights[emitter.light];
@@ -460,25 +471,9 @@ impl Estimator for CausticPass<'_> {
         }
     }
 
-    fn finish(&self, film: Film, stats: &mut Stats) -> Caustics {
+    fn finish(&self, film: Film, _stats: &mut Stats) -> Caustics {
         let (width, height) = self.size;
-        // The noise of the floor's part, from its two halves of photons,
-        // in image units: added to the render's estimate.
         let first_photons = ((self.chunks / 2) as u64 * self.per_chunk).min(self.photons);
-        if !film.first.is_empty() {
-            for y in 0..height {
-                for x in 0..width {
-                    let k = y as usize * width as usize + x as usize;
-                    if let Some((difference, weight)) =
-                        film.halves(k, (self.photons, first_photons))
-                    {
-                        let scale =
-                            pixel_scale(self.scene, self.size, (x, y), self.options.exposure);
-                        stats.noise.add_error(difference * scale, weight);
-                    }
-                }
-            }
-        }
         let floor = if film.fluence.is_empty() {
             vec![Rgb::ZERO; width as usize * height as usize]
         } else {
@@ -491,6 +486,8 @@ impl Estimator for CausticPass<'_> {
         };
         Caustics {
             floor,
+            first: film.first,
+            photons: (self.photons, first_photons),
             bins: self.bins.clone(),
             walls,
             bounces: self.bounces,

@@ -10,16 +10,17 @@
 
 use rayon::prelude::*;
 
+use crate::passes::PixelSums;
 use crate::{Rgb, Stats};
 
 /// What one unit of work measured.
 pub(crate) enum Part {
-    /// The finished values of a tile's pixels, row by row.
+    /// The sums of a tile's pixels for one pass, row by row.
     Tile {
         x0: u32,
         y0: u32,
         width: u32,
-        values: Vec<[f32; 3]>,
+        values: Vec<PixelSums>,
     },
     /// Fluence deposited anywhere on the image (a light tracer's track
     /// lengths), and on the walls' bins (the caustic pass's), summed in
@@ -37,8 +38,8 @@ pub(crate) enum Part {
 pub(crate) struct Film {
     pub width: u32,
     pub height: u32,
-    /// Finished pixel values, from tiles.
-    pub values: Vec<[f32; 3]>,
+    /// Pixel sums, from tiles (empty when no unit was a tile).
+    pub values: Vec<PixelSums>,
     /// Summed deposits (empty when no unit splatted).
     pub fluence: Vec<Rgb>,
     /// Summed deposits of the units of the first half.
@@ -52,7 +53,7 @@ impl Film {
         Film {
             width,
             height,
-            values: vec![[0.0; 3]; width as usize * height as usize],
+            values: Vec::new(),
             fluence: Vec::new(),
             first: Vec::new(),
             walls: Vec::new(),
@@ -61,7 +62,7 @@ impl Film {
 
     /// Adds a part; parts must come in unit order.
     fn add(&mut self, part: Part) {
-        let pixels = self.values.len();
+        let pixels = self.width as usize * self.height as usize;
         match part {
             Part::Tile {
                 x0,
@@ -69,6 +70,9 @@ impl Film {
                 width,
                 values,
             } => {
+                if self.values.is_empty() {
+                    self.values = vec![PixelSums::default(); pixels];
+                }
                 for (k, value) in values.into_iter().enumerate() {
                     let x = x0 + k as u32 % width;
                     let y = y0 + k as u32 / width;
@@ -101,21 +105,30 @@ impl Film {
 
 impl Film {
     /// For pixel `k`'s deposits, made by `all` paths (or photons) of which
-    /// `first` were in the first half of the units: how far the two
-    /// halves' estimates of the pixel differ, each scaled to the whole,
-    /// and the weight `n1 n2 / n^2` that [`crate::Noise::add`] takes.
-    /// `None` when one half is empty.
-    pub fn halves(&self, k: usize, (all, first): (u64, u64)) -> Option<(Rgb, f64)> {
-        if first == 0 || first >= all {
-            return None;
-        }
-        let fluence = self.fluence.get(k).copied().unwrap_or(Rgb::ZERO);
-        let half = self.first.get(k).copied().unwrap_or(Rgb::ZERO);
-        let (p, p1) = (all as f64, first as f64);
-        let a = half * (p / p1);
-        let b = (fluence - half) * (p / (p - p1));
-        Some((a - b, p1 * (p - p1) / (p * p)))
+    /// `first` were in the first half of the units: the estimates of the
+    /// two halves, each scaled to the whole; the whole's twice when one
+    /// half is empty.
+    pub fn split(&self, k: usize, (all, first): (u64, u64)) -> (Rgb, Rgb) {
+        split(&self.fluence, &self.first, k, (all, first))
     }
+}
+
+/// For pixel `k` of deposits `fluence` made by `all` paths, `first` of
+/// them summed apart in `first_sums`: the two halves' estimates, each
+/// scaled to the whole, or the whole's twice when a half is empty.
+pub(crate) fn split(
+    fluence: &[Rgb],
+    first_sums: &[Rgb],
+    k: usize,
+    (all, first): (u64, u64),
+) -> (Rgb, Rgb) {
+    let whole = fluence.get(k).copied().unwrap_or(Rgb::ZERO);
+    if first == 0 || first >= all {
+        return (whole, whole);
+    }
+    let half = first_sums.get(k).copied().unwrap_or(Rgb::ZERO);
+    let (p, p1) = (all as f64, first as f64);
+    (half * (p / p1), (whole - half) * (p / (p - p1)))
 }
 
 /// What the image's pixel `(x, y)` multiplies its mean fluence by: the

@@ -35,6 +35,7 @@ pub mod metrics;
 mod mirror;
 mod onward;
 pub mod optics;
+mod passes;
 mod path;
 pub mod plan;
 mod render;
@@ -48,6 +49,7 @@ mod strata;
 pub type Rgb = glam::DVec3;
 
 pub use memo::MemoOptions;
+pub use passes::{FIRST_PASS, Progressive, next_pass_end};
 pub use plan::Plan;
 pub use render::{
     FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS, RenderOptions, Rendered,

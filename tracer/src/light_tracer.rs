@@ -7,11 +7,12 @@ use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
 use crate::bsdf::{Bsdf, Sampling, Transport};
 use crate::caustics::WallBins;
-use crate::film::{Estimator, Film, Part, pixel_scale, run};
+use crate::film::{Estimator, Film, Part, run};
 use crate::glass::{GlassState, absorption, transmit};
 use crate::lights::Photon;
+use crate::passes::{Pass, PixelSums};
 use crate::plan::Plan;
-use crate::render::{Image, RenderOptions, Rendered, image_size};
+use crate::render::{RenderOptions, image_size};
 use crate::sampling::Stream;
 use crate::scene::{Falloff, Light, Scene};
 use crate::{Rgb, Stats};
@@ -23,17 +24,20 @@ const MAX_CHUNKS: usize = 16;
 /// Bytes the chunk buffers may take together.
 const CHUNK_BUDGET: usize = 256 << 20;
 
-/// Renders `scene` by light tracing with `options.samples` x pixels paths.
-pub fn render_light(
+/// One pass of a light-traced render (`passes.rs`): the pass's samples
+/// times the pixels in photon paths, from the pass's own seed, and each
+/// pixel's sums from the two halves of those paths.
+pub(crate) fn light_pass(
     scene: &Scene,
     options: &RenderOptions,
+    pass: &Pass,
     progress: &(dyn Fn(u64) + Sync),
-) -> Rendered {
+) -> (Vec<PixelSums>, Stats) {
     let (width, height) = image_size(scene, options.scale);
     let pixels = width as usize * height as usize;
     let plan = Plan::new(scene, options);
     let bounces = if plan.indirect { options.bounces } else { 0 };
-    let paths = options.samples as u64 * pixels as u64;
+    let paths = pass.count() as u64 * pixels as u64;
 
     let powers: Vec<f64> = scene
         .lights
@@ -48,15 +52,12 @@ pub fn render_light(
         cumulative.push(acc);
     }
     if total <= 0.0 || paths == 0 {
-        return Rendered {
-            image: Image::new(width, height),
-            stats: Stats::default(),
-        };
+        return (vec![PixelSums::default(); pixels], Stats::default());
     }
     let chunks = (CHUNK_BUDGET / (pixels.max(1) * 24)).clamp(1, MAX_CHUNKS);
     let estimator = Photons {
         scene,
-        options,
+        pass,
         size: (width, height),
         bounces,
         paths,
@@ -67,17 +68,14 @@ pub fn render_light(
         grid: Grid::new(scene, options.scale, width, height),
     };
     let outcome = run(&estimator, Stats::default(), progress);
-    Rendered {
-        image: outcome.output,
-        stats: outcome.stats,
-    }
+    (outcome.output, outcome.stats)
 }
 
 /// Light tracing as units of the render loop: fixed chunks of photon
 /// paths, each summed in order into a buffer of the whole image.
 struct Photons<'a> {
     scene: &'a Scene,
-    options: &'a RenderOptions,
+    pass: &'a Pass,
     size: (u32, u32),
     bounces: u32,
     /// Photon paths in all, and each one's share of the total power.
@@ -92,7 +90,7 @@ struct Photons<'a> {
 }
 
 impl Estimator for Photons<'_> {
-    type Output = Image;
+    type Output = Vec<PixelSums>;
 
     fn size(&self) -> (u32, u32) {
         self.size
@@ -114,7 +112,7 @@ impl Estimator for Photons<'_> {
         let last = ((chunk as u64 + 1) * self.per_chunk).min(self.paths);
         let mut done = 0u64;
         for index in first..last {
-            let mut stream = Stream::new(self.options.seed, index, 0);
+            let mut stream = Stream::new(self.pass.seed, index, 0);
             let u = stream.uniform();
             let pick = self
                 .cumulative
@@ -145,28 +143,15 @@ impl Estimator for Photons<'_> {
         }
     }
 
-    fn finish(&self, film: Film, stats: &mut Stats) -> Image {
-        let (width, height) = self.size;
-        let mut image = Image::new(width, height);
+    fn finish(&self, film: Film, _stats: &mut Stats) -> Vec<PixelSums> {
         // The first half of the chunks' paths, for the noise estimate.
         let first_paths = ((self.chunks / 2) as u64 * self.per_chunk).min(self.paths);
-        for y in 0..height {
-            for x in 0..width {
-                let k = y as usize * width as usize + x as usize;
-                let scale = pixel_scale(self.scene, self.size, (x, y), self.options.exposure);
-                let fluence = film.fluence.get(k).copied().unwrap_or(Rgb::ZERO);
-                let value = fluence * scale;
-                if let Some((difference, weight)) = film.halves(k, (self.paths, first_paths)) {
-                    stats.noise.add(difference * scale, value, weight);
-                }
-                if value.is_finite() {
-                    image.pixels[k] = [value.x as f32, value.y as f32, value.z as f32];
-                } else {
-                    stats.record_nonfinite(x, y, 0);
-                }
-            }
-        }
-        image
+        (0..self.size.0 as usize * self.size.1 as usize)
+            .map(|k| {
+                self.pass
+                    .weigh_halves(film.split(k, (self.paths, first_paths)))
+            })
+            .collect()
     }
 }
 

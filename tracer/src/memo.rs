@@ -18,10 +18,9 @@ pub struct MemoOptions {
     pub enabled: bool,
     /// Length of a wall bin, in pixels of the rendered image.
     pub bin_length: f64,
-    /// The fewest stratified receiver points per pixel for the floor's
-    /// direct light. A pixel takes at least as many strata as samples, so
-    /// its error keeps falling as the samples grow: the larger of the two,
-    /// rounded up to a square.
+    /// The fewest receiver points per pixel and render pass for the
+    /// floor's direct light. A pass takes at least as many points as
+    /// samples, so the error keeps falling as the samples grow.
     pub floor_samples: u32,
     /// Stratified points per line or circle light for a wall bin's
     /// irradiance.
@@ -199,19 +198,3 @@ pub(crate) fn to_value(v: Rgb) -> Value {
     [v.x as f32, v.y as f32, v.z as f32]
 }
 
-/// The side of the floor's stratified grid for `samples` samples per
-/// pixel: the smallest square of at least `samples` and at least
-/// `options.floor_samples` strata, so that the floor's direct light is a
-/// consistent estimate (its error falls as the samples grow; a fixed grid
-/// would leave a noise floor at shadow edges).
-pub(crate) fn floor_grid(options: &MemoOptions, samples: u32) -> u32 {
-    let n = samples.max(options.floor_samples).max(1);
-    let mut side = (n as f64).sqrt() as u32;
-    while side * side < n {
-        side += 1;
-    }
-    while side > 1 && (side - 1) * (side - 1) >= n {
-        side -= 1;
-    }
-    side
-}

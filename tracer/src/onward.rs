@@ -21,13 +21,15 @@
 //! `rho C_m` there: one ray per sample where the path loop would cast
 //! up to `D`.
 //!
-//! Each bin's gathers take `K` cosine-weighted directions stratified over
-//! the half circle, `K` growing with the render's samples per pixel, so
-//! the estimate converges as the samples grow (to its value at the bin's
-//! centre: the wall memo's kind of bias). The memo is kept twice, from independent gathers:
-//! the first half of a pixel's samples reads one copy and the second half
-//! the other, so the noise estimate from the two halves includes the
-//! memo's own error.
+//! Each render pass (`passes.rs`) fills the memo anew, from its own seed:
+//! each bin's gathers take `K` cosine-weighted directions stratified over
+//! the half circle, `K` the pass's samples per pixel. The passes' memos
+//! are independent, so the image's memo error falls as the samples grow
+//! (to the memo's value at each bin's centre: the wall memo's kind of
+//! bias). Each pass keeps the memo twice, from independent gathers: the
+//! first half of its samples reads one copy and the second half the
+//! other, so the noise estimate from the two halves includes the memo's
+//! own error.
 
 use flatray_cache::WallMemo;
 use flatray_geometry::{Ray, Side, Skip};
@@ -59,17 +61,18 @@ pub(crate) struct OnwardMemo {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Onward<'a> {
     copies: [&'a [WallMemo]; 2],
-    /// Samples below this read the first copy (`Sums::half` in the render
-    /// loop: the noise estimate's first half).
+    /// Samples below this read the first copy (`Pass::middle`: the noise
+    /// estimate's first half).
     half: u32,
 }
 
 impl<'a> Onward<'a> {
-    /// The memo as a render of `samples` per pixel reads it.
-    pub fn of(memo: &'a OnwardMemo, samples: u32) -> Onward<'a> {
+    /// The memo as a render pass reads it: samples below `middle` (the
+    /// pass's first half) read the first copy.
+    pub fn of(memo: &'a OnwardMemo, middle: u32) -> Onward<'a> {
         Onward {
             copies: [&memo.copies[0], &memo.copies[1]],
-            half: samples / 2,
+            half: middle,
         }
     }
 

@@ -15,12 +15,15 @@ use crate::light::{
     Strata, Visibility, direct_light_chosen, direct_light_points, numbers_per_point,
 };
 use crate::lights::choice::LightTable;
-use crate::memo::{MemoOptions, build_wall_memo, floor_grid};
+use crate::memo::{MemoOptions, build_wall_memo};
 use crate::mirror::MirrorArcs;
-use crate::onward::Onward;
+use crate::onward::{Onward, OnwardMemo};
+use crate::passes::{Pass, PixelSums, Totals};
 use crate::path::{MirrorWalls, Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
-use crate::sampling::{ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc};
+use crate::sampling::{
+    ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc, sobol_points,
+};
 use crate::scene::Scene;
 use crate::shortcut::memo_bounce;
 use crate::strata::direct_light_strata;
@@ -227,110 +230,351 @@ pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
 
 /// Renders `scene`. `progress` is called from worker threads with the
 /// number of pixel samples each finished tile took; the image does not
-/// depend on the number of threads or on their scheduling.
+/// depend on the number of threads or on their scheduling. The render is
+/// the sequence of passes that `passes.rs` describes: the same image as
+/// [`crate::Progressive`] driven to the same samples.
 pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + Sync)) -> Rendered {
-    if options.integrator == Integrator::Light {
-        return crate::light_tracer::render_light(scene, options, progress);
-    }
-    let (width, height) = image_size(scene, options.scale);
-    let plan = Plan::new(scene, options);
-    let mut memo_stats = Stats::default();
-    let memo = plan.wall_memo.then(|| {
-        build_wall_memo(
-            scene,
-            &options.memo,
-            options.scale,
-            plan.shadows,
-            &mut memo_stats,
+    let mut passes = Passes::new(scene, options);
+    passes.run_to(options.samples, progress);
+    passes.rendered()
+}
+
+/// Bytes that the per-pass fills (caustic passes, onward memos) of the
+/// passes rendered together may take: passes beyond it are rendered
+/// after, from the totals (the same image).
+const FILLS_BUDGET: u64 = 256 << 20;
+
+/// What every pass of a path-traced render shares, built once.
+struct Shared {
+    plan: Plan,
+    memo: Option<WallMemo>,
+    mirror_arcs: Option<MirrorArcs>,
+    light_table: Option<LightTable>,
+    coherence: Option<FloorCoherence>,
+    tiles: Vec<(u32, u32)>,
+}
+
+/// Where the next pass starts: its index, its first sample and its first
+/// floor point.
+#[derive(Clone, Copy, Debug, Default)]
+struct Cursor {
+    index: u32,
+    samples: u32,
+    points: u32,
+}
+
+impl Cursor {
+    /// The pass from here to `end` samples per pixel.
+    fn pass(self, end: u32, options: &RenderOptions) -> Pass {
+        Pass::new(
+            self.index,
+            self.samples..end,
+            (self.points, options.memo.floor_samples),
+            options.seed,
         )
-    });
-    // Rays off mirrors are culled wherever the floor's are.
-    let mirror_arcs = plan
-        .floor_ray_culling
-        .then(|| MirrorArcs::build(scene, options.scale))
-        .flatten();
-    let light_table = light_table_for(scene, options, &plan);
-    if let Some(table) = &light_table {
-        memo_stats.work.light_table_bytes += table.memory_bytes() as u64;
-        memo_stats.work.light_table_rays += table.probe_rays;
     }
-    let coherence = plan
-        .floor_coherence
-        .then(|| FloorCoherence::build(scene, (width, height)))
-        .flatten();
-    // Light from points, spots and suns through mirrors and glass, which
-    // no path from the floor can find: traced from the lights first, so
-    // that next-event estimation at the walls can read it.
-    let caustics = if plan.caustics {
-        crate::caustics::trace_caustics(scene, options, options.bounces, &mut memo_stats, &|_| {})
-    } else {
-        None
-    };
-    let trace = trace_for(
-        scene,
-        options,
-        &plan,
-        (memo.as_ref(), caustics.as_ref()),
-        mirror_arcs.as_ref().map(|arcs| arcs as &dyn MirrorWalls),
-        light_table.as_ref(),
-    );
-    // The rest of a path from each diffuse wall, gathered after the
-    // direct light and the caustic pass that its paths read.
-    let onward = trace.memo.filter(|_| plan.onward).map(|wall_memo| {
-        let gathers = crate::onward::gathers(
-            options.samples,
-            width as u64 * height as u64,
-            wall_memo.values() as u64,
-            options.bounces.saturating_sub(1),
-        );
-        crate::onward::build_onward(&trace, wall_memo, gathers, options.seed, &mut memo_stats)
-    });
-    let context = Context {
-        options,
-        size: (width, height),
-        floor_memo: plan.floor_memo,
-        coherence: coherence.as_ref(),
-        culling: plan.floor_ray_culling,
-        trace: Trace {
-            onward: onward
-                .as_ref()
-                .map(|memo| Onward::of(memo, options.samples)),
-            ..trace
-        },
-        one_bounce_memo: memo
-            .as_ref()
-            .filter(|_| plan.indirect && options.bounces == 1 && options.takes(FastPath::Shortcut)),
-        render_pixel: if options.takes(FastPath::Avx) {
-            pixel_fn()
+
+    /// Where the pass after `pass` starts.
+    fn after(pass: &Pass) -> Cursor {
+        Cursor {
+            index: pass.index + 1,
+            samples: pass.samples.end,
+            points: pass.points.end,
+        }
+    }
+}
+
+/// A render pass by pass (`passes.rs`): what the passes share, and the
+/// running totals.
+pub(crate) struct Passes<'a> {
+    scene: &'a Scene,
+    options: RenderOptions,
+    /// `None` for the light tracer, whose passes share nothing.
+    shared: Option<Shared>,
+    totals: Totals,
+    cursor: Cursor,
+    /// Whether the last pass ended short of the schedule: no pass may
+    /// follow it.
+    closed: bool,
+}
+
+impl<'a> Passes<'a> {
+    pub fn new(scene: &'a Scene, options: &RenderOptions) -> Passes<'a> {
+        let (width, height) = image_size(scene, options.scale);
+        let mut stats = Stats::default();
+        let shared = (options.integrator != Integrator::Light).then(|| {
+            let plan = Plan::new(scene, options);
+            let memo = plan.wall_memo.then(|| {
+                build_wall_memo(
+                    scene,
+                    &options.memo,
+                    options.scale,
+                    plan.shadows,
+                    &mut stats,
+                )
+            });
+            // Rays off mirrors are culled wherever the floor's are.
+            let mirror_arcs = plan
+                .floor_ray_culling
+                .then(|| MirrorArcs::build(scene, options.scale))
+                .flatten();
+            let light_table = light_table_for(scene, options, &plan);
+            if let Some(table) = &light_table {
+                stats.work.light_table_bytes += table.memory_bytes() as u64;
+                stats.work.light_table_rays += table.probe_rays;
+            }
+            let coherence = plan
+                .floor_coherence
+                .then(|| FloorCoherence::build(scene, (width, height)))
+                .flatten();
+            let tiles = (0..height.div_ceil(TILE))
+                .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx, ty)))
+                .collect();
+            Shared {
+                plan,
+                memo,
+                mirror_arcs,
+                light_table,
+                coherence,
+                tiles,
+            }
+        });
+        Passes {
+            scene,
+            options: *options,
+            shared,
+            totals: Totals::new((width, height), stats),
+            cursor: Cursor::default(),
+            closed: false,
+        }
+    }
+
+    pub fn samples(&self) -> u32 {
+        self.totals.samples
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        self.totals.size
+    }
+
+    pub fn next_end(&self) -> Option<u32> {
+        (!self.closed).then(|| crate::passes::next_pass_end(self.samples()))
+    }
+
+    /// Takes the next pass, to `end` samples per pixel, if the schedule
+    /// lets one end there.
+    pub fn pass(&mut self, end: u32, progress: &(dyn Fn(u64) + Sync)) -> bool {
+        let done = self.samples();
+        match self.next_end() {
+            Some(next) if end > done && end <= next => self.closed = end < next,
+            _ => return false,
+        }
+        let pass = self.cursor.pass(end, &self.options);
+        self.run(&[pass], progress);
+        true
+    }
+
+    /// Takes every pass of the schedule up to `samples`, as many at once
+    /// as [`FILLS_BUDGET`] allows: each pixel then takes all of them in
+    /// turn, sharing its culling lists, floor points and shared shadow
+    /// rays. The same sums as pass by pass.
+    pub fn run_to(&mut self, samples: u32, progress: &(dyn Fn(u64) + Sync)) {
+        let mut group: Vec<Pass> = Vec::new();
+        let mut cursor = self.cursor;
+        let mut bytes = 0;
+        while !self.closed && cursor.samples < samples {
+            let next = crate::passes::next_pass_end(cursor.samples);
+            let pass = cursor.pass(next.min(samples), &self.options);
+            let pass_bytes = self.fill_bytes();
+            if !group.is_empty() && bytes + pass_bytes > FILLS_BUDGET {
+                self.run(&group, progress);
+                group.clear();
+                bytes = 0;
+            }
+            bytes += pass_bytes;
+            self.closed = pass.samples.end < next;
+            cursor = Cursor::after(&pass);
+            group.push(pass);
+        }
+        if !group.is_empty() {
+            self.run(&group, progress);
+        }
+    }
+
+    /// About the bytes of a pass's own fills: its caustic pass's floor
+    /// (and the first half's) and its onward memo.
+    fn fill_bytes(&self) -> u64 {
+        let Some(shared) = &self.shared else {
+            return 0;
+        };
+        let (width, height) = self.size();
+        let mut bytes = 0u64;
+        if shared.plan.caustics {
+            bytes += width as u64 * height as u64 * 48;
+        }
+        if let Some(memo) = shared.memo.as_ref().filter(|_| shared.plan.onward) {
+            bytes += crate::onward::onward_bytes(memo.memory_bytes() as u64, self.options.bounces);
+        }
+        bytes
+    }
+
+    /// Renders `group`, consecutive passes from the cursor on, and adds
+    /// them to the totals.
+    fn run(&mut self, group: &[Pass], progress: &(dyn Fn(u64) + Sync)) {
+        let Some(last) = group.last() else {
+            return;
+        };
+        match &self.shared {
+            Some(shared) => {
+                let (sums, stats) = path_passes(
+                    self.scene,
+                    &self.options,
+                    shared,
+                    group,
+                    &self.totals.sums,
+                    progress,
+                );
+                self.totals.replace(group, sums, &stats);
+            }
+            None => {
+                for pass in group {
+                    let (sums, stats) =
+                        crate::light_tracer::light_pass(self.scene, &self.options, pass, progress);
+                    self.totals.add(pass, sums, &stats);
+                }
+            }
+        }
+        self.cursor = Cursor::after(last);
+    }
+
+    pub fn rendered(&self) -> Rendered {
+        self.totals.rendered(self.scene, self.options.exposure)
+    }
+}
+
+/// What one pass of a path-traced render fills for itself: its caustic
+/// pass and its onward memo.
+struct Fills {
+    caustics: Option<Caustics>,
+    onward: Option<OnwardMemo>,
+}
+
+impl Fills {
+    fn new(
+        scene: &Scene,
+        options: &RenderOptions,
+        shared: &Shared,
+        pass: &Pass,
+        stats: &mut Stats,
+    ) -> Fills {
+        let plan = &shared.plan;
+        let (width, height) = image_size(scene, options.scale);
+        // Light from points, spots and suns through mirrors and glass,
+        // which no path from the floor can find: traced from the lights
+        // first, so that next-event estimation at the walls can read it.
+        let caustics = if plan.caustics {
+            crate::caustics::trace_caustics(scene, options, (options.bounces, pass), stats, &|_| {})
         } else {
-            render_pixel
-        },
-    };
-    let tiles_x = width.div_ceil(TILE);
-    let tiles_y = height.div_ceil(TILE);
-    let tiles: Vec<(u32, u32)> = (0..tiles_y)
-        .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
-        .collect();
-    let outcome = run(&PixelEstimator { context, tiles }, memo_stats, progress);
-    Rendered {
-        image: outcome.output,
-        stats: outcome.stats,
+            None
+        };
+        // The rest of a path from each diffuse wall, gathered after the
+        // direct light and the caustic pass that its paths read.
+        let onward = shared
+            .memo
+            .as_ref()
+            .filter(|_| plan.onward)
+            .map(|wall_memo| {
+                let trace = trace_for(scene, options, shared, (caustics.as_ref(), None));
+                let gathers = crate::onward::gathers(
+                    pass.count(),
+                    width as u64 * height as u64,
+                    wall_memo.values() as u64,
+                    options.bounces.saturating_sub(1),
+                );
+                crate::onward::build_onward(&trace, wall_memo, gathers, pass.seed, stats)
+            });
+        Fills { caustics, onward }
     }
+}
+
+/// Passes `group` of a path-traced render, each with its own fills, every
+/// pixel taking them in turn from its totals `previous` (empty before
+/// the first pass): the pixels' new totals.
+fn path_passes(
+    scene: &Scene,
+    options: &RenderOptions,
+    shared: &Shared,
+    group: &[Pass],
+    previous: &[PixelSums],
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Vec<PixelSums>, Stats) {
+    let (width, height) = image_size(scene, options.scale);
+    let plan = &shared.plan;
+    let mut stats = Stats::default();
+    let fills: Vec<Fills> = group
+        .iter()
+        .map(|pass| Fills::new(scene, options, shared, pass, &mut stats))
+        .collect();
+    let contexts = group
+        .iter()
+        .zip(&fills)
+        .map(|(pass, fills)| Context {
+            options,
+            pass,
+            size: (width, height),
+            floor_memo: plan.floor_memo,
+            coherence: shared.coherence.as_ref(),
+            culling: plan.floor_ray_culling,
+            trace: trace_for(
+                scene,
+                options,
+                shared,
+                (
+                    fills.caustics.as_ref(),
+                    fills
+                        .onward
+                        .as_ref()
+                        .map(|memo| Onward::of(memo, pass.middle)),
+                ),
+            ),
+            one_bounce_memo: shared.memo.as_ref().filter(|_| {
+                plan.indirect && options.bounces == 1 && options.takes(FastPath::Shortcut)
+            }),
+            render_pixel: if options.takes(FastPath::Avx) {
+                pixel_fn()
+            } else {
+                render_pixel
+            },
+        })
+        .collect();
+    let outcome = run(
+        &PixelEstimator {
+            contexts,
+            tiles: &shared.tiles,
+            previous,
+        },
+        stats,
+        progress,
+    );
+    (outcome.output, outcome.stats)
 }
 
 /// The path estimators (`Path`, `Original`) as units of the render loop:
 /// a tile of pixels each, in blocks of [`CULL_BLOCK`] pixels (which share
 /// their culling lists), then pixel by pixel.
 struct PixelEstimator<'a> {
-    context: Context<'a>,
-    tiles: Vec<(u32, u32)>,
+    /// One per pass, in order.
+    contexts: Vec<Context<'a>>,
+    tiles: &'a [(u32, u32)],
+    /// The pixels' totals before these passes (empty before the first).
+    previous: &'a [PixelSums],
 }
 
 impl Estimator for PixelEstimator<'_> {
-    type Output = Image;
+    type Output = Vec<PixelSums>;
 
     fn size(&self) -> (u32, u32) {
-        self.context.size
+        self.contexts.first().map_or((0, 0), |c| c.size)
     }
 
     fn units(&self) -> usize {
@@ -338,7 +582,15 @@ impl Estimator for PixelEstimator<'_> {
     }
 
     fn render_unit(&self, unit: usize, stats: &mut Stats, progress: &(dyn Fn(u64) + Sync)) -> Part {
-        let context = &self.context;
+        let contexts = &self.contexts[..];
+        let Some(context) = contexts.first() else {
+            return Part::Tile {
+                x0: 0,
+                y0: 0,
+                width: 0,
+                values: Vec::new(),
+            };
+        };
         let scene = context.trace.scene;
         let (width, height) = context.size;
         let step = pixel_size(scene, (width, height));
@@ -348,7 +600,7 @@ impl Estimator for PixelEstimator<'_> {
         let x1 = (x0 + TILE).min(width);
         let y1 = (y0 + TILE).min(height);
         let tile_width = x1 - x0;
-        let mut values = vec![[0.0; 3]; (tile_width * (y1 - y0)) as usize];
+        let mut values = vec![PixelSums::default(); (tile_width * (y1 - y0)) as usize];
         // The walls each arc of directions can meet, for the tile and
         // then for each block of it (tested against the tile's lists).
         let mut tile_arcs = ArcCandidates::default();
@@ -368,13 +620,22 @@ impl Estimator for PixelEstimator<'_> {
                 });
                 for y in by..by1 {
                     for x in bx..bx1 {
-                        values[((y - y0) * tile_width + x - x0) as usize] =
-                            (context.render_pixel)(context, x, y, culled, &mut batch, stats);
+                        let k = (y * width + x) as usize;
+                        let total = self.previous.get(k).copied();
+                        values[((y - y0) * tile_width + x - x0) as usize] = (context.render_pixel)(
+                            contexts,
+                            total,
+                            (x, y),
+                            culled,
+                            &mut batch,
+                            stats,
+                        );
                     }
                 }
             }
         }
-        progress(values.len() as u64 * context.options.samples as u64);
+        let samples: u64 = contexts.iter().map(|c| c.pass.count() as u64).sum();
+        progress(values.len() as u64 * samples);
         Part::Tile {
             x0,
             y0,
@@ -383,12 +644,11 @@ impl Estimator for PixelEstimator<'_> {
         }
     }
 
-    fn finish(&self, film: Film, _stats: &mut Stats) -> Image {
-        Image {
-            width: film.width,
-            height: film.height,
-            pixels: film.values,
+    fn finish(&self, film: Film, _stats: &mut Stats) -> Vec<PixelSums> {
+        if film.values.is_empty() {
+            return vec![PixelSums::default(); film.width as usize * film.height as usize];
         }
+        film.values
     }
 }
 
@@ -400,9 +660,10 @@ fn pixel_size(scene: &Scene, (width, height): (u32, u32)) -> DVec2 {
     )
 }
 
-/// What every pixel of one render shares.
+/// What every pixel of one render pass shares.
 struct Context<'a> {
     options: &'a RenderOptions,
+    pass: &'a Pass,
     size: (u32, u32),
     /// Whether the floor's direct light is estimated once per pixel.
     floor_memo: bool,
@@ -418,30 +679,37 @@ struct Context<'a> {
     render_pixel: PixelFn,
 }
 
-type PixelFn = fn(&Context, u32, u32, Option<&BlockCulling>, &mut Batch, &mut Stats) -> [f32; 3];
+type PixelFn = fn(
+    &[Context],
+    Option<PixelSums>,
+    (u32, u32),
+    Option<&BlockCulling>,
+    &mut Batch,
+    &mut Stats,
+) -> PixelSums;
 
 /// [`render_pixel`] compiled with AVX2 (the same operations, so the same
 /// bits: no fused multiply-add is enabled).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn render_pixel_avx2(
-    context: &Context,
-    x: u32,
-    y: u32,
+    contexts: &[Context],
+    total: Option<PixelSums>,
+    (x, y): (u32, u32),
     culled: Option<&BlockCulling>,
     batch: &mut Batch,
     stats: &mut Stats,
-) -> [f32; 3] {
-    render_pixel(context, x, y, culled, batch, stats)
+) -> PixelSums {
+    render_pixel(contexts, total, (x, y), culled, batch, stats)
 }
 
 /// The fastest [`render_pixel`] this processor runs.
 fn pixel_fn() -> PixelFn {
     #[cfg(target_arch = "x86_64")]
     if !flatray_geometry::portable_forced() && is_x86_feature_detected!("avx2") {
-        return |context, x, y, culled, batch, stats| {
+        return |contexts, total, xy, culled, batch, stats| {
             // SAFETY: the processor has AVX2, checked just above.
-            unsafe { render_pixel_avx2(context, x, y, culled, batch, stats) }
+            unsafe { render_pixel_avx2(contexts, total, xy, culled, batch, stats) }
         };
     }
     // Out of line, compiled for any x86-64 processor (or any other).
@@ -455,14 +723,36 @@ fn light_table_for(scene: &Scene, options: &RenderOptions, plan: &Plan) -> Optio
         .flatten()
 }
 
-/// The switches of a path sample, from the plan.
+/// The switches of a path sample, from the plan, with a pass's fills.
 fn trace_for<'a>(
+    scene: &'a Scene,
+    options: &RenderOptions,
+    shared: &'a Shared,
+    (caustics, onward): (Option<&'a Caustics>, Option<Onward<'a>>),
+) -> Trace<'a> {
+    trace_with(
+        scene,
+        options,
+        &shared.plan,
+        (shared.memo.as_ref(), caustics),
+        shared
+            .mirror_arcs
+            .as_ref()
+            .map(|arcs| arcs as &dyn MirrorWalls),
+        shared.light_table.as_ref(),
+        onward,
+    )
+}
+
+/// The switches of a path sample, from the plan and what it reads.
+fn trace_with<'a>(
     scene: &'a Scene,
     options: &RenderOptions,
     plan: &Plan,
     (memo, caustics): (Option<&'a WallMemo>, Option<&'a Caustics>),
     mirror_arcs: Option<&'a dyn MirrorWalls>,
     light_table: Option<&'a LightTable>,
+    onward: Option<Onward<'a>>,
 ) -> Trace<'a> {
     let bounces = if plan.indirect { options.bounces } else { 0 };
     let force = options.reference;
@@ -479,28 +769,38 @@ fn trace_for<'a>(
         caustics,
         mirror_arcs,
         light_table,
-        onward: None,
+        onward,
     }
 }
 
-/// Stream sample indices from here up key the floor memo's strata, apart
-/// from every path sample's.
+/// Stream sample indices from here up key the floor memo's points' line
+/// light numbers, apart from every path sample's.
 const FLOOR_STREAMS: u64 = 1 << 40;
 
-/// One pixel's value: exposure times floor albedo times its mean fluence.
-/// With the floor memo, the floor's direct light is estimated once per
-/// pixel over a stratified grid and every path sample reuses it; without,
-/// each sample estimates it anew. A sample whose estimate is not finite is
-/// left out and reported in `stats`.
+/// The stream sample index that draws a pixel's seeds for its floor
+/// points' scrambling.
+const FLOOR_SEED_STREAM: u64 = (1 << 41) + 1;
+
+/// One pixel's totals after the passes of `contexts` (one per pass, in
+/// order), from its totals `total` before them (`None` before the first
+/// pass). Each pass adds the floor's direct light and its path samples,
+/// each half weighted by its samples (`passes.rs`). With the floor memo,
+/// the floor's direct light is estimated once per pixel over all the
+/// passes' floor points, each pass reading its own; without, each sample
+/// estimates it anew. A sample whose estimate is not finite is left out
+/// and reported in `stats`.
 #[inline(always)]
 fn render_pixel(
-    context: &Context,
-    x: u32,
-    y: u32,
+    contexts: &[Context],
+    mut total: Option<PixelSums>,
+    (x, y): (u32, u32),
     culled: Option<&BlockCulling>,
     batch: &mut Batch,
     stats: &mut Stats,
-) -> [f32; 3] {
+) -> PixelSums {
+    let (Some(first), Some(last)) = (contexts.first(), contexts.last()) else {
+        return total.unwrap_or_default();
+    };
     let Context {
         options,
         size,
@@ -508,14 +808,14 @@ fn render_pixel(
         coherence,
         ref trace,
         ..
-    } = *context;
+    } = *first;
     let scene = trace.scene;
     let pixel = Pixel::new(scene, size, x, y, options.seed);
     let step = pixel.step;
     let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
-    let mut direct = Rgb::ZERO;
-    let grid = floor_grid(&options.memo, options.samples);
-    if floor_memo {
+    // The passes' floor points: the direct light at each, filled once.
+    let points = first.pass.points.start..last.pass.points.end;
+    if floor_memo && !points.is_empty() {
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
         let visibility = &mut batch.visibility;
@@ -567,23 +867,28 @@ fn render_pixel(
                 }
             }
         }
-        // The strata's points, and the number each line light draws, in
-        // the order `direct_light_with` draws them; then the lights one
-        // by one over all strata (`direct_light_strata`).
+        // The pass's points (progressive jitter: the pixel's earlier
+        // points are drawn again to place them), and the numbers each line
+        // light draws, in the order `direct_light_with` draws them; then
+        // the lights one by one over all points (`direct_light_strata`).
+        // The pass's points, from the pixel's scrambled Sobol sequence,
+        // and the numbers each line light draws, in the order
+        // `direct_light_with` draws them; then the lights one by one over
+        // all points (`direct_light_strata`).
         let floor = &mut batch.floor;
         floor.points.clear();
         floor.numbers.clear();
         let numbers = numbers_per_point(scene, trace.light_table);
-        // Stratum `k` is cell `(k % grid, k / grid)`, without dividing.
-        let cells = (0..grid).flat_map(|row| (0..grid).map(move |column| (column, row)));
-        for (k, (column, row)) in cells.enumerate() {
-            let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
-            let cell = DVec2::new(column as f64, row as f64);
-            let (jx, jy) = stream.uniform_pair();
-            let jitter = (cell + DVec2::new(jx, jy)) / grid as f64;
-            floor.points.push(corner + jitter * step);
-            for _ in 0..numbers {
-                floor.numbers.push(stream.uniform());
+        let bits = pixel.key.stream(FLOOR_SEED_STREAM).bits();
+        let seeds = [(bits >> 32) as u32, bits as u32];
+        floor.points.resize(points.len(), DVec2::ZERO);
+        sobol_points(points.start, seeds, (corner, step), &mut floor.points);
+        if numbers > 0 {
+            for k in points.clone() {
+                let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
+                for _ in 0..numbers {
+                    floor.numbers.push(stream.uniform());
+                }
             }
         }
         let shadow_walls = culled.map(|c| &c.shadows[..]);
@@ -616,96 +921,121 @@ fn render_pixel(
             }
             None => direct_light_points(scene, floor, visibility, stats),
         }
-        direct = strata_sum(&floor.values, (x, y), stats) / (grid * grid) as f64;
-        stats.work.floor_memo_reuses += options.samples as u64;
     }
-    let mut sums = Sums::new(options.samples);
+    // Every pass's path samples, arc by arc over all of them.
+    let mut sums = std::mem::take(&mut batch.sums);
+    sums.clear();
+    sums.extend(contexts.iter().map(|c| Sums::new(c.pass.middle)));
     match culled {
         Some(culled) => {
             // Unchecked, a sample that is not finite makes the sum not
             // finite; then the pixel's samples are taken again, each
             // checked (a rare case: no test per sample in the common one).
             let before = *stats;
-            culled_samples::<false>(context, &pixel, culled, &mut sums, stats);
-            if !sums.all.is_finite() {
+            culled_samples::<false>(contexts, &pixel, culled, &mut sums, stats);
+            if !sums.iter().all(|s| s.all.is_finite()) {
                 *stats = before;
-                sums = Sums::new(options.samples);
-                checked_culled_samples(context, &pixel, culled, &mut sums, stats);
+                for (sum, context) in sums.iter_mut().zip(contexts) {
+                    *sum = Sums::new(context.pass.middle);
+                }
+                checked_culled_samples(contexts, &pixel, culled, &mut sums, stats);
             }
         }
         None => {
-            for (_, of_arc) in sample_order(pixel.arc_offset, options.samples) {
+            let all = first.pass.samples.start..last.pass.samples.end;
+            for (_, of_arc) in sample_order(pixel.arc_offset, all) {
                 for sample in of_arc {
-                    let value = sample_with(context, &pixel, sample, stats);
-                    add_sample::<true>(&mut sums, value, (x, y, sample), stats);
+                    let pass = pass_of(contexts, sample);
+                    let value = sample_with(&contexts[pass], &pixel, sample, stats);
+                    add_sample::<true>(&mut sums[pass], value, (x, y, sample), stats);
                 }
             }
         }
     }
-    let mut mean = direct + sums.all / options.samples.max(1) as f64;
-    if let Some(caustics) = trace.caustics {
-        mean += caustics.floor[(y * size.0 + x) as usize];
+    for (context, sum) in contexts.iter().zip(&sums) {
+        let pass_sums = pass_sums(
+            context,
+            *sum,
+            (x, y),
+            &batch.floor.values,
+            points.start,
+            stats,
+        );
+        total = Some(match total {
+            None => pass_sums,
+            Some(t) => crate::passes::fold(t, pass_sums),
+        });
     }
-    let albedo = scene.floor.albedo_at(&scene.canvas, corner + 0.5 * step);
-    let scale = albedo * options.exposure;
-    let value = mean * scale;
-    // The pixel's noise, from its two halves of samples (and of strata).
-    let (n, first) = (options.samples, sums.half);
-    if first > 0 {
-        let (direct_first, direct_second) = if floor_memo {
-            strata_halves(&batch.floor.values, grid)
-        } else {
-            (Rgb::ZERO, Rgb::ZERO)
-        };
-        let a = direct_first + sums.first / first as f64;
-        let b = direct_second + (sums.all - sums.first) / (n - first) as f64;
-        let weight = first as f64 * (n - first) as f64 / (n as f64 * n as f64);
-        stats.noise.add((a - b) * scale, value, weight);
-    }
-    [value.x as f32, value.y as f32, value.z as f32]
+    batch.sums = sums;
+    total.unwrap_or_default()
 }
 
-/// The means of a pixel's floor strata over the two colours of a
-/// checkerboard of its grid: two estimates of its direct light, each over
-/// the whole pixel. Strata that are not finite are left out.
-fn strata_halves(values: &[Rgb], grid: u32) -> (Rgb, Rgb) {
-    let mut sums = [Rgb::ZERO; 2];
-    let mut counts = [0u32; 2];
-    for (row, values) in values.chunks(grid.max(1) as usize).enumerate() {
-        for (column, &value) in values.iter().enumerate() {
-            let colour = (row + column) & 1;
-            if value.is_finite() {
-                sums[colour] += value;
-                counts[colour] += 1;
-            }
+/// The pass of `contexts` (consecutive passes of the schedule) that takes
+/// `sample`.
+#[inline(always)]
+fn pass_of(contexts: &[Context], sample: u32) -> usize {
+    let first = contexts.first().map_or(0, |c| c.pass.index);
+    (crate::passes::pass_index(sample).saturating_sub(first) as usize)
+        .min(contexts.len().saturating_sub(1))
+}
+
+/// One pass's sums for one pixel: its path samples' `sums`, its direct
+/// light from its own floor points (among `values`, filled from point
+/// `first_point` on), and its caustic pass's light on the floor.
+#[inline(always)]
+fn pass_sums(
+    context: &Context,
+    sums: Sums,
+    (x, y): (u32, u32),
+    values: &[Rgb],
+    first_point: u32,
+    stats: &mut Stats,
+) -> PixelSums {
+    let pass = context.pass;
+    let mut halves = (Rgb::ZERO, Rgb::ZERO);
+    if context.floor_memo && !pass.points.is_empty() {
+        let from = (pass.points.start - first_point) as usize;
+        let to = (pass.points.end - first_point) as usize;
+        if let Some(values) = values.get(from..to) {
+            halves = strata_halves(values, (x, y), stats);
         }
+        stats.work.floor_memo_reuses += pass.count() as u64;
     }
-    let mean = |k: usize| sums[k] / counts[k].max(1) as f64;
-    if counts[1] == 0 {
-        // One stratum: both halves hold it, and it adds no difference.
-        return (mean(0), mean(0));
+    // The caustic pass's light on the floor, from each half of its
+    // photons.
+    if let Some(caustics) = context.trace.caustics {
+        let (first, second) = caustics.floor_halves((y * context.size.0 + x) as usize);
+        halves = (halves.0 + first, halves.1 + second);
     }
-    (mean(0), mean(1))
+    let mut pixel_sums = pass.weigh_halves(halves);
+    pixel_sums.all += sums.all;
+    pixel_sums.first += sums.first;
+    pixel_sums
 }
 
-/// The sum of a pixel's floor strata, those that are not finite left out
-/// and counted (as sample `u32::MAX` of pixel `(x, y)`). Checked only when
-/// the plain sum is not finite, as the samples are: a value that is not
-/// finite makes it so.
-fn strata_sum(values: &[Rgb], (x, y): (u32, u32), stats: &mut Stats) -> Rgb {
-    let sum = values.iter().fold(Rgb::ZERO, |sum, &value| sum + value);
-    if sum.is_finite() {
-        return sum;
-    }
-    let mut sum = Rgb::ZERO;
-    for &value in values {
+/// The means of a pass's floor points over the first and the second half
+/// of them: two estimates of the pixel's direct light, each over the
+/// whole pixel; the mean of all, twice, for a single point. Points that
+/// are not finite count as zero, and are reported (as sample `u32::MAX`
+/// of pixel `(x, y)`).
+fn strata_halves(values: &[Rgb], (x, y): (u32, u32), stats: &mut Stats) -> (Rgb, Rgb) {
+    let middle = values.len() / 2;
+    let mut sums = [Rgb::ZERO; 2];
+    for (k, &value) in values.iter().enumerate() {
         if value.is_finite() {
-            sum += value;
+            sums[(k >= middle) as usize] += value;
         } else {
             stats.record_nonfinite(x, y, u32::MAX);
         }
     }
-    sum
+    if middle == 0 {
+        let all = sums[1] / values.len().max(1) as f64;
+        return (all, all);
+    }
+    (
+        sums[0] / middle as f64,
+        sums[1] / (values.len() - middle) as f64,
+    )
 }
 
 /// A pixel's position, stream key, size and the turn of its samples'
@@ -807,19 +1137,36 @@ fn finish(
     )
 }
 
-/// The order in which a pixel's samples are taken and summed, whether
-/// culled or not: chunk by chunk of [`CHUNK`] samples, in each arc by arc
-/// (see [`sample_arc`]), in each by index. Yields each arc with its
-/// samples in the chunk (at most [`LANES`]).
-fn sample_order(offset: usize, samples: u32) -> impl Iterator<Item = (usize, StepBy<Range<u32>>)> {
-    (0..samples).step_by(CHUNK).flat_map(move |first| {
-        let last = (first + CHUNK as u32).min(samples);
-        (0..ARCS).map(move |arc| {
-            (
-                arc,
-                (first + first_sample_of_arc(offset, arc)..last).step_by(ARCS),
-            )
-        })
+/// The order in which a pixel's samples `samples` are taken and summed,
+/// whether culled or not: chunk by chunk of [`CHUNK`] samples (from a
+/// multiple of it to the next), in each arc by arc (see [`sample_arc`]),
+/// in each by index. Yields each arc that has samples in the chunk, with
+/// them (at most [`LANES`]). The samples of any pass are taken in the
+/// same order whether it is rendered alone or with others.
+fn sample_order(
+    offset: usize,
+    samples: Range<u32>,
+) -> impl Iterator<Item = (usize, StepBy<Range<u32>>)> {
+    let end = samples.end;
+    let chunks = std::iter::successors(Some(samples.start), move |&first| {
+        let next = (first / CHUNK as u32 + 1).saturating_mul(CHUNK as u32);
+        (next < end).then_some(next)
+    })
+    .filter(move |&first| first < end);
+    chunks.flat_map(move |first| {
+        let last = (first / CHUNK as u32 + 1)
+            .saturating_mul(CHUNK as u32)
+            .min(end);
+        (0..ARCS)
+            .map(move |arc| {
+                // The arc's first sample from `first` on: its samples are
+                // `ARCS` apart.
+                let residue = first_sample_of_arc(offset, arc);
+                let ahead = (residue + ARCS as u32 - first % ARCS as u32) % ARCS as u32;
+                (arc, (first.saturating_add(ahead)..last).step_by(ARCS))
+            })
+            // A chunk of fewer samples than arcs leaves arcs empty.
+            .filter(|(_, of_arc)| of_arc.len() > 0)
     })
 }
 
@@ -833,18 +1180,21 @@ fn sample_order(offset: usize, samples: u32) -> impl Iterator<Item = (usize, Ste
 /// no wall, its samples are known to be zero and are not drawn at all.
 #[inline(always)]
 fn culled_samples<const CHECKED: bool>(
-    context: &Context,
+    contexts: &[Context],
     pixel: &Pixel,
     culled: &BlockCulling,
-    sum: &mut Sums,
+    sums: &mut [Sums],
     stats: &mut Stats,
 ) {
-    let trace = &context.trace;
+    let (Some(first), Some(last)) = (contexts.first(), contexts.last()) else {
+        return;
+    };
+    let trace = &first.trace;
     let scene = trace.scene;
-    let samples = context.options.samples;
+    let samples = first.pass.samples.start..last.pass.samples.end;
     let (arcs, shadow_walls) = (&culled.arcs, Some(&culled.shadows[..]));
     let empty_arcs_add_nothing = !trace.floor_direct && !trace.force;
-    stats.physics.camera_samples += samples as u64;
+    stats.physics.camera_samples += samples.len() as u64;
     let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
     for (arc, of_arc) in sample_order(pixel.arc_offset, samples) {
         let walls = arcs.arc(arc);
@@ -859,16 +1209,19 @@ fn culled_samples<const CHECKED: bool>(
             // As many lanes as the arc has samples, rounded up to a power
             // of two: few samples per arc draw no idle lanes.
             let count = of_arc.len();
-            let args = (context, pixel, arc, walls, of_arc);
+            let args = (contexts, pixel, arc, walls, of_arc);
             match count {
-                1 => arc_in_lanes::<CHECKED, 1>(args, sum, stats),
-                2 => arc_in_lanes::<CHECKED, 2>(args, sum, stats),
-                3 | 4 => arc_in_lanes::<CHECKED, 4>(args, sum, stats),
-                _ => arc_in_lanes::<CHECKED, LANES>(args, sum, stats),
+                1 => arc_in_lanes::<CHECKED, 1>(args, sums, stats),
+                2 => arc_in_lanes::<CHECKED, 2>(args, sums, stats),
+                3 | 4 => arc_in_lanes::<CHECKED, 4>(args, sums, stats),
+                _ => arc_in_lanes::<CHECKED, LANES>(args, sums, stats),
             }
             continue;
         }
         for sample in of_arc {
+            let pass = pass_of(contexts, sample);
+            let context = &contexts[pass];
+            let trace = &context.trace;
             let mut stream = pixel.key.stream(sample as u64);
             let p = pixel.receiver(scene, &mut stream);
             let begun = path_begin(trace, p, arc, shadow_walls, &mut stream, stats);
@@ -892,28 +1245,28 @@ fn culled_samples<const CHECKED: bool>(
                 }
                 None => begun.fluence,
             };
-            add_sample::<CHECKED>(sum, value, (x, y, sample), stats);
+            add_sample::<CHECKED>(&mut sums[pass], value, (x, y, sample), stats);
         }
     }
 }
 
 /// [`culled_samples`] with every sample checked, out of line: for the
-/// rare pixel whose unchecked sum is not finite.
+/// rare pixel whose unchecked sums are not all finite.
 #[inline(never)]
 fn checked_culled_samples(
-    context: &Context,
+    contexts: &[Context],
     pixel: &Pixel,
     culled: &BlockCulling,
-    sum: &mut Sums,
+    sums: &mut [Sums],
     stats: &mut Stats,
 ) {
-    culled_samples::<true>(context, pixel, culled, sum, stats);
+    culled_samples::<true>(contexts, pixel, culled, sums, stats);
 }
 
-/// A pixel's sum of sample values, and apart the sum of its first half
-/// of samples (those below `half`), whose difference from the second
-/// half estimates the pixel's noise. The sum of all is taken in the same
-/// order with or without the halves: the image does not change.
+/// A pixel's sum of sample values in one pass, and apart the sum of its
+/// first half of samples (those below `half`), whose difference from the
+/// second half estimates the pixel's noise. The sum of all is taken in
+/// the same order with or without the halves: the image does not change.
 #[derive(Clone, Copy, Debug)]
 struct Sums {
     all: Rgb,
@@ -922,11 +1275,11 @@ struct Sums {
 }
 
 impl Sums {
-    fn new(samples: u32) -> Sums {
+    fn new(half: u32) -> Sums {
         Sums {
             all: Rgb::ZERO,
             first: Rgb::ZERO,
-            half: samples / 2,
+            half,
         }
     }
 
@@ -959,16 +1312,18 @@ fn add_sample<const CHECKED: bool>(
 /// The samples `of_arc` (at most `N`, of [`LANES`] at most), all of arc
 /// `arc`, whose paths start with nothing (no floor light of their own):
 /// drawn, their first rays built and tested against `walls` in `N` lanes,
-/// one lane per sample, then each path finished alone and added to `sum`
-/// in order. The same values as [`sample_with`] gives.
+/// one lane per sample, then each path finished alone, with its pass's
+/// fills, and added to its pass's sum in order. The same values as [`sample_with`] gives.
 #[inline(always)]
 fn arc_in_lanes<const CHECKED: bool, const N: usize>(
-    (context, pixel, arc, walls, of_arc): (&Context, &Pixel, usize, &[u32], StepBy<Range<u32>>),
-    sum: &mut Sums,
+    (contexts, pixel, arc, walls, of_arc): (&[Context], &Pixel, usize, &[u32], StepBy<Range<u32>>),
+    sums: &mut [Sums],
     stats: &mut Stats,
 ) {
-    let trace = &context.trace;
-    let scene = trace.scene;
+    let Some(context) = contexts.first() else {
+        return;
+    };
+    let scene = context.trace.scene;
     let count = of_arc.len();
     // Every lane is drawn, those past the chunk's end for samples that
     // are not taken: the loops below have a fixed length.
@@ -1000,6 +1355,8 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
     stats.work.culled_walls_tested += (walls.len() * count) as u64;
     let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
     for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
+        let pass = pass_of(contexts, sample);
+        let trace = &contexts[pass].trace;
         // `path_finish`'s common case first, from the lanes as they are.
         let dir = DVec2::new(rays.dx[k], rays.dy[k]);
         let shortcut = context.one_bounce_memo.and_then(|memo| {
@@ -1018,7 +1375,7 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
                 stats,
             ),
         };
-        add_sample::<CHECKED>(sum, value, (x, y, sample), stats);
+        add_sample::<CHECKED>(&mut sums[pass], value, (x, y, sample), stats);
     }
 }
 
@@ -1073,8 +1430,10 @@ struct Batch {
     /// Per light, whether the pixel shares its transmittance and it is
     /// not yet traced (with a light table and coherence masks).
     shared: Vec<bool>,
-    /// The floor memo's strata of one pixel.
+    /// The floor memo's points of one pixel, for all its passes.
     floor: Strata,
+    /// The path samples' sums of each pass.
+    sums: Vec<Sums>,
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of
@@ -1102,19 +1461,22 @@ pub fn pixel_sample(
     let plan = Plan::new(scene, &options);
     // The render's own table, built again: the same from the same seed.
     let light_table = light_table_for(scene, &options, &plan);
+    let pass = Pass::new(0, sample..sample.saturating_add(1), (0, 0), options.seed);
     let context = Context {
         options: &options,
+        pass: &pass,
         size,
         floor_memo: false,
         coherence: None,
         culling: false,
-        trace: trace_for(
+        trace: trace_with(
             scene,
             &options,
             &plan,
             (None, None),
             None,
             light_table.as_ref(),
+            None,
         ),
         one_bounce_memo: None,
         render_pixel,
@@ -1135,23 +1497,22 @@ mod tests {
     fn strata_that_are_not_finite_are_left_out_and_counted() {
         let v = |x: f64| Rgb::new(x, 1.0, 2.0);
         let mut stats = Stats::default();
-        let finite = [v(1.0), v(2.0), v(3.0)];
+        let finite = [v(1.0), v(3.0), v(2.0), v(6.0)];
         assert_eq!(
-            strata_sum(&finite, (4, 5), &mut stats),
-            Rgb::new(6.0, 3.0, 6.0)
+            strata_halves(&finite, (4, 5), &mut stats),
+            (Rgb::new(2.0, 1.0, 2.0), Rgb::new(4.0, 1.0, 2.0))
         );
         assert_eq!(stats.physics.nonfinite_samples, 0);
-        // An infinity, a NaN, and finite values whose sum overflows (all
-        // finite: kept, as before the check moved).
-        let mixed = [v(1.0), v(f64::INFINITY), v(2.0), v(f64::NAN), v(3.0)];
+        // An infinity and a NaN count as zero, and are counted.
+        let mixed = [v(1.0), v(3.0), v(f64::INFINITY), v(f64::NAN)];
         assert_eq!(
-            strata_sum(&mixed, (4, 5), &mut stats),
-            Rgb::new(6.0, 3.0, 6.0)
+            strata_halves(&mixed, (4, 5), &mut stats),
+            (Rgb::new(2.0, 1.0, 2.0), Rgb::ZERO)
         );
         assert_eq!(stats.physics.nonfinite_samples, 2);
         assert_eq!(stats.physics.first_nonfinite, Some((4, 5, u32::MAX)));
-        let huge = [v(f64::MAX), v(f64::MAX)];
-        assert_eq!(strata_sum(&huge, (4, 5), &mut stats).x, f64::INFINITY);
-        assert_eq!(stats.physics.nonfinite_samples, 2);
+        // One point: its value, for both halves.
+        let one = strata_halves(&finite[..1], (4, 5), &mut stats);
+        assert_eq!(one, (v(1.0), v(1.0)));
     }
 }

@@ -50,7 +50,7 @@ impl Stream {
 
     /// The next 64 random bits.
     #[inline]
-    fn bits(&mut self) -> u64 {
+    pub fn bits(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(GOLDEN);
         finalise(self.0)
     }
@@ -75,6 +75,12 @@ impl StreamKey {
     }
 }
 
+/// A seed for a part of a render apart from every other: `seed` mixed
+/// with `index`, as a pixel's stream key is.
+pub fn derive_seed(seed: u64, index: u64) -> u64 {
+    StreamKey::new(seed, index).0
+}
+
 /// SplitMix64's increment: 2^64 over the golden ratio, odd.
 const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
 
@@ -96,6 +102,141 @@ fn finalise(mut z: u64) -> u64 {
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^ (z >> 31)
 }
+
+/// Point `k` of a pixel's sequence of points in the unit square: the
+/// Sobol sequence's first two dimensions, Owen-scrambled by `seeds` (a
+/// pixel's own pair) with Burley's hash ("Practical hash-based Owen
+/// scrambling", 2020). Every prefix of the sequence is spread evenly, and
+/// any `2^m` points from a multiple of `2^m` on have one point in each of
+/// the `2^m` boxes of any shape `2^-a x 2^-(m-a)` (a (0, m, 2)-net): the
+/// first `4^L` points form a jittered grid of `2^L x 2^L` cells. The
+/// scrambling makes each point uniform over the square, so a render can
+/// draw more points later, and draw them alone, without moving the ones it
+/// has.
+#[inline]
+pub fn sobol_point(k: u32, seeds: [u32; 2]) -> DVec2 {
+    // The first dimension is the index with its bits reversed (van der
+    // Corput): scrambled, reversed, it is the index itself.
+    let x = laine_karras(k, seeds[0]).reverse_bits();
+    // The second, bit-reversed: the columns of its generator matrix for
+    // each set bit of the index.
+    let reversed = sobol_second_reversed(k);
+    let y = laine_karras(reversed, seeds[1]).reverse_bits();
+    let scale = 1.0 / (1u64 << 32) as f64;
+    DVec2::new(x as f64 * scale, y as f64 * scale)
+}
+
+/// [`SOBOL_SECOND_REVERSED`] summed (by exclusive or) over the set bits
+/// of each 10-bit number, for bits 0 to 9 and 10 to 19 of an index.
+const SOBOL_SECOND_TABLES: [[u32; 1024]; 2] = {
+    let mut tables = [[0u32; 1024]; 2];
+    let mut t = 0;
+    while t < 2 {
+        let mut i = 0;
+        while i < 1024 {
+            let mut sum = 0;
+            let mut bit = 0;
+            while bit < 10 {
+                if i >> bit & 1 == 1 {
+                    sum ^= SOBOL_SECOND_REVERSED[10 * t + bit];
+                }
+                bit += 1;
+            }
+            tables[t][i] = sum;
+            i += 1;
+        }
+        t += 1;
+    }
+    tables
+};
+
+/// Points `first ..` of a pixel's sequence ([`sobol_point`]), as many as
+/// `points` holds, each scaled by `step` from `corner`: the same points,
+/// eight at a time in vector instructions (of the caller's target
+/// features: inlined always).
+#[inline(always)]
+pub fn sobol_points(
+    first: u32,
+    seeds: [u32; 2],
+    (corner, step): (DVec2, DVec2),
+    points: &mut [DVec2],
+) {
+    let scale = 1.0 / (1u64 << 32) as f64;
+    let mut k = first;
+    let mut rest = &mut points[..];
+    // One by one up to a multiple of eight, then eight at a time.
+    while !rest.is_empty() && (!k.is_multiple_of(8) || rest.len() < 8) {
+        rest[0] = corner + sobol_point(k, seeds) * step;
+        rest = &mut rest[1..];
+        k = k.wrapping_add(1);
+    }
+    while rest.len() >= 8 {
+        // The second dimension is linear in the index's bits: the eight
+        // share the high bits' columns and differ by the low three's.
+        let high = sobol_second_reversed(k);
+        let (mut xs, mut ys) = ([0u32; 8], [0u32; 8]);
+        for j in 0..8 {
+            xs[j] = laine_karras(k + j as u32, seeds[0]).reverse_bits();
+            ys[j] = laine_karras(high ^ SOBOL_SECOND_TABLES[0][j], seeds[1]).reverse_bits();
+        }
+        for j in 0..8 {
+            let p = DVec2::new(xs[j] as f64 * scale, ys[j] as f64 * scale);
+            rest[j] = corner + p * step;
+        }
+        rest = &mut rest[8..];
+        k = k.wrapping_add(8);
+        while !rest.is_empty() && rest.len() < 8 {
+            rest[0] = corner + sobol_point(k, seeds) * step;
+            rest = &mut rest[1..];
+            k = k.wrapping_add(1);
+        }
+    }
+}
+
+/// The Sobol sequence's second dimension at index `k`, bit-reversed and
+/// not scrambled.
+#[inline(always)]
+fn sobol_second_reversed(k: u32) -> u32 {
+    let mut reversed = SOBOL_SECOND_TABLES[0][(k & 1023) as usize]
+        ^ SOBOL_SECOND_TABLES[1][((k >> 10) & 1023) as usize];
+    let (mut rest, mut column) = (k >> 20, 20u32);
+    while rest != 0 {
+        let skip = rest.trailing_zeros();
+        column += skip;
+        reversed ^= SOBOL_SECOND_REVERSED[column as usize];
+        rest = rest.checked_shr(skip + 1).unwrap_or(0);
+        column += 1;
+    }
+    reversed
+}
+
+/// The Laine-Karras permutation with Burley's constants: a hash of `x`
+/// that flips each bit by the bits below it (the nested scramble, in the
+/// bit-reversed order).
+#[inline]
+fn laine_karras(mut x: u32, seed: u32) -> u32 {
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50_b47c);
+    x ^= x.wrapping_mul(0xb82f_1e52);
+    x ^= x.wrapping_mul(0xc7af_e638);
+    x ^= x.wrapping_mul(0x8d22_f6e6);
+    x
+}
+
+/// The Sobol sequence's second dimension's generator columns (direction
+/// numbers `v_0 = 2^31`, `v_j = v_(j-1) xor v_(j-1) >> 1`), each with its
+/// bits reversed.
+const SOBOL_SECOND_REVERSED: [u32; 32] = {
+    let mut columns = [0u32; 32];
+    let mut v = 1u32 << 31;
+    let mut j = 0;
+    while j < 32 {
+        columns[j] = v.reverse_bits();
+        v ^= v >> 1;
+        j += 1;
+    }
+    columns
+};
 
 /// A uniform direction on the circle (pdf `1 / 2pi` per radian): one
 /// number, turned into an angle by [`circle_point`].
@@ -539,6 +680,92 @@ mod tests {
                 (hi.sin() - lo.sin()) / 2.0
             })
             .collect()
+    }
+
+    /// A pixel's scrambling seeds, from `seed`.
+    fn seeds(seed: u64) -> [u32; 2] {
+        let bits = Stream::new(seed, 0, 0).bits();
+        [(bits >> 32) as u32, bits as u32]
+    }
+
+    /// The sequence's first `count` points for the seeds of `seed`.
+    fn sobol(seed: u64, count: u32) -> Vec<DVec2> {
+        (0..count).map(|k| sobol_point(k, seeds(seed))).collect()
+    }
+
+    /// Every `2^m` points from a multiple of `2^m` on, for `m` up to 10,
+    /// have one point in each box of every shape `2^-a x 2^-(m - a)`.
+    #[test]
+    fn sobol_points_form_nets() {
+        for seed in 0..8 {
+            let points = sobol(seed, 4096);
+            for m in 0..=10u32 {
+                let n = 1usize << m;
+                for block in points.chunks(n).take(3) {
+                    for a in 0..=m {
+                        let mut counts = vec![0u8; n];
+                        for p in block {
+                            assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y));
+                            let i = (p.x * (1u64 << a) as f64) as usize;
+                            let j = (p.y * (1u64 << (m - a)) as f64) as usize;
+                            counts[(i << (m - a)) | j] += 1;
+                        }
+                        assert!(counts.iter().all(|&c| c == 1), "seed {seed} m {m} a {a}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// The tables give the generator matrix's columns summed bit by bit,
+    /// for indices of any size.
+    #[test]
+    fn sobol_tables_match_the_columns() {
+        let seeds = [0, 0];
+        let mut stream = Stream::new(3, 0, 0);
+        for k in (0..5000).chain((0..5000).map(|_| stream.bits() as u32)) {
+            let mut reversed = 0u32;
+            for (bit, column) in SOBOL_SECOND_REVERSED.iter().enumerate() {
+                if k >> bit & 1 == 1 {
+                    reversed ^= column;
+                }
+            }
+            let y = laine_karras(reversed, seeds[1]).reverse_bits();
+            let expected = y as f64 / (1u64 << 32) as f64;
+            assert_eq!(sobol_point(k, seeds).y, expected, "index {k}");
+        }
+    }
+
+    /// Eight at a time, the same points.
+    #[test]
+    fn sobol_points_in_lanes_are_the_same() {
+        let seeds = [12345, 678910];
+        let (corner, step) = (DVec2::new(-3.0, 7.5), DVec2::new(0.25, 0.5));
+        for (first, count) in [(0, 64), (3, 29), (16, 16), (1000, 7), ((1 << 20) - 5, 40)] {
+            let mut points = vec![DVec2::ZERO; count];
+            sobol_points(first, seeds, (corner, step), &mut points);
+            for (j, p) in points.iter().enumerate() {
+                let expected = corner + sobol_point(first + j as u32, seeds) * step;
+                assert_eq!(*p, expected, "point {}", first + j as u32);
+            }
+        }
+    }
+
+    /// Each point, whatever its index, is uniform over the square across
+    /// pixels (seeds).
+    #[test]
+    fn sobol_points_are_each_uniform() {
+        for k in [0, 1, 3, 6, 17, 45, 1000] {
+            let mut counts = [0usize; BINS];
+            for seed in 0..40_000u64 {
+                let p = sobol_point(k, seeds(seed));
+                // Bins mix both coordinates, so each is tested.
+                let bin = ((p.x * 5.0) as usize) * 4 + (p.y * 4.0) as usize;
+                counts[bin] += 1;
+            }
+            let chi2 = chi_square(&counts, &[1.0 / BINS as f64; BINS]);
+            assert!(chi2 < CHI2_19_999, "point {k}: chi2 {chi2}");
+        }
     }
 
     #[test]

@@ -96,8 +96,8 @@ pub struct Plan {
     pub caustics_enabled: bool,
     /// The wall memo's bin length, in pixels, as given.
     pub bin_length: String,
-    /// The floor memo's strata per pixel, per side.
-    pub floor_grid: u32,
+    /// The floor memo's points per pixel, over the render's passes.
+    pub floor_points: u64,
     /// Whether the wall memo fits its budget.
     pub wall_memo_fits: bool,
     /// Wall-light pairs and pixel-light cells: what the coherence masks
@@ -243,7 +243,7 @@ impl Plan {
             memo_enabled: options.memo.enabled,
             caustics_enabled: options.caustics,
             bin_length: options.memo.bin_length.to_string(),
-            floor_grid: crate::memo::floor_grid(&options.memo, options.samples),
+            floor_points: crate::passes::floor_points(options.samples, options.memo.floor_samples),
             wall_memo_fits,
             pairs,
             mask_cells,

@@ -64,7 +64,7 @@ impl Plan {
             memo_enabled,
             caustics_enabled,
             ref bin_length,
-            floor_grid,
+            floor_points,
             wall_memo_fits,
             pairs,
             mask_cells,
@@ -287,10 +287,8 @@ impl Plan {
             } else if !indirect {
                 "no indirect path would reuse it".into()
             } else {
-                let grid = floor_grid;
                 format!(
-                    "{} stratified points per pixel (at least as many as the samples)",
-                    grid * grid
+                    "{floor_points} stratified points per pixel (at least as many as the samples)"
                 )
             },
         );

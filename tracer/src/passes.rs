@@ -1,0 +1,375 @@
+//! A render as a sequence of passes, each adding samples to the same
+//! pixels: 16 samples per pixel, then as many again, then doubling
+//! (16, 32, 64, 128, ...), the last pass ending wherever the render's
+//! samples do.
+//!
+//! A pass draws its own per-render fills (the caustic pass's photons, the
+//! onward memo's gathers, a light tracer's photons: as many as its own
+//! samples ask for, from its own seed) and adds each pixel's sums to the
+//! running totals. So a render of `n` samples is the same sequence of
+//! passes however it is driven: [`Progressive`] can stop after any pass,
+//! look at the noise, and go on, and the image is bit for bit the one
+//! [`crate::render`] gives for the samples reached. What is the same for
+//! every pass (the wall memo, the light table, the coherence masks, the
+//! culling lists) is built once.
+
+use std::ops::Range;
+
+use rayon::prelude::*;
+
+use crate::film::pixel_scale;
+use crate::render::{Image, RenderOptions, Rendered};
+use crate::scene::Scene;
+use crate::{Rgb, Stats};
+
+/// Samples per pixel at the end of the first pass.
+pub const FIRST_PASS: u32 = 16;
+
+/// Where the pass that starts at `done` samples per pixel ends, if the
+/// render goes on past it: the first pass at [`FIRST_PASS`], each later
+/// one at twice the samples it starts from.
+pub fn next_pass_end(done: u32) -> u32 {
+    if done == 0 {
+        FIRST_PASS
+    } else {
+        done.saturating_mul(2)
+    }
+}
+
+/// The floor memo's points per pixel over the passes of a render of
+/// `samples`, each pass taking as many as its samples and at least
+/// `fewest`.
+pub(crate) fn floor_points(samples: u32, fewest: u32) -> u64 {
+    let mut done = 0;
+    let mut points = 0u64;
+    while done < samples {
+        let end = next_pass_end(done).min(samples);
+        points += (end - done).max(fewest) as u64;
+        done = end;
+    }
+    points
+}
+
+/// The index of the pass of the schedule that takes sample `sample`: 0
+/// below [`FIRST_PASS`], then one more at each doubling.
+#[inline(always)]
+pub(crate) fn pass_index(sample: u32) -> u32 {
+    const _: () = assert!(FIRST_PASS == 16);
+    (u32::BITS - (sample | (FIRST_PASS - 1)).leading_zeros()).saturating_sub(4)
+}
+
+/// The passes of a render of `samples` samples per pixel, as ranges of
+/// sample indices.
+#[cfg(test)]
+fn passes(samples: u32) -> impl Iterator<Item = Range<u32>> {
+    let mut done = 0;
+    std::iter::from_fn(move || {
+        (done < samples).then(|| {
+            let end = next_pass_end(done).min(samples);
+            let pass = done..end;
+            done = end;
+            pass
+        })
+    })
+}
+
+/// One pass: which it is, its samples, and the seed of its fills.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Pass {
+    pub index: u32,
+    /// The samples it takes (sample indices of each pixel).
+    pub samples: Range<u32>,
+    /// Samples below this are in the first half, for the noise estimate
+    /// (and read the onward memo's first copy).
+    pub middle: u32,
+    /// The floor memo's points it draws (point indices of each pixel):
+    /// as many as its samples, and at least the memo's fewest.
+    pub points: Range<u32>,
+    /// The seed of the pass's own photons and gathers: the render's for
+    /// the first pass, mixed with the pass's index for the others.
+    pub seed: u64,
+}
+
+impl Pass {
+    /// Pass `index`, of `samples`, whose floor points start at
+    /// `first_point`, at least `fewest_points` of them.
+    pub fn new(
+        index: u32,
+        samples: Range<u32>,
+        (first_point, fewest_points): (u32, u32),
+        seed: u64,
+    ) -> Pass {
+        let middle = samples.start + (samples.end - samples.start) / 2;
+        let count = samples.end - samples.start;
+        let points = first_point..first_point.saturating_add(count.max(fewest_points));
+        let seed = match index {
+            0 => seed,
+            i => crate::sampling::derive_seed(seed, PASS_SEEDS + i as u64),
+        };
+        Pass {
+            index,
+            samples,
+            middle,
+            points,
+            seed,
+        }
+    }
+
+    /// Samples per pixel in the pass.
+    pub fn count(&self) -> u32 {
+        self.samples.end - self.samples.start
+    }
+
+    /// How many of them are in the first half.
+    pub fn first_count(&self) -> u32 {
+        self.middle - self.samples.start
+    }
+
+    /// What a pixel adds for the pass from an estimate of its mean value
+    /// made in two independent halves (each scaled to the whole), such as
+    /// a pass's photons deposit: each half counted for the pass's samples
+    /// in that half.
+    pub fn weigh_halves(&self, (first, second): (Rgb, Rgb)) -> PixelSums {
+        let (a, b) = (
+            self.first_count() as f64,
+            (self.count() - self.first_count()) as f64,
+        );
+        PixelSums {
+            all: first * a + second * b,
+            first: first * a,
+        }
+    }
+}
+
+/// Offsets the index of a later pass's seed from every pixel's.
+const PASS_SEEDS: u64 = 1 << 42;
+
+/// One pixel's sums over its samples: of all, and of the first half of
+/// each pass (their difference from the second estimates the noise).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct PixelSums {
+    pub all: Rgb,
+    pub first: Rgb,
+}
+
+impl std::ops::AddAssign for PixelSums {
+    fn add_assign(&mut self, other: PixelSums) {
+        self.all += other.all;
+        self.first += other.first;
+    }
+}
+
+/// A pixel's totals `total` after one more pass of sums `pass`. The noise
+/// estimate's two halves are the first pass's two halves while it is the
+/// only one, and then every pass before the last against the last: at 16
+/// times a power of two samples, the first and the second half of the
+/// samples, each spread evenly over the floor rays' directions
+/// (`sampling::sample_arc`).
+#[inline]
+pub(crate) fn fold(total: PixelSums, pass: PixelSums) -> PixelSums {
+    PixelSums {
+        all: total.all + pass.all,
+        first: total.all,
+    }
+}
+
+/// The running totals of a render's passes.
+pub(crate) struct Totals {
+    pub size: (u32, u32),
+    /// Per pixel, row by row.
+    pub sums: Vec<PixelSums>,
+    /// Samples per pixel so far, and how many were in first halves.
+    pub samples: u32,
+    pub first: u64,
+    pub stats: Stats,
+}
+
+impl Totals {
+    pub fn new(size: (u32, u32), stats: Stats) -> Totals {
+        Totals {
+            size,
+            sums: Vec::new(),
+            samples: 0,
+            first: 0,
+            stats,
+        }
+    }
+
+    /// Adds a pass's own sums (row by row) and what it counted.
+    pub fn add(&mut self, pass: &Pass, sums: Vec<PixelSums>, stats: &Stats) {
+        if self.sums.is_empty() {
+            self.sums = sums;
+        } else {
+            for (total, s) in self.sums.iter_mut().zip(sums) {
+                *total = fold(*total, s);
+            }
+        }
+        self.count(pass);
+        self.stats.merge(stats);
+    }
+
+    /// Takes the totals after `passes` (their sums already folded in,
+    /// row by row) and what they counted.
+    pub fn replace(&mut self, passes: &[Pass], sums: Vec<PixelSums>, stats: &Stats) {
+        self.sums = sums;
+        for pass in passes {
+            self.count(pass);
+        }
+        self.stats.merge(stats);
+    }
+
+    /// Counts `pass`'s samples: in the first half, the first pass's first
+    /// half while it is the only pass, then every pass before the last.
+    fn count(&mut self, pass: &Pass) {
+        self.first = match self.samples {
+            0 => pass.first_count() as u64,
+            samples => samples as u64,
+        };
+        self.samples = pass.samples.end;
+    }
+
+    /// The image so far: exposure times floor albedo times each pixel's
+    /// mean, and the noise estimate from the halves. Rows in parallel,
+    /// their noise summed in row order.
+    pub fn rendered(&self, scene: &Scene, exposure: f64) -> Rendered {
+        let (width, height) = self.size;
+        let mut stats = self.stats;
+        if self.samples == 0 || self.sums.is_empty() || width == 0 {
+            return Rendered {
+                image: Image::new(width, height),
+                stats,
+            };
+        }
+        let n = self.samples as f64;
+        let (n1, n2) = (self.first as f64, n - self.first as f64);
+        let weight = n1 * n2 / (n * n);
+        let rows: Vec<(Vec<[f32; 3]>, Stats)> = self
+            .sums
+            .par_chunks(width as usize)
+            .enumerate()
+            .map(|(y, row)| {
+                let mut stats = Stats::default();
+                let pixels = row
+                    .iter()
+                    .enumerate()
+                    .map(|(x, sums)| {
+                        let (x, y) = (x as u32, y as u32);
+                        let scale = pixel_scale(scene, self.size, (x, y), exposure);
+                        let value = sums.all / n * scale;
+                        if n1 > 0.0 && n2 > 0.0 {
+                            let difference = sums.first / n1 - (sums.all - sums.first) / n2;
+                            stats.noise.add(difference * scale, value, weight);
+                        }
+                        if value.is_finite() {
+                            [value.x as f32, value.y as f32, value.z as f32]
+                        } else {
+                            stats.record_nonfinite(x, y, u32::MAX);
+                            [0.0; 3]
+                        }
+                    })
+                    .collect();
+                (pixels, stats)
+            })
+            .collect();
+        let mut image = Image {
+            width,
+            height,
+            pixels: Vec::with_capacity(self.sums.len()),
+        };
+        for (pixels, row_stats) in rows {
+            image.pixels.extend(pixels);
+            stats.merge(&row_stats);
+        }
+        Rendered { image, stats }
+    }
+}
+
+/// A render driven pass by pass: the image after any pass is the one a
+/// render of that many samples gives, bit for bit, and more samples can
+/// be added to it.
+pub struct Progressive<'a> {
+    inner: crate::render::Passes<'a>,
+}
+
+impl<'a> Progressive<'a> {
+    /// Prepares a render of `scene` (`options.samples` is not used: the
+    /// passes say how many samples are taken): builds what every pass
+    /// shares.
+    pub fn new(scene: &'a Scene, options: &RenderOptions) -> Progressive<'a> {
+        Progressive {
+            inner: crate::render::Passes::new(scene, options),
+        }
+    }
+
+    /// Samples per pixel taken so far.
+    pub fn samples(&self) -> u32 {
+        self.inner.samples()
+    }
+
+    /// Where the next pass ends if more are to follow it
+    /// ([`next_pass_end`]); `None` once a pass has ended short of that,
+    /// since a render of more samples would not have taken that pass.
+    pub fn next_end(&self) -> Option<u32> {
+        self.inner.next_end()
+    }
+
+    /// Takes the next pass, ending at `end` samples per pixel: at most
+    /// [`Progressive::next_end`] (a pass that ends short of it is the
+    /// last). Returns false, taking nothing, when no such pass may follow.
+    /// `progress` is called with pixel samples (or photon paths) done.
+    pub fn pass(&mut self, end: u32, progress: &(dyn Fn(u64) + Sync)) -> bool {
+        self.inner.pass(end, progress)
+    }
+
+    /// The image and statistics so far.
+    pub fn rendered(&self) -> Rendered {
+        self.inner.rendered()
+    }
+
+    /// The image's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.inner.size()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn passes_double_from_the_first_and_end_at_the_samples() {
+        let ends = |n| passes(n).map(|p| (p.start, p.end)).collect::<Vec<_>>();
+        assert_eq!(ends(0), vec![]);
+        assert_eq!(ends(1), vec![(0, 1)]);
+        assert_eq!(ends(16), vec![(0, 16)]);
+        assert_eq!(ends(17), vec![(0, 16), (16, 17)]);
+        assert_eq!(ends(100), vec![(0, 16), (16, 32), (32, 64), (64, 100)]);
+        assert_eq!(next_pass_end(u32::MAX), u32::MAX);
+        assert_eq!(floor_points(100, 1), 100);
+        assert_eq!(floor_points(100, 20), 20 + 20 + 32 + 36);
+        assert_eq!(floor_points(0, 20), 0);
+    }
+
+    #[test]
+    fn a_sample_knows_its_pass() {
+        for (index, pass) in passes(1 << 20).enumerate() {
+            for sample in [pass.start, pass.end - 1] {
+                assert_eq!(pass_index(sample), index as u32, "sample {sample}");
+            }
+        }
+        assert_eq!(pass_index(u32::MAX), 28);
+    }
+
+    #[test]
+    fn halves_weigh_each_half_by_its_samples() {
+        let pass = Pass::new(1, 16..21, (36, 36), 7);
+        assert_eq!(pass.points, 36..72);
+        assert_eq!((pass.count(), pass.first_count()), (5, 2));
+        let sums = pass.weigh_halves((Rgb::splat(1.0), Rgb::splat(3.0)));
+        assert_eq!(sums.all, Rgb::splat(2.0 + 9.0));
+        assert_eq!(sums.first, Rgb::splat(2.0));
+        assert_ne!(pass.seed, 7);
+        assert_eq!(Pass::new(0, 0..16, (0, 1), 7).seed, 7);
+        assert_eq!(Pass::new(0, 0..16, (0, 1), 7).points, 0..16);
+    }
+}
