@@ -159,6 +159,7 @@ struct GenerateArgs {
 }
 
 #[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("passes").args(["target_error", "time"]).multiple(true)))]
 struct RenderArgs {
     /// The scene file (RON).
     scene: PathBuf,
@@ -203,15 +204,20 @@ struct RenderArgs {
     #[arg(long)]
     stats: bool,
     /// Render until the estimated noise (relative RMS error) is at most
-    /// this many percent: a short first pass measures the noise, the next
-    /// renders anew with the samples that should reach it. The image is
-    /// exactly the single render with the samples reached.
+    /// this many percent, in passes that add samples to the image (16
+    /// spp, then doubling). The image is exactly the single render with
+    /// the samples reached.
     #[arg(long, value_name = "PERCENT")]
     target_error: Option<f64>,
-    /// Render with as many samples as fit in this many seconds (with
-    /// --target-error: stop at whichever comes first).
+    /// Render with as many samples as fit in this many seconds, in passes
+    /// that add samples to the image (with --target-error: stop at
+    /// whichever comes first). At least the first pass is taken.
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
+    /// With --target-error or --time: write the image after each pass, so
+    /// that a long render can be looked at as it goes.
+    #[arg(long, requires = "passes")]
+    write_passes: bool,
     /// With --stats: also how the work was done (the full plan, culling,
     /// cache hits, shared shadow rays).
     #[arg(long, short)]
@@ -654,37 +660,69 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
                 .map_err(|e| Failure::other(format!("cannot start {n} threads: {e}")))?,
         ),
     };
-    // One render of `samples` samples per pixel, with its progress bar.
-    let render_at = |samples: u32, what: &str| {
-        let options = RenderOptions { samples, ..options };
-        let bar = progress_bar(pixels * samples as u64, args.quiet, what);
-        let progress = |n: u64| bar.inc(n);
-        let rendered = match &pool {
-            None => flatray_tracer::render(&loaded.scene, &options, &progress),
-            Some(pool) => {
-                pool.install(|| flatray_tracer::render(&loaded.scene, &options, &progress))
-            }
-        };
-        bar.finish_and_clear();
-        rendered
+    let write = |rendered: &flatray_tracer::Rendered| {
+        if args.draw_walls {
+            flatray_io::write_png_with_walls(
+                &rendered.image,
+                loaded.tonemap,
+                &loaded.scene,
+                &output,
+            )
+        } else {
+            flatray_io::write_image(&rendered.image, loaded.tonemap, &output)
+        }
+        .map_err(Failure::other)
     };
     let (rendered, options, passes) = match (args.target_error, args.time) {
-        (None, None) => (render_at(options.samples, "rendering"), options, 1),
+        (None, None) => {
+            let bar = progress_bar(pixels * options.samples as u64, args.quiet, "rendering");
+            let progress = |n: u64| bar.inc(n);
+            let rendered = match &pool {
+                None => flatray_tracer::render(&loaded.scene, &options, &progress),
+                Some(pool) => {
+                    pool.install(|| flatray_tracer::render(&loaded.scene, &options, &progress))
+                }
+            };
+            bar.finish_and_clear();
+            (rendered, options, 1)
+        }
         (target, time) => {
-            let (rendered, samples, passes) =
-                render_to_target(&render_at, target.map(|t| t / 100.0), time, loaded_at)?;
+            let stop = Stop::new(target, time, loaded_at)?;
+            let in_pool = |work: &mut (dyn FnMut() + Send)| match &pool {
+                None => work(),
+                Some(pool) => pool.install(work),
+            };
+            let mut progressive = None;
+            in_pool(&mut || {
+                progressive = Some(flatray_tracer::Progressive::new(&loaded.scene, &options))
+            });
+            let Some(mut progressive) = progressive else {
+                return Err(Failure::other("the render could not start".to_string()));
+            };
+            let mut passes = 0;
+            let rendered = loop {
+                let done = progressive.samples();
+                let Some(end) = stop.next_end(&progressive, passes) else {
+                    break progressive.rendered();
+                };
+                let what = format!("pass {} ({} to {end} spp)", passes + 1, done);
+                let bar = progress_bar(pixels * (end - done) as u64, args.quiet, &what);
+                let progress = |n: u64| bar.inc(n);
+                in_pool(&mut || {
+                    progressive.pass(end, &progress);
+                });
+                bar.finish_and_clear();
+                passes += 1;
+                if args.write_passes {
+                    write(&progressive.rendered())?;
+                }
+            };
+            let samples = progressive.samples();
             (rendered, RenderOptions { samples, ..options }, passes)
         }
     };
     let rendered_at = Instant::now();
-
-    if args.draw_walls {
-        flatray_io::write_png_with_walls(&rendered.image, loaded.tonemap, &loaded.scene, &output)
-            .map_err(Failure::other)?;
-    } else {
-        flatray_io::write_image(&rendered.image, loaded.tonemap, &output)
-            .map_err(Failure::other)?;
-    }
+    write(&rendered)?;
     let written_at = Instant::now();
 
     let _ = writeln!(
@@ -793,69 +831,79 @@ fn import(args: ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     Ok(())
 }
 
-/// Renders until the estimated relative noise is at most `target`, or
-/// until `time` seconds from `since` would be exceeded: a first pass of
-/// [`FIRST_PASS`] samples measures the noise and the seconds per sample,
-/// and each next pass renders anew with the samples predicted to reach
-/// the target within the time left. Returns the last render, its samples and the
-/// number of passes. Every pass is a complete render: the image is the
-/// single render with those samples, bit for bit.
-fn render_to_target(
-    render_at: &dyn Fn(u32, &str) -> flatray_tracer::Rendered,
+/// When `--target-error` and `--time` stop a render taken pass by pass.
+struct Stop {
+    /// The relative noise to reach, and the seconds from `since` to stay
+    /// within.
     target: Option<f64>,
     time: Option<f64>,
     since: Instant,
-) -> Result<(flatray_tracer::Rendered, u32, u32), Failure> {
-    if let Some(t) = target
-        && !(t.is_finite() && t > 0.0)
-    {
-        return Err(Failure::usage(format!(
-            "--target-error: expected a percentage > 0, found {}",
-            t * 100.0
-        )));
-    }
-    if let Some(t) = time
-        && !(t.is_finite() && t > 0.0)
-    {
-        return Err(Failure::usage(format!(
-            "--time: expected seconds > 0, found {t}"
-        )));
-    }
-    let max = flatray_io::format::MAX_SAMPLES;
-    let mut samples = FIRST_PASS;
-    let mut passes = 0;
-    loop {
-        let started = Instant::now();
-        let rendered = render_at(samples, &format!("pass {} ({samples} spp)", passes + 1));
-        passes += 1;
-        let per_sample = started.elapsed().as_secs_f64() / samples as f64;
-        let noise = rendered.stats.noise.relative();
-        // Samples the target asks for, and samples the time leaves room for.
-        let wanted = match (target, noise) {
-            // Noise falls as samples^-0.5 (independent samples) to about
-            // samples^-0.7 (stratified paths, whose estimate from few
-            // samples also runs high): aim by 1.5, between the two; a pass
-            // that falls short is followed by another.
-            (Some(t), Some(e)) if e > t => (samples as f64 * (e / t).powf(1.5)).ceil(),
-            (Some(_), Some(_)) => return Ok((rendered, samples, passes)),
-            (Some(_), None) => samples as f64 * 4.0,
-            (None, _) => f64::INFINITY,
-        };
-        let affordable = match time {
-            Some(t) => ((t - since.elapsed().as_secs_f64()) / per_sample.max(1e-12)).floor(),
-            None => f64::INFINITY,
-        };
-        let next = wanted.min(affordable).min(max as f64);
-        if next <= samples as f64 || passes >= 8 {
-            return Ok((rendered, samples, passes));
-        }
-        samples = next as u32;
-    }
+    /// When the last pass started, and the samples then.
+    last: std::cell::Cell<(Instant, u32)>,
 }
 
-/// The samples per pixel of the first pass of `--target-error` and
-/// `--time`: enough for a noise estimate that does not run far high.
-const FIRST_PASS: u32 = 16;
+impl Stop {
+    fn new(target: Option<f64>, time: Option<f64>, since: Instant) -> Result<Stop, Failure> {
+        let target = target.map(|t| t / 100.0);
+        if let Some(t) = target
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(Failure::usage(format!(
+                "--target-error: expected a percentage > 0, found {}",
+                t * 100.0
+            )));
+        }
+        if let Some(t) = time
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(Failure::usage(format!(
+                "--time: expected seconds > 0, found {t}"
+            )));
+        }
+        Ok(Stop {
+            target,
+            time,
+            since,
+            last: std::cell::Cell::new((Instant::now(), 0)),
+        })
+    }
+
+    /// Where the next pass should end, or `None` to stop: once the noise
+    /// is at most the target. Each pass doubles the samples
+    /// ([`flatray_tracer::next_pass_end`]), unless the time left (at the
+    /// last pass's seconds per sample) has room for fewer: then the pass
+    /// ends where the time does, and is the last, since a render of more
+    /// samples would not have taken it.
+    fn next_end(&self, progressive: &flatray_tracer::Progressive, passes: u32) -> Option<u32> {
+        let done = progressive.samples();
+        let next = progressive.next_end()?.min(flatray_io::format::MAX_SAMPLES);
+        if next <= done {
+            return None;
+        }
+        let (started, before) = self.last.get();
+        self.last.set((Instant::now(), done));
+        if passes == 0 {
+            return Some(next);
+        }
+        let per_sample = started.elapsed().as_secs_f64() / (done - before).max(1) as f64;
+        if let (Some(t), Some(e)) = (self.target, progressive.rendered().stats.noise.relative())
+            && e <= t
+        {
+            return None;
+        }
+        // Samples the time leaves room for: the whole next pass, or a
+        // last pass that ends short of it.
+        let affordable = match self.time {
+            Some(t) => {
+                let left = t - self.since.elapsed().as_secs_f64();
+                done as f64 + (left / per_sample.max(1e-12)).floor()
+            }
+            None => f64::INFINITY,
+        };
+        let end = affordable.min(next as f64);
+        (end > done as f64).then(|| (end as u32).min(next))
+    }
+}
 
 /// The image size at `scale`, or a usage error when it is more than
 /// flatray renders.
