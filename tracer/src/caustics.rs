@@ -49,6 +49,8 @@ pub const PHOTONS_PER_SAMPLE: f64 = 0.0625;
 /// Fixed work chunks, as the light tracer's: at least two (the noise
 /// estimate compares halves), at most sixteen.
 const MAX_CHUNKS: usize = 16;
+/// The fewest photons a chunk takes beyond the first two chunks.
+pub(crate) const MIN_CHUNK_PHOTONS: u64 = 1 << 15;
 /// Bytes the chunks' floor and wall buffers may take together (beyond the
 /// two chunks that every pass has).
 const CHUNK_BUDGET: usize = 32 << 20;
@@ -374,7 +376,12 @@ pub(crate) fn trace_caustics(
     let levels = bounces.saturating_sub(1) as usize;
     let bins = WallBins::new(scene, options.memo.bin_length / options.scale, levels);
     let chunk_bytes = (pixels + bins.len) * 24;
-    let chunks = (CHUNK_BUDGET / chunk_bytes.max(1)).clamp(2, MAX_CHUNKS);
+    // As many chunks as the budget holds, but not so many that a chunk's
+    // buffers cost more to clear and merge than its photons to trace.
+    let by_photons = (photons / MIN_CHUNK_PHOTONS) as usize;
+    let chunks = (CHUNK_BUDGET / chunk_bytes.max(1))
+        .min(by_photons)
+        .clamp(2, MAX_CHUNKS);
     let pass = CausticPass {
         scene,
         size: (width, height),

@@ -197,4 +197,3 @@ fn junctions(scene: &Scene) -> Vec<Vec<f64>> {
 pub(crate) fn to_value(v: Rgb) -> Value {
     [v.x as f32, v.y as f32, v.z as f32]
 }
-

@@ -1,7 +1,6 @@
 //! The render loop, written once: tiles in parallel, then pixels, then
 //! samples. Integrators only say how one sample is estimated.
 
-use std::iter::StepBy;
 use std::ops::Range;
 
 use flatray_geometry::{ArcCandidates, DVec2, Hit, Ray, RayLanes, Skip, hull_candidates};
@@ -1143,10 +1142,7 @@ fn finish(
 /// in each by index. Yields each arc that has samples in the chunk, with
 /// them (at most [`LANES`]). The samples of any pass are taken in the
 /// same order whether it is rendered alone or with others.
-fn sample_order(
-    offset: usize,
-    samples: Range<u32>,
-) -> impl Iterator<Item = (usize, StepBy<Range<u32>>)> {
+fn sample_order(offset: usize, samples: Range<u32>) -> impl Iterator<Item = (usize, ArcSamples)> {
     let end = samples.end;
     let chunks = std::iter::successors(Some(samples.start), move |&first| {
         let next = (first / CHUNK as u32 + 1).saturating_mul(CHUNK as u32);
@@ -1157,18 +1153,48 @@ fn sample_order(
         let last = (first / CHUNK as u32 + 1)
             .saturating_mul(CHUNK as u32)
             .min(end);
-        (0..ARCS)
-            .map(move |arc| {
-                // The arc's first sample from `first` on: its samples are
-                // `ARCS` apart.
-                let residue = first_sample_of_arc(offset, arc);
-                let ahead = (residue + ARCS as u32 - first % ARCS as u32) % ARCS as u32;
-                (arc, (first.saturating_add(ahead)..last).step_by(ARCS))
+        (0..ARCS).filter_map(move |arc| {
+            // The arc's first sample from `first` on: its samples are
+            // `ARCS` apart. A chunk of fewer samples than arcs leaves
+            // arcs empty.
+            let residue = first_sample_of_arc(offset, arc);
+            let start = first + (residue.wrapping_sub(first) & (ARCS as u32 - 1));
+            (start < last).then(|| {
+                let count = (last - start - 1) / ARCS as u32 + 1;
+                (arc, ArcSamples { next: start, count })
             })
-            // A chunk of fewer samples than arcs leaves arcs empty.
-            .filter(|(_, of_arc)| of_arc.len() > 0)
+        })
     })
 }
+
+/// The samples of one arc in one chunk: `count` of them from `next`,
+/// [`ARCS`] apart.
+#[derive(Clone, Copy, Debug)]
+struct ArcSamples {
+    next: u32,
+    count: u32,
+}
+
+impl Iterator for ArcSamples {
+    type Item = u32;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<u32> {
+        (self.count > 0).then(|| {
+            let sample = self.next;
+            self.next = self.next.wrapping_add(ARCS as u32);
+            self.count -= 1;
+            sample
+        })
+    }
+
+    #[inline(always)]
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.count as usize, Some(self.count as usize))
+    }
+}
+
+impl ExactSizeIterator for ArcSamples {}
 
 /// The samples of a pixel whose floor rays are culled by direction, in
 /// [`sample_order`]: the samples of one arc test the same walls and their
@@ -1316,7 +1342,7 @@ fn add_sample<const CHECKED: bool>(
 /// fills, and added to its pass's sum in order. The same values as [`sample_with`] gives.
 #[inline(always)]
 fn arc_in_lanes<const CHECKED: bool, const N: usize>(
-    (contexts, pixel, arc, walls, of_arc): (&[Context], &Pixel, usize, &[u32], StepBy<Range<u32>>),
+    (contexts, pixel, arc, walls, of_arc): (&[Context], &Pixel, usize, &[u32], ArcSamples),
     sums: &mut [Sums],
     stats: &mut Stats,
 ) {
