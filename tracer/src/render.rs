@@ -1143,28 +1143,58 @@ fn finish(
 /// them (at most [`LANES`]). The samples of any pass are taken in the
 /// same order whether it is rendered alone or with others.
 fn sample_order(offset: usize, samples: Range<u32>) -> impl Iterator<Item = (usize, ArcSamples)> {
-    let end = samples.end;
-    let chunks = std::iter::successors(Some(samples.start), move |&first| {
-        let next = (first / CHUNK as u32 + 1).saturating_mul(CHUNK as u32);
-        (next < end).then_some(next)
-    })
-    .filter(move |&first| first < end);
-    chunks.flat_map(move |first| {
-        let last = (first / CHUNK as u32 + 1)
-            .saturating_mul(CHUNK as u32)
-            .min(end);
-        (0..ARCS).filter_map(move |arc| {
-            // The arc's first sample from `first` on: its samples are
-            // `ARCS` apart. A chunk of fewer samples than arcs leaves
-            // arcs empty.
-            let residue = first_sample_of_arc(offset, arc);
-            let start = first + (residue.wrapping_sub(first) & (ARCS as u32 - 1));
-            (start < last).then(|| {
-                let count = (last - start - 1) / ARCS as u32 + 1;
-                (arc, ArcSamples { next: start, count })
-            })
-        })
-    })
+    SampleOrder {
+        offset,
+        first: samples.start,
+        last: chunk_end(samples.start, samples.end),
+        end: samples.end,
+        arc: 0,
+    }
+}
+
+/// Where the chunk that holds sample `first` ends, within `end`.
+#[inline(always)]
+fn chunk_end(first: u32, end: u32) -> u32 {
+    (first / CHUNK as u32 + 1)
+        .saturating_mul(CHUNK as u32)
+        .min(end)
+}
+
+/// [`sample_order`]'s state: the chunk `first..last` of the samples up to
+/// `end`, and the next arc to look at in it.
+struct SampleOrder {
+    offset: usize,
+    first: u32,
+    last: u32,
+    end: u32,
+    arc: usize,
+}
+
+impl Iterator for SampleOrder {
+    type Item = (usize, ArcSamples);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(usize, ArcSamples)> {
+        while self.first < self.end {
+            while self.arc < ARCS {
+                let arc = self.arc;
+                self.arc += 1;
+                // The arc's first sample from `first` on: its samples are
+                // `ARCS` apart. A chunk of fewer samples than arcs leaves
+                // arcs empty.
+                let residue = first_sample_of_arc(self.offset, arc);
+                let start = self.first + (residue.wrapping_sub(self.first) & (ARCS as u32 - 1));
+                if start < self.last {
+                    let count = (self.last - start - 1) / ARCS as u32 + 1;
+                    return Some((arc, ArcSamples { next: start, count }));
+                }
+            }
+            self.first = self.last;
+            self.last = chunk_end(self.first, self.end);
+            self.arc = 0;
+        }
+        None
+    }
 }
 
 /// The samples of one arc in one chunk: `count` of them from `next`,
