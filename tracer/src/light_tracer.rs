@@ -55,8 +55,9 @@ pub(crate) fn light_pass(
         return (vec![PixelSums::default(); pixels], Stats::default());
     }
     // As many chunks as the budget holds, but not so many that a chunk's
-    // buffer costs more to clear and merge than its paths to trace.
-    let by_paths = (paths / crate::caustics::MIN_CHUNK_PHOTONS) as usize;
+    // buffer costs more to clear and merge than its paths to trace, and
+    // two where the budget allows (the noise estimate's halves).
+    let by_paths = ((paths / crate::caustics::MIN_CHUNK_PHOTONS) as usize).max(2);
     let chunks = (CHUNK_BUDGET / (pixels.max(1) * 24))
         .min(by_paths)
         .clamp(1, MAX_CHUNKS);
