@@ -26,10 +26,12 @@
 //! the half circle, `K` the pass's samples per pixel. The passes' memos
 //! are independent, so the image's memo error falls as the samples grow
 //! (to the memo's value at each bin's centre: the wall memo's kind of
-//! bias). Each pass keeps the memo twice, from independent gathers: the
-//! first half of its samples reads one copy and the second half the
-//! other, so the noise estimate from the two halves includes the memo's
-//! own error.
+//! bias). The first pass keeps the memo twice, from independent gathers:
+//! the first half of its samples reads one copy and the second half the
+//! other, so the noise estimate from its two halves includes the memo's
+//! own error. A later pass is one half of the estimate by itself, and
+//! keeps the memo once, with twice the gathers: the same work and error,
+//! half the memory.
 
 use flatray_cache::WallMemo;
 use flatray_geometry::{Ray, Side, Skip};
@@ -51,7 +53,8 @@ pub const MIN_GATHERS: u32 = 8;
 /// pixel sample's.
 const ONWARD_STREAM: u64 = 1 << 43;
 
-/// Both copies of the onward memo: `copies[h][m - 1]` holds `C_m`.
+/// The onward memo's copies: `copies[h][m - 1]` holds `C_m`; the second
+/// is empty where the memo is kept once.
 #[derive(Debug, Default)]
 pub(crate) struct OnwardMemo {
     copies: [Vec<WallMemo>; 2],
@@ -68,10 +71,15 @@ pub(crate) struct Onward<'a> {
 
 impl<'a> Onward<'a> {
     /// The memo as a render pass reads it: samples below `middle` (the
-    /// pass's first half) read the first copy.
+    /// pass's first half) read the first copy, the others the second (the
+    /// first too, where the memo is kept once).
     pub fn of(memo: &'a OnwardMemo, middle: u32) -> Onward<'a> {
+        let second = match memo.copies[1].is_empty() {
+            true => &memo.copies[0],
+            false => &memo.copies[1],
+        };
         Onward {
-            copies: [&memo.copies[0], &memo.copies[1]],
+            copies: [&memo.copies[0], second],
             half: middle,
         }
     }
@@ -83,14 +91,18 @@ impl<'a> Onward<'a> {
     }
 }
 
-/// Gather directions per bin, order and copy for a render of `samples`
-/// per pixel over `pixels` pixels, with `values` (wall, side, bin) values
-/// per table and `orders` orders: as many as the samples (at least
-/// [`MIN_GATHERS`]), but all gathers together at most half as many paths
-/// as the pixels' samples (and at least one per bin).
-pub(crate) fn gathers(samples: u32, pixels: u64, values: u64, orders: u32) -> u32 {
-    let wanted = samples.max(MIN_GATHERS) as u64;
-    let tables = (2 * orders as u64).saturating_mul(values).max(1);
+/// Gather directions per bin, order and copy for a render pass of
+/// `samples` per pixel over `pixels` pixels, with `values` (wall, side,
+/// bin) values per table, `orders` orders and `copies` copies (1 or 2): as
+/// many as the samples times 2 / `copies` (at least [`MIN_GATHERS`]), but
+/// all gathers together at most half as many paths as the pass's pixel
+/// samples (and at least one per bin).
+pub(crate) fn gathers(samples: u32, pixels: u64, (values, orders): (u64, u32), copies: u32) -> u32 {
+    let copies = copies.clamp(1, 2);
+    let wanted = (samples as u64 * 2 / copies as u64).max(MIN_GATHERS as u64);
+    let tables = (copies as u64 * orders as u64)
+        .saturating_mul(values)
+        .max(1);
     let cap = (pixels.saturating_mul(samples as u64) / 2) / tables;
     wanted.min(cap).max(1) as u32
 }
@@ -102,21 +114,22 @@ pub(crate) fn onward_bytes(wall_memo_bytes: u64, bounces: u32) -> u64 {
 }
 
 /// Fills the onward memo for the paths `trace` describes (its `onward`
-/// unset), on the bins of `wall_memo` (the memo its paths read), with
-/// `gathers` directions per bin.
+/// unset), on the bins of `wall_memo` (the memo its paths read), `copies`
+/// times (1 or 2) with `gathers` directions per bin.
 pub(crate) fn build_onward(
     trace: &Trace,
     wall_memo: &WallMemo,
-    gathers: u32,
+    (gathers, copies): (u32, u32),
     seed: u64,
     stats: &mut Stats,
 ) -> OnwardMemo {
     let scene = trace.scene;
     let bounces = trace.bounces;
     let gathers = gathers.max(1);
-    let mut copies: [Vec<WallMemo>; 2] = [Vec::new(), Vec::new()];
     let (mut rays, mut bytes) = (0u64, 0u64);
-    for (copy, tables) in copies.iter_mut().enumerate() {
+    let kept = copies.clamp(1, 2) as usize;
+    let mut copies: [Vec<WallMemo>; 2] = [Vec::new(), Vec::new()];
+    for (copy, tables) in copies.iter_mut().enumerate().take(kept) {
         for m in 1..bounces {
             let lower: &[WallMemo] = tables;
             let gather_trace = Trace {
@@ -193,18 +206,21 @@ mod tests {
 
     #[test]
     fn gathers_follow_the_samples_within_half_the_pixel_samples() {
-        // As many as the samples, at least MIN_GATHERS.
-        assert_eq!(gathers(64, 1_000_000, 1000, 2), 64);
-        assert_eq!(gathers(2, 1_000_000, 1000, 2), MIN_GATHERS);
+        // As many as the samples, at least MIN_GATHERS; twice as many for
+        // one copy.
+        assert_eq!(gathers(64, 1_000_000, (1000, 2), 2), 64);
+        assert_eq!(gathers(64, 1_000_000, (1000, 2), 1), 128);
+        assert_eq!(gathers(2, 1_000_000, (1000, 2), 2), MIN_GATHERS);
         // Capped at half the pixel samples over 2 copies x 2 orders x
         // 1000 values: 100 x 64 / 2 / 4000 is below 1, so 1 per bin;
         // 10,000 x 64 / 2 / 4000 = 80, above the 64 wanted; 2,000 pixels
-        // give 16.
-        assert_eq!(gathers(64, 100, 1000, 2), 1);
-        assert_eq!(gathers(64, 10_000, 1000, 2), 64);
-        assert_eq!(gathers(64, 2_000, 1000, 2), 16);
+        // give 16 (32 for one copy).
+        assert_eq!(gathers(64, 100, (1000, 2), 2), 1);
+        assert_eq!(gathers(64, 10_000, (1000, 2), 2), 64);
+        assert_eq!(gathers(64, 2_000, (1000, 2), 2), 16);
+        assert_eq!(gathers(64, 2_000, (1000, 2), 1), 32);
         // No orders or no values: no division by zero.
-        assert_eq!(gathers(16, 100, 0, 0), 16);
+        assert_eq!(gathers(16, 100, (0, 0), 2), 16);
         assert_eq!(onward_bytes(1000, 1), 0);
         assert_eq!(onward_bytes(1000, 3), 4000);
     }

@@ -484,13 +484,16 @@ impl Fills {
             .filter(|_| plan.onward)
             .map(|wall_memo| {
                 let trace = trace_for(scene, options, shared, (caustics.as_ref(), None));
+                // The first pass's halves read a copy each; a later pass
+                // is one half of the noise estimate by itself.
+                let copies = if pass.index == 0 { 2 } else { 1 };
                 let gathers = crate::onward::gathers(
                     pass.count(),
                     width as u64 * height as u64,
-                    wall_memo.values() as u64,
-                    options.bounces.saturating_sub(1),
+                    (wall_memo.values() as u64, options.bounces.saturating_sub(1)),
+                    copies,
                 );
-                crate::onward::build_onward(&trace, wall_memo, gathers, pass.seed, stats)
+                crate::onward::build_onward(&trace, wall_memo, (gathers, copies), pass.seed, stats)
             });
         Fills { caustics, onward }
     }
