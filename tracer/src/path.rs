@@ -58,7 +58,9 @@ pub(crate) struct Begun {
 /// The first part of [`path_sample`]: draws from `stream` exactly what
 /// `path_sample` draws before its first ray.
 /// With `shadow_walls` (per light, the walls that shadow rays from `p`
-/// can cross), the floor's shadow rays test only those.
+/// can cross), the floor's shadow rays test only those. Inlined, so that
+/// the pixel loop compiled with AVX2 takes it with AVX2 too.
+#[inline(always)]
 pub(crate) fn path_begin(
     trace: &Trace,
     p: DVec2,
