@@ -498,3 +498,61 @@ fn the_cache_flag_says_what_is_cached() {
     let (walls, onward) = line("off");
     assert!(walls.starts_with("skipped") && onward.starts_with("skipped"));
 }
+
+/// With `--write-passes`, an interrupted render keeps the image of its
+/// last finished pass (a whole image, written atomically), where without
+/// it nothing is written; `--write-passes` alone is a usage error.
+#[cfg(target_os = "linux")]
+#[test]
+fn written_passes_survive_an_interrupt() {
+    let dir = scratch("passes");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    let out = dir.join("room.png");
+    let alone = flatray()
+        .args([
+            "render",
+            room.to_str().unwrap(),
+            "-q",
+            "--write-passes",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(alone.status.code(), Some(2), "{alone:?}");
+    let mut child = flatray()
+        .args([
+            "render",
+            room.to_str().unwrap(),
+            "-q",
+            "--scale",
+            "0.4",
+            "--target-error",
+            "0.001",
+            "--write-passes",
+            "-o",
+        ])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // The first passes take well under a second at this size.
+    let started = std::time::Instant::now();
+    while !out.exists() && started.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+    let image = std::fs::read(&out).unwrap();
+    // A whole PNG: its signature, and its end chunk last.
+    assert!(image.starts_with(b"\x89PNG\r\n\x1a\n"));
+    assert!(image.ends_with(&[0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82]));
+    // Nothing else is left in the folder.
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -144,19 +144,14 @@ impl Pass {
 /// Offsets the index of a later pass's seed from every pixel's.
 const PASS_SEEDS: u64 = 1 << 42;
 
-/// One pixel's sums over its samples: of all, and of the first half of
-/// each pass (their difference from the second estimates the noise).
+/// One pixel's sums over its samples: of all, and of a first half (a
+/// pass's own first half of samples; in the totals, the noise estimate's
+/// first half: [`fold`]), whose difference from the rest estimates the
+/// noise.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct PixelSums {
     pub all: Rgb,
     pub first: Rgb,
-}
-
-impl std::ops::AddAssign for PixelSums {
-    fn add_assign(&mut self, other: PixelSums) {
-        self.all += other.all;
-        self.first += other.first;
-    }
 }
 
 /// A pixel's totals `total` after one more pass of sums `pass`. The noise

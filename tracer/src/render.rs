@@ -1,5 +1,6 @@
-//! The render loop, written once: tiles in parallel, then pixels, then
-//! samples. Integrators only say how one sample is estimated.
+//! The render loop, written once: passes of samples (`passes.rs`), tiles
+//! in parallel, then pixels, then samples. Integrators only say how one
+//! sample is estimated.
 
 use std::ops::Range;
 
@@ -243,6 +244,11 @@ pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + 
 /// after, from the totals (the same image).
 const FILLS_BUDGET: u64 = 256 << 20;
 
+/// Floor points per pixel of the passes rendered together, at most (a
+/// pass alone takes at most 2^20): each worker thread holds them and
+/// their values, about 40 bytes each.
+const GROUP_POINTS: u64 = 1 << 21;
+
 /// What every pass of a path-traced render shares, built once.
 struct Shared {
     plan: Plan,
@@ -374,23 +380,27 @@ impl<'a> Passes<'a> {
     }
 
     /// Takes every pass of the schedule up to `samples`, as many at once
-    /// as [`FILLS_BUDGET`] allows: each pixel then takes all of them in
+    /// as [`FILLS_BUDGET`] and [`GROUP_POINTS`] allow: each pixel then takes all of them in
     /// turn, sharing its culling lists, floor points and shared shadow
     /// rays. The same sums as pass by pass.
     pub fn run_to(&mut self, samples: u32, progress: &(dyn Fn(u64) + Sync)) {
         let mut group: Vec<Pass> = Vec::new();
         let mut cursor = self.cursor;
-        let mut bytes = 0;
+        let (mut bytes, mut points) = (0, 0);
         while !self.closed && cursor.samples < samples {
             let next = crate::passes::next_pass_end(cursor.samples);
             let pass = cursor.pass(next.min(samples), &self.options);
             let pass_bytes = self.fill_bytes();
-            if !group.is_empty() && bytes + pass_bytes > FILLS_BUDGET {
+            let pass_points = pass.points.len() as u64;
+            if !group.is_empty()
+                && (bytes + pass_bytes > FILLS_BUDGET || points + pass_points > GROUP_POINTS)
+            {
                 self.run(&group, progress);
                 group.clear();
-                bytes = 0;
+                (bytes, points) = (0, 0);
             }
             bytes += pass_bytes;
+            points += pass_points;
             self.closed = pass.samples.end < next;
             cursor = Cursor::after(&pass);
             group.push(pass);
@@ -1229,10 +1239,11 @@ impl Iterator for ArcSamples {
 
 impl ExactSizeIterator for ArcSamples {}
 
-/// The samples of a pixel whose floor rays are culled by direction, in
-/// [`sample_order`]: the samples of one arc test the same walls and their
-/// paths branch alike. Each value is exactly what [`sample_with`] gives,
-/// added to `sum` in the same order as without culling.
+/// The samples of a pixel's passes `contexts` whose floor rays are culled
+/// by direction, in [`sample_order`] over all of them: the samples of one
+/// arc test the same walls and their paths branch alike. Each value is
+/// exactly what [`sample_with`] gives with its pass's fills, added to its
+/// pass's sum in `sums` in the same order as without culling.
 ///
 /// Without the floor's direct light in the paths (the memo holds it), a
 /// path whose first ray escapes adds exactly nothing: where an arc meets
