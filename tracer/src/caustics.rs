@@ -176,6 +176,11 @@ pub(crate) struct Caustics {
 }
 
 impl Caustics {
+    /// The fluence on pixel `k`, from all the photons.
+    pub fn floor_at(&self, k: usize) -> Rgb {
+        self.floor.get(k).copied().unwrap_or(Rgb::ZERO)
+    }
+
     /// The fluence on pixel `k` as the two halves of the photons estimate
     /// it, each scaled to the whole.
     pub fn floor_halves(&self, k: usize) -> (Rgb, Rgb) {

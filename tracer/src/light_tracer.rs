@@ -25,14 +25,16 @@ const MAX_CHUNKS: usize = 16;
 const CHUNK_BUDGET: usize = 256 << 20;
 
 /// One pass of a light-traced render (`passes.rs`): the pass's samples
-/// times the pixels in photon paths, from the pass's own seed, and each
-/// pixel's sums from the two halves of those paths.
+/// times the pixels in photon paths, from the pass's own seed; each
+/// pixel's sums (all the paths for the whole, and apart the first half of
+/// the chunks' paths, counted as that share of the pass's samples), and
+/// that share of its samples.
 pub(crate) fn light_pass(
     scene: &Scene,
     options: &RenderOptions,
     pass: &Pass,
     progress: &(dyn Fn(u64) + Sync),
-) -> (Vec<PixelSums>, Stats) {
+) -> (Vec<PixelSums>, Stats, f64) {
     let (width, height) = image_size(scene, options.scale);
     let pixels = width as usize * height as usize;
     let plan = Plan::new(scene, options);
@@ -52,7 +54,7 @@ pub(crate) fn light_pass(
         cumulative.push(acc);
     }
     if total <= 0.0 || paths == 0 {
-        return (vec![PixelSums::default(); pixels], Stats::default());
+        return (vec![PixelSums::default(); pixels], Stats::default(), 0.0);
     }
     // As many chunks as the budget holds, but not so many that a chunk's
     // buffer costs more to clear and merge than its paths to trace, and
@@ -73,8 +75,9 @@ pub(crate) fn light_pass(
         per_chunk: paths.div_ceil(chunks as u64),
         grid: Grid::new(scene, options.scale, width, height),
     };
+    let first = pass.count() as f64 * estimator.first_share();
     let outcome = run(&estimator, Stats::default(), progress);
-    (outcome.output, outcome.stats)
+    (outcome.output, outcome.stats, first)
 }
 
 /// Light tracing as units of the render loop: fixed chunks of photon
@@ -150,14 +153,36 @@ impl Estimator for Photons<'_> {
     }
 
     fn finish(&self, film: Film, _stats: &mut Stats) -> Vec<PixelSums> {
-        // The first half of the chunks' paths, for the noise estimate.
-        let first_paths = ((self.chunks / 2) as u64 * self.per_chunk).min(self.paths);
+        // Every path counts for the whole; the first half of the chunks'
+        // paths, apart, for the noise estimate.
+        let (n, share) = (self.pass.count() as f64, self.first_share());
         (0..self.size.0 as usize * self.size.1 as usize)
             .map(|k| {
-                self.pass
-                    .weigh_halves(film.split(k, (self.paths, first_paths)))
+                let (first, _) = film.split(k, (self.paths, self.first_paths()));
+                let whole = film.fluence.get(k).copied().unwrap_or(Rgb::ZERO);
+                PixelSums {
+                    all: whole * n,
+                    first: first * (n * share),
+                }
             })
             .collect()
+    }
+}
+
+impl Photons<'_> {
+    /// The paths of the first half of the chunks.
+    fn first_paths(&self) -> u64 {
+        ((self.chunks / 2) as u64 * self.per_chunk).min(self.paths)
+    }
+
+    /// Their share of the paths, where both halves have paths (else 0:
+    /// no estimate of the noise).
+    fn first_share(&self) -> f64 {
+        let first = self.first_paths();
+        match first > 0 && first < self.paths {
+            true => first as f64 / self.paths as f64,
+            false => 0.0,
+        }
     }
 }
 

@@ -173,9 +173,10 @@ pub(crate) struct Totals {
     pub size: (u32, u32),
     /// Per pixel, row by row.
     pub sums: Vec<PixelSums>,
-    /// Samples per pixel so far, and how many were in first halves.
+    /// Samples per pixel so far, and how many are in the noise estimate's
+    /// first half (a share of one, for a light tracer's first pass).
     pub samples: u32,
-    pub first: u64,
+    pub first: f64,
     pub stats: Stats,
 }
 
@@ -185,13 +186,15 @@ impl Totals {
             size,
             sums: Vec::new(),
             samples: 0,
-            first: 0,
+            first: 0.0,
             stats,
         }
     }
 
-    /// Adds a pass's own sums (row by row) and what it counted.
-    pub fn add(&mut self, pass: &Pass, sums: Vec<PixelSums>, stats: &Stats) {
+    /// Adds a pass's own sums (row by row) and what it counted; `first`
+    /// of its samples (a light tracer's share of them) are in its first
+    /// half.
+    pub fn add(&mut self, pass: &Pass, sums: Vec<PixelSums>, stats: &Stats, first: f64) {
         if self.sums.is_empty() {
             self.sums = sums;
         } else {
@@ -199,26 +202,27 @@ impl Totals {
                 *total = fold(*total, s);
             }
         }
-        self.count(pass);
+        self.count(pass, first);
         self.stats.merge(stats);
     }
 
     /// Takes the totals after `passes` (their sums already folded in,
-    /// row by row) and what they counted.
+    /// row by row, each pass's first half its first half of samples) and
+    /// what they counted.
     pub fn replace(&mut self, passes: &[Pass], sums: Vec<PixelSums>, stats: &Stats) {
         self.sums = sums;
         for pass in passes {
-            self.count(pass);
+            self.count(pass, pass.first_count() as f64);
         }
         self.stats.merge(stats);
     }
 
-    /// Counts `pass`'s samples: in the first half, the first pass's first
-    /// half while it is the only pass, then every pass before the last.
-    fn count(&mut self, pass: &Pass) {
+    /// Counts `pass`'s samples: in the first half, the first pass's
+    /// `first` while it is the only pass, then every pass before the last.
+    fn count(&mut self, pass: &Pass, first: f64) {
         self.first = match self.samples {
-            0 => pass.first_count() as u64,
-            samples => samples as u64,
+            0 => first,
+            samples => samples as f64,
         };
         self.samples = pass.samples.end;
     }
@@ -236,7 +240,7 @@ impl Totals {
             };
         }
         let n = self.samples as f64;
-        let (n1, n2) = (self.first as f64, n - self.first as f64);
+        let (n1, n2) = (self.first, n - self.first);
         let weight = n1 * n2 / (n * n);
         let rows: Vec<(Vec<[f32; 3]>, Stats)> = self
             .sums

@@ -447,9 +447,9 @@ impl<'a> Passes<'a> {
             }
             None => {
                 for pass in group {
-                    let (sums, stats) =
+                    let (sums, stats, first) =
                         crate::light_tracer::light_pass(self.scene, &self.options, pass, progress);
-                    self.totals.add(pass, sums, &stats);
+                    self.totals.add(pass, sums, &stats, first);
                 }
             }
         }
@@ -1004,33 +1004,45 @@ fn pass_sums(
     stats: &mut Stats,
 ) -> PixelSums {
     let pass = context.pass;
-    let mut halves = (Rgb::ZERO, Rgb::ZERO);
+    // Each half's estimates, and the whole's.
+    let (mut halves, mut whole) = ((Rgb::ZERO, Rgb::ZERO), Rgb::ZERO);
     if context.floor_memo && !pass.points.is_empty() {
         let from = (pass.points.start - first_point) as usize;
         let to = (pass.points.end - first_point) as usize;
         if let Some(values) = values.get(from..to) {
-            halves = strata_halves(values, (x, y), stats);
+            let (first, second, all) = strata_halves(values, (x, y), stats);
+            (halves, whole) = ((first, second), all);
         }
         stats.work.floor_memo_reuses += pass.count() as u64;
     }
     // The caustic pass's light on the floor, from each half of its
     // photons.
     if let Some(caustics) = context.trace.caustics {
-        let (first, second) = caustics.floor_halves((y * context.size.0 + x) as usize);
+        let k = (y * context.size.0 + x) as usize;
+        let (first, second) = caustics.floor_halves(k);
         halves = (halves.0 + first, halves.1 + second);
+        whole += caustics.floor_at(k);
     }
-    let mut pixel_sums = pass.weigh_halves(halves);
+    // A pass of one sample has no halves: its points and photons all
+    // count, for the whole.
+    let mut pixel_sums = match pass.count() {
+        1 => PixelSums {
+            all: whole,
+            first: Rgb::ZERO,
+        },
+        _ => pass.weigh_halves(halves),
+    };
     pixel_sums.all += sums.all;
     pixel_sums.first += sums.first;
     pixel_sums
 }
 
 /// The means of a pass's floor points over the first and the second half
-/// of them: two estimates of the pixel's direct light, each over the
-/// whole pixel; the mean of all, twice, for a single point. Points that
-/// are not finite count as zero, and are reported (as sample `u32::MAX`
-/// of pixel `(x, y)`).
-fn strata_halves(values: &[Rgb], (x, y): (u32, u32), stats: &mut Stats) -> (Rgb, Rgb) {
+/// of them (two estimates of the pixel's direct light, each over the
+/// whole pixel; the mean of all, twice, for a single point), and over all.
+/// Points that are not finite count as zero, and are reported (as sample
+/// `u32::MAX` of pixel `(x, y)`).
+fn strata_halves(values: &[Rgb], (x, y): (u32, u32), stats: &mut Stats) -> (Rgb, Rgb, Rgb) {
     let middle = values.len() / 2;
     let mut sums = [Rgb::ZERO; 2];
     for (k, &value) in values.iter().enumerate() {
@@ -1040,13 +1052,14 @@ fn strata_halves(values: &[Rgb], (x, y): (u32, u32), stats: &mut Stats) -> (Rgb,
             stats.record_nonfinite(x, y, u32::MAX);
         }
     }
+    let all = (sums[0] + sums[1]) / values.len().max(1) as f64;
     if middle == 0 {
-        let all = sums[1] / values.len().max(1) as f64;
-        return (all, all);
+        return (all, all, all);
     }
     (
         sums[0] / middle as f64,
         sums[1] / (values.len() - middle) as f64,
+        all,
     )
 }
 
@@ -1570,19 +1583,23 @@ mod tests {
         let finite = [v(1.0), v(3.0), v(2.0), v(6.0)];
         assert_eq!(
             strata_halves(&finite, (4, 5), &mut stats),
-            (Rgb::new(2.0, 1.0, 2.0), Rgb::new(4.0, 1.0, 2.0))
+            (
+                Rgb::new(2.0, 1.0, 2.0),
+                Rgb::new(4.0, 1.0, 2.0),
+                Rgb::new(3.0, 1.0, 2.0)
+            )
         );
         assert_eq!(stats.physics.nonfinite_samples, 0);
         // An infinity and a NaN count as zero, and are counted.
         let mixed = [v(1.0), v(3.0), v(f64::INFINITY), v(f64::NAN)];
         assert_eq!(
             strata_halves(&mixed, (4, 5), &mut stats),
-            (Rgb::new(2.0, 1.0, 2.0), Rgb::ZERO)
+            (Rgb::new(2.0, 1.0, 2.0), Rgb::ZERO, Rgb::new(1.0, 0.5, 1.0))
         );
         assert_eq!(stats.physics.nonfinite_samples, 2);
         assert_eq!(stats.physics.first_nonfinite, Some((4, 5, u32::MAX)));
         // One point: its value, for both halves.
         let one = strata_halves(&finite[..1], (4, 5), &mut stats);
-        assert_eq!(one, (v(1.0), v(1.0)));
+        assert_eq!(one, (v(1.0), v(1.0), v(1.0)));
     }
 }
