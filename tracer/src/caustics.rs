@@ -50,7 +50,7 @@ pub const PHOTONS_PER_SAMPLE: f64 = 0.0625;
 /// estimate compares halves), at most sixteen.
 const MAX_CHUNKS: usize = 16;
 /// The fewest photons a chunk takes beyond the first two chunks.
-pub(crate) const MIN_CHUNK_PHOTONS: u64 = 1 << 15;
+const MIN_CHUNK_PHOTONS: u64 = 1 << 15;
 /// Bytes the chunks' floor and wall buffers may take together (beyond the
 /// two chunks that every pass has).
 const CHUNK_BUDGET: usize = 32 << 20;

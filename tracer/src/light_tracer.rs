@@ -56,13 +56,10 @@ pub(crate) fn light_pass(
     if total <= 0.0 || paths == 0 {
         return (vec![PixelSums::default(); pixels], Stats::default(), 0.0);
     }
-    // As many chunks as the budget holds, but not so many that a chunk's
-    // buffer costs more to clear and merge than its paths to trace, and
-    // two where the budget allows (the noise estimate's halves).
-    let by_paths = ((paths / crate::caustics::MIN_CHUNK_PHOTONS) as usize).max(2);
-    let chunks = (CHUNK_BUDGET / (pixels.max(1) * 24))
-        .min(by_paths)
-        .clamp(1, MAX_CHUNKS);
+    // As many chunks as the budget holds (a light-traced path crosses many
+    // pixels: tracing a chunk costs far more than clearing its buffer),
+    // and two where the budget allows (the noise estimate's halves).
+    let chunks = (CHUNK_BUDGET / (pixels.max(1) * 24)).clamp(1, MAX_CHUNKS);
     let estimator = Photons {
         scene,
         pass,
