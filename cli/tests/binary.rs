@@ -14,6 +14,29 @@ fn scratch(name: &str) -> std::path::PathBuf {
     dir
 }
 
+/// `flatray render ARGS -q -o OUT`, started in the background, quiet.
+fn spawn_render(args: &[&str], out: &Path) -> std::process::Child {
+    flatray()
+        .arg("render")
+        .args(args)
+        .args(["-q", "-o"])
+        .arg(out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+/// Sends `signal` to `child` and waits for it.
+fn interrupt(mut child: std::process::Child, signal: &str) -> std::process::ExitStatus {
+    let killed = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    child.wait().unwrap()
+}
+
 #[test]
 fn renders_the_example_room_to_png_and_exr() {
     let dir = scratch("room");
@@ -165,27 +188,9 @@ fn an_interrupted_render_exits_130_and_leaves_nothing() {
     let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
     for signal in ["-INT", "-TERM"] {
         let out = dir.join("room.png");
-        let mut child = flatray()
-            .args([
-                "render",
-                room.to_str().unwrap(),
-                "-q",
-                "--spp",
-                "100000",
-                "-o",
-            ])
-            .arg(&out)
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .unwrap();
+        let child = spawn_render(&[room.to_str().unwrap(), "--spp", "100000"], &out);
         std::thread::sleep(std::time::Duration::from_millis(700));
-        let killed = Command::new("kill")
-            .args([signal, &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(killed.success());
-        let status = child.wait().unwrap();
+        let status = interrupt(child, signal);
         assert_eq!(status.code(), Some(130), "{signal}: {status:?}");
         assert!(!out.exists());
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "{signal}");
@@ -520,34 +525,17 @@ fn written_passes_survive_an_interrupt() {
         .output()
         .unwrap();
     assert_eq!(alone.status.code(), Some(2), "{alone:?}");
-    let mut child = flatray()
-        .args([
-            "render",
-            room.to_str().unwrap(),
-            "-q",
-            "--scale",
-            "0.4",
-            "--target-error",
-            "0.001",
-            "--write-passes",
-            "-o",
-        ])
-        .arg(&out)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    let args = [room.to_str().unwrap(), "--scale", "0.4"];
+    let child = spawn_render(
+        &[&args[..], &["--target-error", "0.001", "--write-passes"]].concat(),
+        &out,
+    );
     // The first passes take well under a second at this size.
     let started = std::time::Instant::now();
     while !out.exists() && started.elapsed().as_secs() < 60 {
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    assert_eq!(child.wait().unwrap().code(), Some(130));
+    assert_eq!(interrupt(child, "-INT").code(), Some(130));
     let image = std::fs::read(&out).unwrap();
     // A whole PNG: its signature, and its end chunk last.
     assert!(image.starts_with(b"\x89PNG\r\n\x1a\n"));
