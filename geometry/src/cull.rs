@@ -38,12 +38,20 @@ pub struct ArcCandidates {
     /// Each arc's edge directions, widened by the margin: computed once
     /// for a number of arcs, kept for every box after.
     edges: Vec<(DVec2, DVec2)>,
+    /// The segments of each arc while the lists are filled.
+    buckets: Vec<Vec<u32>>,
 }
 
 impl ArcCandidates {
     /// Fills the lists for rays leaving the box `[lo, hi]` in `arcs` arcs.
-    /// With `within`, only the segments of its lists (for the same number
-    /// of arcs, and a box that holds this one) are tested.
+    /// With `within`, only the segments of its lists (for a box that holds
+    /// this one) are tested.
+    ///
+    /// Without `within`, a segment is tested only against the arcs of the
+    /// directions from the box to it ([`arc_range`]: a few arcs for a
+    /// segment far from the box), then by the exact test against each of
+    /// those. The lists are those of testing every arc, for far less
+    /// work on many segments.
     pub fn fill(
         &mut self,
         set: &SegmentSet,
@@ -56,11 +64,6 @@ impl ArcCandidates {
         self.indices.clear();
         self.starts.push(0);
         let scale = lo.abs().max(hi.abs()).max_element();
-        // Without a parent, every segment is tested.
-        let all: Vec<u32> = match within {
-            Some(_) => Vec::new(),
-            None => (0..set.len() as u32).collect(),
-        };
         if self.edges.len() != arcs {
             let angle = std::f64::consts::TAU / arcs as f64;
             let direction = |a: f64| {
@@ -76,18 +79,98 @@ impl ArcCandidates {
                 })
                 .collect();
         }
-        for (k, &(d0, d1)) in self.edges.iter().enumerate() {
-            let wedge = Wedge::new(lo, hi, d0, d1);
-            let tested = within.map_or(&all[..], |parent| parent.arc(k));
-            for &index in tested {
-                let segment = set.get(index);
-                let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
-                if wedge.meets(segment.a, segment.b, DISTANCE_MARGIN * (1.0 + extent)) {
-                    self.indices.push(index);
+        if let Some(parent) = within {
+            // A few segments per arc: each tested against its arc alone.
+            for (k, &(d0, d1)) in self.edges.iter().enumerate() {
+                let wedge = Wedge::new(lo, hi, d0, d1);
+                for &index in parent.arc(k) {
+                    let segment = set.get(index);
+                    let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
+                    if wedge.meets(segment.a, segment.b, DISTANCE_MARGIN * (1.0 + extent)) {
+                        self.indices.push(index);
+                    }
+                }
+                self.starts.push(self.indices.len() as u32);
+            }
+            return;
+        }
+        // Every segment of the set: each tested only against the arcs of
+        // the directions towards it, into one list per arc.
+        self.buckets.resize_with(arcs, Vec::new);
+        for bucket in &mut self.buckets {
+            bucket.clear();
+        }
+        for index in 0..set.len() as u32 {
+            let segment = set.get(index);
+            let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
+            let margin = DISTANCE_MARGIN * (1.0 + extent);
+            let (first, count) = arc_range(lo, hi, segment.a, segment.b, arcs, margin);
+            for j in first..first + count {
+                let k = j % arcs;
+                let (d0, d1) = self.edges[k];
+                if Wedge::new(lo, hi, d0, d1).meets(segment.a, segment.b, margin) {
+                    self.buckets[k].push(index);
                 }
             }
+        }
+        for bucket in &self.buckets[..arcs] {
+            self.indices.extend_from_slice(bucket);
             self.starts.push(self.indices.len() as u32);
         }
+    }
+
+    /// Drops from each arc's list the segments that no ray of the arc
+    /// can reach without first crossing a segment for which `blocks` is
+    /// true: where a blocking segment lies across every ray of the arc
+    /// (every ray from the box in its directions crosses its inside), the
+    /// segments farther from the box than the farthest such crossing go.
+    ///
+    /// The lists then answer closest-hit queries exactly, also for a ray
+    /// that goes on straight from a segment that does not block (with that
+    /// segment skipped), but no longer all-crossings queries. Blocking
+    /// segments that pass within a millionth of the coordinates of the
+    /// box, or that rays meet at less than a thousandth of a radian, count
+    /// as not blocking: rounding cannot move a crossing off them.
+    pub fn drop_blocked(
+        &mut self,
+        set: &SegmentSet,
+        lo: DVec2,
+        hi: DVec2,
+        blocks: impl Fn(u32) -> bool,
+    ) {
+        let scale = lo.abs().max(hi.abs()).max_element();
+        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        let mut kept = 0;
+        let mut start = 0;
+        for k in 0..self.arcs() {
+            let end = self.starts[k + 1] as usize;
+            let (d0, d1) = self.edges[k];
+            // The nearest distance beyond which a blocker stops every ray.
+            let mut reach = f64::INFINITY;
+            for &index in &self.indices[start..end] {
+                if blocks(index) {
+                    let s = set.get(index);
+                    if let Some(t) = blocked_beyond(s.a, s.b, &corners, d0, d1, scale) {
+                        reach = reach.min(t);
+                    }
+                }
+            }
+            for j in start..end {
+                let index = self.indices[j];
+                let s = set.get(index);
+                let extent = scale.max(s.a.abs().max(s.b.abs()).max_element());
+                // A lower bound on the segment's distance from the box.
+                let gap = (lo - s.a.max(s.b)).max(s.a.min(s.b) - hi).max_element();
+                let hidden = gap > reach + 1e-6 * extent;
+                if !hidden {
+                    self.indices[kept] = index;
+                    kept += 1;
+                }
+            }
+            start = end;
+            self.starts[k + 1] = kept as u32;
+        }
+        self.indices.truncate(kept);
     }
 
     /// The number of arcs filled.
@@ -104,6 +187,130 @@ impl ArcCandidates {
             _ => &[],
         }
     }
+}
+
+/// How far from the box (of corners `corners`) rays in the cone from `d0`
+/// to `d1` (unit vectors, less than half a turn apart) can go before
+/// segment `a b` stops them, if every such ray crosses its inside: the
+/// largest distance of the eight rays from the corners along the cone's
+/// edges. (A ray's distance to the segment's line is its origin's
+/// distance, largest at a corner, over the cosine of its angle to the
+/// normal, largest at an edge of the cone; where it crosses the line moves
+/// monotonically between the same extremes.) `None` unless the box lies
+/// wholly on one side of the line, clear of it by a millionth of `scale`,
+/// and each of the eight rays meets the line at more than a thousandth of
+/// a radian and crosses it clear of the segment's ends by a thousand
+/// times the rounding any of them could carry.
+fn blocked_beyond(
+    a: DVec2,
+    b: DVec2,
+    corners: &[DVec2; 4],
+    d0: DVec2,
+    d1: DVec2,
+    scale: f64,
+) -> Option<f64> {
+    let e = b - a;
+    let length = e.length();
+    let extent = scale.max(a.abs().max(b.abs()).max_element());
+    let usable = length > 0.0 && extent.is_finite();
+    if !usable {
+        return None;
+    }
+    let tangent = e / length;
+    // The normal pointing from the line towards the far side.
+    let mut normal = tangent.perp();
+    let sides = corners.map(|c| normal.dot(c - a));
+    let clear = 1e-6 * extent;
+    if sides.iter().all(|&h| h > clear) {
+        normal = -normal;
+    } else if !sides.iter().all(|&h| h < -clear) {
+        return None;
+    }
+    let slack = 1e3 * DISTANCE_MARGIN * (1.0 + extent);
+    let mut farthest: f64 = 0.0;
+    for d in [d0, d1] {
+        let cosine = d.dot(normal);
+        let steep = cosine > 1e-3;
+        if !steep {
+            return None;
+        }
+        for &c in corners {
+            let distance = -normal.dot(c - a);
+            let t = distance / cosine;
+            let along = tangent.dot(c + d * t - a);
+            if !(along > slack / cosine && along < length - slack / cosine) {
+                return None;
+            }
+            farthest = farthest.max(t);
+        }
+    }
+    Some(farthest)
+}
+
+/// The arcs, `first..first + count` taken modulo `arcs`, that hold every
+/// direction from a point of the box `[lo, hi]` to a point within about
+/// `margin` of segment `a b`, with room to spare: every arc whose
+/// [`Wedge`] can meet the segment. All arcs where the segment comes near
+/// the box (within a millionth of the coordinates), where nothing is
+/// finite, or where the directions span nearly the whole circle.
+///
+/// The directions from the box to the segment are those of the points of
+/// the convex polygon `segment - box`, whose vertices are the segment's
+/// ends less the box's corners. Away from the origin the polygon spans
+/// less than half a turn, so the extreme directions are two of its eight
+/// vertices, found by cross products; only those two take an `atan2`.
+/// The range is then widened by the arcs' own margin and by the angle
+/// the distance margin subtends at the polygon's least distance, both
+/// several times over.
+fn arc_range(lo: DVec2, hi: DVec2, a: DVec2, b: DVec2, arcs: usize, margin: f64) -> (usize, usize) {
+    let all = (0, arcs);
+    let (smin, smax) = (a.min(b), a.max(b));
+    // A lower bound on the distance between the segment and the box.
+    let gap = (lo - smax).max(smin - hi).max_element();
+    let scale = lo
+        .abs()
+        .max(hi.abs())
+        .max(a.abs())
+        .max(b.abs())
+        .max_element();
+    let apart = gap > 1e-6 * scale && gap > 1e3 * margin && scale.is_finite();
+    if !apart {
+        return all;
+    }
+    let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+    // A direction inside the span: from the box's centre to the
+    // segment's middle, a point of the polygon.
+    let inside = (a + b) * 0.5 - (lo + hi) * 0.5;
+    let (mut most_cw, mut most_ccw) = (inside, inside);
+    for c in corners {
+        for v in [a - c, b - c] {
+            if cross(most_cw, v) < 0.0 {
+                most_cw = v;
+            }
+            if cross(most_ccw, v) > 0.0 {
+                most_ccw = v;
+            }
+        }
+    }
+    let width = std::f64::consts::TAU / arcs as f64;
+    let pad = 4.0 * ARC_MARGIN + 4.0 * margin / gap + 1e-9;
+    let from = most_cw.y.atan2(most_cw.x) - pad;
+    let mut to = most_ccw.y.atan2(most_ccw.x) + pad;
+    if to < from {
+        to += std::f64::consts::TAU;
+    }
+    let within_half_turn = to - from < std::f64::consts::PI;
+    if !within_half_turn {
+        return all;
+    }
+    let first = (from / width).floor();
+    let last = (to / width).floor();
+    let count = (last - first) as usize + 1;
+    if count >= arcs {
+        return all;
+    }
+    let first = (first as i64).rem_euclid(arcs as i64) as usize;
+    (first, count)
 }
 
 /// The region swept by rays leaving a box with directions in a cone less
@@ -487,6 +694,89 @@ impl SegmentSet {
             index: best_index,
             t: best_t,
             u,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Every arc's wedge tested against every segment: what
+    /// [`ArcCandidates::fill`] would list without [`arc_range`].
+    fn every_arc(set: &SegmentSet, lo: DVec2, hi: DVec2, arcs: usize) -> Vec<Vec<u32>> {
+        let scale = lo.abs().max(hi.abs()).max_element();
+        let mut c = ArcCandidates::default();
+        c.fill(set, lo, hi, arcs, None);
+        c.edges
+            .iter()
+            .map(|&(d0, d1)| {
+                let wedge = Wedge::new(lo, hi, d0, d1);
+                (0..set.len() as u32)
+                    .filter(|&i| {
+                        let s = set.get(i);
+                        let extent = scale.max(s.a.abs().max(s.b.abs()).max_element());
+                        wedge.meets(s.a, s.b, DISTANCE_MARGIN * (1.0 + extent))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn coordinate() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            -50.0..50.0f64,
+            (-20i32..20).prop_map(f64::from),
+            (-1e6..1e6f64),
+            (-1e-5..1e-5f64),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(5), ..ProptestConfig::default() })]
+
+        /// The arcs a segment is tested against hold every arc whose
+        /// wedge meets it: the lists are exactly those of testing every
+        /// arc, for boxes near and far, large and tiny, and segments along
+        /// the box's edges and through its corners.
+        #[test]
+        fn arc_ranges_lose_no_arc(
+            (x, y) in (coordinate(), coordinate()),
+            (w, h) in (prop_oneof![1e-6..1e-3f64, 0.1..4.0f64, Just(1.0)], prop_oneof![1e-6..1e-3f64, 0.1..4.0f64, Just(1.0)]),
+            ends in prop::collection::vec((coordinate(), coordinate(), coordinate(), coordinate()), 1..40),
+            arcs in prop_oneof![Just(8usize), Just(16), Just(64), Just(7)],
+        ) {
+            let lo = DVec2::new(x, y);
+            let hi = lo + DVec2::new(w, h);
+            let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+            let segments: Vec<Segment> = ends
+                .iter()
+                .enumerate()
+                .map(|(i, &(ax, ay, bx, by))| match i % 4 {
+                    // From a corner of the box, or along one of its edges.
+                    0 => Segment::new(corners[i % 3], DVec2::new(bx, by)),
+                    1 => Segment::new(corners[0] + DVec2::new(0.0, ay.abs() + h), corners[3] + DVec2::new(0.0, by.abs() + h)),
+                    _ => Segment::new(DVec2::new(ax, ay), DVec2::new(bx, by)),
+                })
+                .filter(|s| s.a != s.b)
+                .collect();
+            let set = SegmentSet::new(segments);
+            let mut c = ArcCandidates::default();
+            c.fill(&set, lo, hi, arcs, None);
+            let expected = every_arc(&set, lo, hi, arcs);
+            for (k, list) in expected.iter().enumerate() {
+                prop_assert_eq!(c.arc(k), &list[..], "arc {} of {}", k, arcs);
+            }
+            // Filled within a larger box's lists: the same again.
+            let outer = ArcCandidates { ..c.clone() };
+            let mut inner = ArcCandidates::default();
+            let mid = (lo + hi) * 0.5;
+            inner.fill(&set, lo, mid, arcs, Some(&outer));
+            let expected = every_arc(&set, lo, mid, arcs);
+            for (k, list) in expected.iter().enumerate() {
+                prop_assert_eq!(inner.arc(k), &list[..], "inner arc {} of {}", k, arcs);
+            }
         }
     }
 }

@@ -324,6 +324,125 @@ proptest! {
     }
 }
 
+/// A room around the box `[lo, lo + size]`: four walls, each perhaps
+/// with a door, at one to three box sizes away, turned by `turn`; with
+/// short segments inside and outside it and some long ones.
+fn room_around(lo: DVec2, size: f64) -> impl Strategy<Value = Vec<Segment>> {
+    let centre = lo + DVec2::splat(size / 2.0);
+    (
+        prop::collection::vec(
+            (
+                1.0..3.0f64,
+                prop_oneof![Just(None), (0.1..0.8f64).prop_map(Some)],
+            ),
+            4,
+        ),
+        prop_oneof![Just(0.0), -0.5..0.5f64],
+        segments_near(lo - DVec2::splat(2.0 * size), 2.0 * size),
+    )
+        .prop_map(move |(sides, turn, mut others)| {
+            let (sin, cos) = turn.sin_cos();
+            let rotate =
+                |v: DVec2| centre + DVec2::new(v.x * cos - v.y * sin, v.x * sin + v.y * cos) * size;
+            let r: Vec<f64> = sides.iter().map(|s| s.0 + 0.5).collect();
+            let corners = [
+                DVec2::new(-r[3], -r[0]),
+                DVec2::new(r[1], -r[0]),
+                DVec2::new(r[1], r[2]),
+                DVec2::new(-r[3], r[2]),
+            ];
+            let mut walls = Vec::new();
+            for (k, &(_, door)) in sides.iter().enumerate() {
+                let (p, q) = (corners[k], corners[(k + 1) % 4]);
+                match door {
+                    None => walls.push(Segment::new(rotate(p), rotate(q))),
+                    Some(at) => {
+                        walls.push(Segment::new(rotate(p), rotate(p + (q - p) * at)));
+                        walls.push(Segment::new(rotate(p + (q - p) * (at + 0.15)), rotate(q)));
+                    }
+                }
+            }
+            walls.append(&mut others);
+            walls.into_iter().filter(|s| s.a != s.b).collect()
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(17), ..ProptestConfig::default() })]
+
+    /// Lists without what blocking segments hide still give every ray
+    /// from the box its closest hit, and so on along its line through
+    /// every segment that does not block, to the first that does.
+    #[test]
+    fn lists_without_blocked_segments_give_the_closest_hits_along_the_line(
+        (lo, size, segments) in (point(), prop_oneof![0.5..40.0f64, Just(1.0), Just(1e-6)])
+            .prop_flat_map(|(lo, size)| (Just(lo), Just(size), room_around(lo, size))),
+        blocking in prop::collection::vec(prop::bool::weighted(0.8), 64),
+        arcs in prop_oneof![Just(8usize), Just(16), Just(64)],
+        rays in prop::collection::vec(
+            (prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64], prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64],
+             0usize..64, prop_oneof![Just(0.0), Just(1.0 - 1e-12), 0.0..1.0f64]),
+            64),
+    ) {
+        let set = SegmentSet::new(segments);
+        let blocks = |i: u32| blocking[i as usize % blocking.len()];
+        let hi = lo + DVec2::splat(size);
+        let mut lists = ArcCandidates::default();
+        lists.fill(&set, lo, hi, arcs, None);
+        let before: usize = (0..arcs).map(|k| lists.arc(k).len()).sum();
+        lists.drop_blocked(&set, lo, hi, blocks);
+        let after: usize = (0..arcs).map(|k| lists.arc(k).len()).sum();
+        prop_assert!(after <= before);
+        for (fx, fy, k, f) in rays {
+            let k = k % arcs;
+            let list = lists.arc(k);
+            prop_assert!(list.windows(2).all(|w| w[0] < w[1]));
+            let origin = DVec2::new(lo.x + fx * size, lo.y + fy * size);
+            let mut ray = Ray::new(origin, in_arc(k, arcs, f));
+            let mut skip = Skip::NONE;
+            for _ in 0..16 {
+                let culled = set.closest_hit_among(&ray, f64::INFINITY, skip, list);
+                let full = set.closest_hit(&ray, f64::INFINITY, skip);
+                prop_assert_eq!(culled, full, "arc {} of {}, ray {:?}", k, arcs, ray);
+                match full {
+                    Some((index, hit)) if !blocks(index) => {
+                        ray = Ray::new(ray.at(hit.t), ray.dir);
+                        skip = Skip::one(index);
+                    }
+                    _ => break,
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_closed_room_hides_what_lies_beyond_its_walls() {
+    // A unit box in a closed square room, with walls beyond it on every
+    // side: only the room's own walls stay, unless a wall lets rays pass.
+    let walls = vec![
+        Segment::new(DVec2::new(10.0, -10.0), DVec2::new(10.0, 10.0)),
+        Segment::new(DVec2::new(-10.0, 10.0), DVec2::new(10.0, 10.0)),
+        Segment::new(DVec2::new(-10.0, -10.0), DVec2::new(-10.0, 10.0)),
+        Segment::new(DVec2::new(-10.0, -10.0), DVec2::new(10.0, -10.0)),
+        Segment::new(DVec2::new(20.0, -1.0), DVec2::new(20.0, 1.0)),
+        Segment::new(DVec2::new(-20.0, -1.0), DVec2::new(-20.0, 1.0)),
+    ];
+    let set = SegmentSet::new(walls);
+    let (lo, hi) = (DVec2::splat(-0.5), DVec2::splat(0.5));
+    let mut c = ArcCandidates::default();
+    c.fill(&set, lo, hi, 16, None);
+    assert_eq!(c.arc(0), &[0, 4]);
+    c.drop_blocked(&set, lo, hi, |_| true);
+    assert_eq!(c.arc(0), &[0]);
+    assert_eq!(c.arc(8), &[2]);
+    // The right wall lets light through: the segment beyond it stays.
+    c.fill(&set, lo, hi, 16, None);
+    c.drop_blocked(&set, lo, hi, |i| i != 0);
+    assert_eq!(c.arc(0), &[0, 4]);
+    assert_eq!(c.arc(8), &[2]);
+}
+
 #[test]
 fn culling_keeps_only_the_walls_an_arc_can_see() {
     // A unit box in the middle of four walls: rays going right (the arc
