@@ -1,6 +1,6 @@
 //! The floor's rays are culled by direction (`geometry/src/cull.rs`): per
-//! block of 4x4 pixels and 1/64 turn, a ray tests only the walls such rays
-//! can meet; the floor memo's shadow rays test only the walls between the
+//! block of 4x4 pixels (of 16x16 below 64 samples) and 1/64 turn, a ray
+//! tests only the walls such rays can meet before an opaque wall; the floor memo's shadow rays test only the walls between the
 //! block and the light (the floor memo's, or every sample's without the
 //! memo); a ray off a mirror, only the walls that rays from its piece of
 //! the mirror (4 pixels long) in its 1/64 turn can meet. That must change
@@ -49,8 +49,10 @@ fn the_example_rooms_render_the_same_testing_an_eighth_of_the_walls() {
     for name in ["room", "colour-bleed"] {
         let loaded =
             flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
+        // 64 samples: the lists of each block of 4x4 pixels, not of its
+        // tile (below 64).
         let options = RenderOptions {
-            samples: 8,
+            samples: 64,
             scale: 0.3,
             ..loaded.options
         };
@@ -149,25 +151,137 @@ fn hard_configurations_render_the_same() {
     }
 }
 
+/// A turned, non-convex floor plan of more walls than brute force takes
+/// (a BVH answers the rays that are not culled): a star-shaped outer wall,
+/// inner walls with doors, a window pane, a mirror and furniture stubs.
+fn turned_plan() -> String {
+    let (turn, centre) = (0.37f64, (60.0, 60.0));
+    let at = |r: f64, a: f64| {
+        let (s, c) = (a + turn).sin_cos();
+        (centre.0 + r * c, centre.1 + r * s)
+    };
+    let mut walls = String::new();
+    let mut wall = |p: (f64, f64), q: (f64, f64), material: &str| {
+        walls += &format!(
+            "Wall(a: ({}, {}), b: ({}, {}){material}),",
+            p.0, p.1, q.0, q.1
+        );
+    };
+    let tau = std::f64::consts::TAU;
+    // The outer wall: ten corners, in and out; one side a window.
+    for k in 0..10 {
+        let r = |k: usize| if k.is_multiple_of(2) { 50.0 } else { 38.0 };
+        let (p, q) = (
+            at(r(k), tau * k as f64 / 10.0),
+            at(r(k + 1), tau * (k + 1) as f64 / 10.0),
+        );
+        let material = if k == 3 {
+            ", material: Transparent(tint: (0.8, 0.9, 1.0))"
+        } else {
+            ""
+        };
+        wall(p, q, material);
+    }
+    // Inner walls from the middle, each with a door.
+    for k in 0..5 {
+        let a = tau * (2 * k + 1) as f64 / 10.0;
+        wall(at(3.0, a), at(15.0, a), "");
+        wall(
+            at(19.0, a),
+            at(38.0, a),
+            if k == 2 { ", material: Mirror()" } else { "" },
+        );
+    }
+    // A glass partition across one room, wall to wall: rays go on
+    // through it to what lies behind.
+    wall(
+        at(37.0, tau * 0.62),
+        at(37.0, tau * 0.78),
+        ", material: Transparent(tint: (0.9, 0.9, 0.9))",
+    );
+    // Furniture: short stubs in every room.
+    for k in 0..20 {
+        let a = tau * (k as f64 + 0.5) / 20.0;
+        wall(at(25.0, a), at(29.0, a + 0.05), "");
+    }
+    format!(
+        "Scene(canvas: (120, 120), floor: Color((0.7, 0.7, 0.7)), walls: [{walls}],
+            lights: [Point(at: {:?}, intensity: 20.0), Point(at: {:?}, intensity: 20.0),
+                     Directional(direction: (0.4, 1.0), intensity: 0.5)])",
+        at(20.0, 0.2),
+        at(25.0, 3.0)
+    )
+}
+
 #[test]
-fn scenes_queried_through_a_bvh_are_not_culled() {
-    // More walls than brute force takes: the BVH culls for every ray, and
-    // the plan says so.
-    let walls: String = (0..40)
-        .map(|k| format!("Wall(a: ({}, 2), b: ({}, 8)),", 2 + k, 2 + k))
+fn floor_plans_of_many_walls_render_the_same_testing_few_of_them() {
+    let plan = flatray_io::generate::Apartment {
+        rooms: 9,
+        mirrors: 1.0,
+        seed: 5,
+        ..Default::default()
+    };
+    for (name, text) in [("apartment", plan.to_ron()), ("turned", turned_plan())] {
+        let loaded = scene(&text);
+        let walls = loaded.scene.walls.len() as u64;
+        assert!(walls > 32, "{name}: {walls} walls: a BVH");
+        // Below 64 samples the tiles' lists, from 64 the blocks'; two
+        // bounces, and three without the memo (every sample casts the
+        // floor's shadow rays and follows its path wall to wall).
+        for (samples, bounces, memo) in [(16, 2, true), (64, 2, true), (16, 3, false)] {
+            let options = RenderOptions {
+                samples,
+                scale: if name == "turned" { 1.0 } else { 0.25 },
+                bounces,
+                memo: MemoOptions {
+                    enabled: memo,
+                    ..loaded.options.memo
+                },
+                ..loaded.options
+            };
+            let name = format!("{name}, {samples} spp, {bounces} bounces, memo {memo}");
+            let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
+            assert!(plan.floor_ray_culling, "{name}");
+            let stats = assert_same_image(&name, &loaded.scene, &options);
+            assert!(stats.work.culled_rays > 0, "{name}");
+            // Walls hidden behind opaque ones are not listed: a ray tests
+            // a small share of the walls.
+            assert!(
+                stats.work.culled_walls_tested * 4 < stats.work.culled_rays * walls,
+                "{name}: {} walls tested for {} rays",
+                stats.work.culled_walls_tested,
+                stats.work.culled_rays
+            );
+            assert!(stats.work.culled_mirror_rays > 0, "{name}");
+        }
+    }
+}
+
+#[test]
+fn plans_of_very_many_walls_are_not_culled() {
+    // More walls than culling takes: the BVH answers every ray, and the
+    // plan says so.
+    let count = flatray_tracer::MAX_CULLED_WALLS + 1;
+    let walls: String = (0..count)
+        .map(|k| {
+            let x = 2.0 + (k % 40) as f64;
+            let y = 2.0 + (k / 40) as f64;
+            format!("Wall(a: ({x}, {y}), b: ({}, {})),", x + 0.5, y + 0.3)
+        })
         .collect();
     let loaded = scene(&format!(
-        "Scene(canvas: (50, 10), floor: Color((0.8, 0.8, 0.8)), walls: [{walls}],
+        "Scene(canvas: (50, 20), floor: Color((0.8, 0.8, 0.8)), walls: [{walls}],
             lights: [Point(at: (45, 5), intensity: 1.0)])"
     ));
     let options = RenderOptions {
         samples: 4,
         ..loaded.options
     };
-    let stats = assert_same_image("bvh", &loaded.scene, &options);
+    let stats = assert_same_image("many walls", &loaded.scene, &options);
     assert_eq!(stats.work.culled_rays, 0);
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
     assert!(!plan.floor_ray_culling);
+    assert!(plan.to_string().contains("the BVH answers every ray"));
 }
 
 #[test]

@@ -52,8 +52,8 @@ pub use memo::MemoOptions;
 pub use passes::{FIRST_PASS, Progressive, next_pass_end};
 pub use plan::Plan;
 pub use render::{
-    FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS, RenderOptions, Rendered,
-    TILE, image_size, pixel_sample, render,
+    FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS, MAX_CULLED_WALLS,
+    RenderOptions, Rendered, TILE, image_size, pixel_sample, render,
 };
 pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
 pub use stats::{Noise, Physics, Stats, Work};

@@ -5,7 +5,7 @@
 //! off a mirror then tests only its list, with the same answer as a test
 //! of every wall.
 
-use flatray_geometry::{ArcCandidates, DVec2, SegmentSet};
+use flatray_geometry::{ArcCandidates, DVec2};
 
 use crate::sampling::ARCS;
 use crate::scene::{Material, Scene};
@@ -53,7 +53,7 @@ impl MirrorArcs {
                         let u0 = (i as f64 / n as f64 - REACH).max(0.0);
                         let u1 = ((i + 1) as f64 / n as f64 + REACH).min(1.0);
                         let (p, q) = (s.point_at(u0), s.point_at(u1));
-                        fill(&scene.segments, p.min(q), p.max(q))
+                        fill(scene, p.min(q), p.max(q))
                     })
                     .collect()
             })
@@ -73,9 +73,12 @@ impl MirrorArcs {
     }
 }
 
-fn fill(set: &SegmentSet, lo: DVec2, hi: DVec2) -> ArcCandidates {
+/// The lists of a mirror piece's box: the walls its rays can meet, less
+/// those that walls opaque to them hide.
+fn fill(scene: &Scene, lo: DVec2, hi: DVec2) -> ArcCandidates {
     let mut arcs = ArcCandidates::default();
-    arcs.fill(set, lo, hi, ARCS, None);
+    arcs.fill(&scene.segments, lo, hi, ARCS, None);
+    arcs.drop_blocked(&scene.segments, lo, hi, |i| scene.stops_rays(i));
     arcs
 }
 

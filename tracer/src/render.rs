@@ -4,7 +4,7 @@
 
 use std::ops::Range;
 
-use flatray_geometry::{ArcCandidates, DVec2, Hit, Ray, RayLanes, Skip, hull_candidates};
+use flatray_geometry::{ArcCandidates, DVec2, Hit, HitLanes, Ray, RayLanes, Skip, hull_candidates};
 
 use flatray_cache::WallMemo;
 
@@ -220,6 +220,17 @@ pub const TILE: u32 = 16;
 /// The side of the square blocks of pixels whose floor rays share lists
 /// of the walls each arc of directions can meet.
 pub const CULL_BLOCK: u32 = 4;
+
+/// Scenes of more walls than this leave their floor rays to the BVH: a
+/// tile's lists test every wall, and in a large plan an arc's list grows
+/// long.
+pub const MAX_CULLED_WALLS: usize = 512;
+
+/// Pixels rendered with fewer samples than this (over the passes rendered
+/// together) take their culling lists from their whole tile, not from
+/// their block: a block's list of one arc would serve fewer than
+/// `CULL_BLOCK^2 * FINE_CULLING_SAMPLES / ARCS` = 16 rays.
+pub const FINE_CULLING_SAMPLES: u32 = 64;
 
 /// The image size for `scene` at `scale`: at least one pixel each way.
 pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
@@ -615,19 +626,46 @@ impl Estimator for PixelEstimator<'_> {
         let mut values = vec![PixelSums::default(); (tile_width * (y1 - y0)) as usize];
         // The walls each arc of directions can meet, for the tile and
         // then for each block of it (tested against the tile's lists).
+        // With few samples a pixel, a block's lists would serve too few
+        // rays to repay their filling: the tile's lists serve them all.
+        let samples: u32 = contexts.iter().map(|c| c.pass.count()).sum();
+        let block_size = if samples < FINE_CULLING_SAMPLES {
+            TILE
+        } else {
+            CULL_BLOCK
+        };
         let mut tile_arcs = ArcCandidates::default();
         let mut block = BlockCulling::default();
         let mut batch = Batch::default();
         let corner = |x: u32, y: u32| scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
+        // The shadow lists serve the floor's own shadow rays: those of the
+        // floor memo's strata (a ray to every light) and of paths that
+        // start with the floor's direct light. With a light table the
+        // memo's points read none.
+        let trace = &context.trace;
+        let shadow_lists =
+            trace.shadows && (trace.floor_direct || trace.force || trace.light_table.is_none());
         if context.culling {
-            tile_arcs.fill(&scene.segments, corner(x0, y0), corner(x1, y1), ARCS, None);
+            let (lo, hi) = (corner(x0, y0), corner(x1, y1));
+            // A block's lists come from its tile's: the walls its rays
+            // can meet, less those that walls opaque to them hide.
+            let lists = if block_size == TILE {
+                block.fill_shadows(scene, lo, hi, shadow_lists);
+                &mut block.arcs
+            } else {
+                &mut tile_arcs
+            };
+            lists.fill(&scene.segments, lo, hi, ARCS, None);
+            lists.drop_blocked(&scene.segments, lo, hi, |i| scene.stops_rays(i));
         }
-        for by in (y0..y1).step_by(CULL_BLOCK as usize) {
-            for bx in (x0..x1).step_by(CULL_BLOCK as usize) {
-                let (bx1, by1) = ((bx + CULL_BLOCK).min(x1), (by + CULL_BLOCK).min(y1));
+        for by in (y0..y1).step_by(block_size as usize) {
+            for bx in (x0..x1).step_by(block_size as usize) {
+                let (bx1, by1) = ((bx + block_size).min(x1), (by + block_size).min(y1));
                 let culled = context.culling.then(|| {
-                    let (lo, hi) = (corner(bx, by), corner(bx1, by1));
-                    block.fill(scene, lo, hi, &tile_arcs, context.trace.shadows);
+                    if block_size != TILE {
+                        let (lo, hi) = (corner(bx, by), corner(bx1, by1));
+                        block.fill(scene, lo, hi, &tile_arcs, shadow_lists);
+                    }
                     &block
                 });
                 for y in by..by1 {
@@ -1311,17 +1349,22 @@ fn culled_samples<const CHECKED: bool>(
             // The plan culls only when paths bounce: every sample has a ray.
             let value = match begun.ray {
                 Some(ray) => {
-                    stats.work.culled_walls_tested += walls.len() as u64;
-                    let hit =
-                        scene
-                            .segments
-                            .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls);
+                    let walls = Some(walls).filter(|w| w.len() <= LONG_LIST);
+                    let hit = match walls {
+                        Some(walls) => {
+                            stats.work.culled_walls_tested += walls.len() as u64;
+                            scene
+                                .segments
+                                .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls)
+                        }
+                        None => scene.segments.closest_hit(&ray, f64::INFINITY, Skip::NONE),
+                    };
                     finish(
                         context,
                         begun.fluence,
                         ray,
                         hit,
-                        (Some(walls), sample),
+                        (walls, sample),
                         &mut stream,
                         stats,
                     )
@@ -1434,8 +1477,28 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
         rays.oy[k] = origin.y + (position.y + jy[k]) * step.y;
     }
     (rays.dx, rays.dy) = arc_points(arc, &fractions);
-    let hits = scene.segments.closest_hits_among(&rays, walls);
-    stats.work.culled_walls_tested += (walls.len() * count) as u64;
+    let hits = if walls.len() <= LONG_LIST {
+        stats.work.culled_walls_tested += (walls.len() * count) as u64;
+        scene.segments.closest_hits_among(&rays, walls)
+    } else {
+        // A long list costs more than the BVH: each lane asks the BVH.
+        let mut hits = HitLanes {
+            index: [u32::MAX; N],
+            t: [f64::INFINITY; N],
+            u: [0.0; N],
+        };
+        for k in 0..count.min(N) {
+            if let Some((index, hit)) =
+                scene
+                    .segments
+                    .closest_hit(&rays.ray(k), f64::INFINITY, Skip::NONE)
+            {
+                (hits.index[k], hits.t[k], hits.u[k]) = (index, hit.t, hit.u);
+            }
+        }
+        hits
+    };
+    let walls = Some(walls).filter(|w| w.len() <= LONG_LIST);
     let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
     for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
         let pass = pass_of(contexts, sample);
@@ -1452,7 +1515,7 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
                 Rgb::ZERO,
                 rays.ray(k),
                 hits.hit(k),
-                Some(walls),
+                walls,
                 sample,
                 stream,
                 stats,
@@ -1461,6 +1524,11 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
         add_sample::<CHECKED>(&mut sums[pass], value, (x, y, sample), stats);
     }
 }
+
+/// Rays whose arc lists more walls than this ask the whole set instead
+/// (its BVH, or in a set of a few dozen walls its scan in lanes): the
+/// same answers, for less work than a long list.
+pub(crate) const LONG_LIST: usize = 16;
 
 /// Samples of one arc in one chunk, at most: [`arc_in_lanes`] takes them
 /// in this many lanes.
@@ -1485,6 +1553,12 @@ impl BlockCulling {
     /// only when shadow rays are cast.
     fn fill(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, tile: &ArcCandidates, shadows: bool) {
         self.arcs.fill(&scene.segments, lo, hi, ARCS, Some(tile));
+        self.fill_shadows(scene, lo, hi, shadows);
+    }
+
+    /// The shadow lists for the block `[lo, hi]` (only when shadow rays
+    /// are cast).
+    fn fill_shadows(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, shadows: bool) {
         self.shadows.resize(scene.lights.len(), None);
         if !shadows {
             return;

@@ -566,6 +566,15 @@ impl Scene {
         self.albedo_along.cells.iter().map(Vec::len).sum()
     }
 
+    /// Whether a ray that meets wall `index` ends its straight line there
+    /// (every wall but a transparent one: a path goes on through those
+    /// without turning). An index that is no wall stops nothing.
+    pub fn stops_rays(&self, index: u32) -> bool {
+        self.walls
+            .get(index as usize)
+            .is_some_and(|w| !matches!(w.material, Material::Transparent { .. }))
+    }
+
     /// The line light that wall `index` also is, if any.
     pub fn light_of_wall(&self, index: u32) -> Option<u32> {
         self.wall_light.get(index as usize).copied().flatten()

@@ -6,8 +6,6 @@
 
 mod wording;
 
-use flatray_geometry::Strategy;
-
 use crate::render::{FastPath, FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Floor, Rgb};
@@ -41,7 +39,6 @@ pub struct Inventory {
     pub reflectors: usize,
     /// How the walls' ray queries run, in words.
     pub queries: String,
-    pub brute_force: bool,
 }
 
 impl Inventory {
@@ -78,7 +75,6 @@ impl Inventory {
                 Material::Glass { .. } => true,
             }),
             queries: scene.segments().describe(),
-            brute_force: scene.segments().strategy() == Strategy::BruteForce,
         }
     }
 }
@@ -155,7 +151,6 @@ impl Plan {
             diffuse,
             occluders,
             reflectors,
-            brute_force,
             ..
         } = inventory;
         let force = options.reference;
@@ -230,7 +225,7 @@ impl Plan {
         let floor_ray_culling = !tracing_light
             && indirect
             && !scene.walls.is_empty()
-            && brute_force
+            && scene.walls.len() <= crate::render::MAX_CULLED_WALLS
             && options.takes(FastPath::Culling);
         Plan {
             fast_paths: options.fast_paths,

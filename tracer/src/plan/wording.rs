@@ -5,7 +5,7 @@ use std::fmt;
 
 use super::{Inventory, Plan};
 use crate::mirror::MIRROR_PIECE;
-use crate::render::CULL_BLOCK;
+use crate::render::{CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE};
 use crate::render::{FastPath, LightChoice, MANY_LIGHTS};
 use crate::sampling::ARCS;
 
@@ -55,7 +55,6 @@ impl Plan {
             occluders,
             reflectors,
             ref queries,
-            brute_force,
         } = self.inventory;
         let Plan {
             bounces,
@@ -369,8 +368,8 @@ impl Plan {
                 "no indirect light is traced".into()
             } else if walls == 0 {
                 "no walls".into()
-            } else if !brute_force {
-                "the BVH culls walls for every ray".into()
+            } else if walls > MAX_CULLED_WALLS {
+                format!("more than {MAX_CULLED_WALLS} walls: the BVH answers every ray")
             } else if reference {
                 "the reference model runs no fast path".into()
             } else if !fast_paths.contains(FastPath::Culling) {
@@ -381,8 +380,13 @@ impl Plan {
                 } else {
                     String::new()
                 };
+                let shadow_lists = if light_table {
+                    String::new()
+                } else {
+                    "; the floor cache's shadow rays, only the walls between the pixels and the light".into()
+                };
                 format!(
-                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels and 1/{ARCS} turn, only the walls such rays can meet{off_mirrors}; the floor cache's shadow rays, only the walls between the pixels and the light"
+                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels (per {TILE}x{TILE} below {FINE_CULLING_SAMPLES} samples) and 1/{ARCS} turn, only the walls such rays can meet before an opaque one{off_mirrors}; a ray whose list holds more than {LONG_LIST} asks the whole set{shadow_lists}"
                 )
             },
         );
