@@ -105,10 +105,12 @@ pub(crate) fn numbers_per_point(scene: &Scene, table: Option<&LightTable>) -> us
 /// The direct light at every point of `strata`, each from the lights that
 /// `table` chooses with the point's [`NUMBERS`] numbers, each light's
 /// visibility given by `vis(light)` when a point takes it: the same for
-/// the reference model and the fast paths.
+/// the reference model and the fast paths. `receiver` is the floor, with
+/// the walls its shadow rays towards each light can cross where known.
 pub(crate) fn direct_light_chosen(
     scene: &Scene,
     table: &LightTable,
+    receiver: Receiver,
     strata: &mut Strata,
     mut vis: impl FnMut(usize) -> Visibility,
     stats: &mut Stats,
@@ -121,7 +123,7 @@ pub(crate) fn direct_light_chosen(
     values.clear();
     for (&x, numbers) in points.iter().zip(numbers.chunks_exact(NUMBERS)) {
         let numbers: &[f64; NUMBERS] = numbers.try_into().unwrap_or(&[0.0; NUMBERS]);
-        values.push(table.direct_light(scene, x, Receiver::FLOOR, numbers, &mut vis, stats));
+        values.push(table.direct_light(scene, x, receiver, numbers, &mut vis, stats));
     }
 }
 
@@ -256,10 +258,11 @@ pub(crate) fn light_contribution(
 
 /// What fraction of light gets along `ray` for `0 < t < t_max`: zero when
 /// an opaque wall is in the way, else the product of the transparent
-/// walls' tints. Counts one shadow ray.
-/// With `walls`, only those walls are tested (in index order, as brute
-/// force visits them): the same answer when they hold every wall the ray
-/// can cross.
+/// walls' tints, taken in the order of the walls' indices whatever order
+/// the query visits them in (a BVH visits near boxes first, a list in
+/// index order): the same bits either way. Counts one shadow ray.
+/// With `walls`, only those walls are tested: the same answer when they
+/// hold every wall the ray can cross.
 pub(crate) fn transmittance(
     scene: &Scene,
     ray: &Ray,
@@ -269,23 +272,151 @@ pub(crate) fn transmittance(
     stats: &mut Stats,
 ) -> Rgb {
     stats.work.shadow_rays += 1;
+    let query = (ray, t_max, skip);
+    // The panes crossed, up to `PANES` of them; `None` once an opaque wall
+    // (or a pane of no tint) is met.
+    let mut panes = [(0u32, Rgb::ONE); PANES];
+    let mut count = 0;
+    let mut blocked = false;
+    let mut more = false;
+    crossings(
+        scene,
+        query,
+        walls,
+        &mut |index| match scene.walls[index as usize].material {
+            Material::Transparent { tint } if tint != Rgb::ZERO => {
+                if count < PANES {
+                    panes[count] = (index, tint);
+                    count += 1;
+                    true
+                } else {
+                    more = true;
+                    true
+                }
+            }
+            // Glass refracts: no straight shadow ray gets through it.
+            _ => {
+                blocked = true;
+                false
+            }
+        },
+    );
+    if blocked {
+        return Rgb::ZERO;
+    }
     let mut through = Rgb::ONE;
-    let visit = |index: u32, _| match scene.walls[index as usize].material {
-        Material::Transparent { tint } => {
+    if !more {
+        let panes = &mut panes[..count];
+        panes.sort_unstable_by_key(|&(index, _)| index);
+        for &(_, tint) in panes.iter() {
             through *= tint;
-            through != Rgb::ZERO
         }
-        // Glass refracts: no straight shadow ray gets through it.
-        Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. } => {
-            through = Rgb::ZERO;
-            false
-        }
-    };
+        return through;
+    }
+    // More panes than kept (rare): each next one by index, one query each.
+    let mut after: Option<u32> = None;
+    loop {
+        let mut next: Option<(u32, Rgb)> = None;
+        crossings(scene, query, walls, &mut |index| {
+            if let Material::Transparent { tint } = scene.walls[index as usize].material
+                && after.is_none_or(|a| index > a)
+                && next.is_none_or(|(n, _)| index < n)
+            {
+                next = Some((index, tint));
+            }
+            true
+        });
+        let Some((index, tint)) = next else {
+            return through;
+        };
+        through *= tint;
+        after = Some(index);
+    }
+}
+
+/// Calls `visit(index)` for the walls `ray` crosses before `t_max` (of
+/// `walls` only, where given) until it returns `false`.
+#[inline(always)]
+fn crossings(
+    scene: &Scene,
+    (ray, t_max, skip): (&Ray, f64, Skip),
+    walls: Option<&[u32]>,
+    visit: &mut impl FnMut(u32) -> bool,
+) {
+    let visit = |index, _| visit(index);
     match walls {
         Some(walls) => scene
             .segments
             .for_each_crossing_among(ray, t_max, skip, walls, visit),
         None => scene.segments.for_each_crossing(ray, t_max, skip, visit),
     };
-    through
+}
+
+/// The panes a shadow ray keeps to multiply their tints in index order;
+/// beyond, it finds them again one by one.
+const PANES: usize = 8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Canvas, Floor, Wall};
+    use flatray_geometry::{Segment, Strategy};
+
+    /// Panes across a ray, in an order of indices unlike their order
+    /// along it, with tints whose products round differently by order;
+    /// and enough other walls for a BVH. The BVH (near boxes first), a
+    /// list (index order) and brute force give the same bits, for up to
+    /// and beyond the panes kept at once.
+    #[test]
+    fn panes_tint_a_shadow_ray_in_index_order_whatever_the_query() {
+        for panes in [3, 8, 9, 13] {
+            let mut walls = Vec::new();
+            for k in 0..panes {
+                // Pane k at x = 1 + 3 ((k * 5) % panes): shuffled along the ray.
+                let x = 1.0 + 3.0 * ((k * 5) % panes) as f64;
+                let tint = Rgb::new(
+                    0.1 + 0.07 * k as f64,
+                    0.9 / (1.0 + k as f64),
+                    0.3 + 0.01 * k as f64,
+                );
+                walls.push(Wall {
+                    segment: Segment::new(DVec2::new(x, -1.0), DVec2::new(x, 1.0)),
+                    material: Material::Transparent { tint },
+                });
+            }
+            for k in 0..40 {
+                let y = 3.0 + k as f64;
+                walls.push(Wall {
+                    segment: Segment::new(DVec2::new(0.0, y), DVec2::new(40.0, y + 0.5)),
+                    material: Material::Diffuse { albedo: None },
+                });
+            }
+            let canvas = Canvas {
+                width: 50,
+                height: 50,
+                origin: DVec2::ZERO,
+            };
+            let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, Vec::new());
+            assert_eq!(scene.segments.strategy(), Strategy::Bvh);
+            let ray = Ray::new(DVec2::new(0.0, 0.1), DVec2::new(1.0, 0.0));
+            let mut stats = Stats::default();
+            let all: Vec<u32> = (0..scene.walls.len() as u32).collect();
+            let bvh = transmittance(&scene, &ray, 100.0, Skip::NONE, None, &mut stats);
+            let listed = transmittance(&scene, &ray, 100.0, Skip::NONE, Some(&all), &mut stats);
+            let mut expected = Rgb::ONE;
+            for wall in &scene.walls[..panes] {
+                if let Material::Transparent { tint } = wall.material {
+                    expected *= tint;
+                }
+            }
+            assert_eq!(bvh, expected, "{panes} panes, BVH");
+            assert_eq!(listed, expected, "{panes} panes, list");
+            // An opaque wall across the ray: nothing gets through.
+            let blocked = Ray::new(DVec2::new(0.0, 3.2), DVec2::new(0.0, 1.0));
+            assert_eq!(
+                transmittance(&scene, &blocked, 100.0, Skip::NONE, None, &mut stats),
+                Rgb::ZERO
+            );
+        }
+    }
 }

@@ -12,7 +12,7 @@ use crate::caustics::Caustics;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::film::{Estimator, Film, Part, run};
 use crate::light::{
-    Strata, Visibility, direct_light_chosen, direct_light_points, numbers_per_point,
+    Receiver, Strata, Visibility, direct_light_chosen, direct_light_points, numbers_per_point,
 };
 use crate::lights::choice::LightTable;
 use crate::memo::{MemoOptions, build_wall_memo};
@@ -225,6 +225,11 @@ pub const CULL_BLOCK: u32 = 4;
 /// tile's lists test every wall, and in a large plan an arc's list grows
 /// long.
 pub const MAX_CULLED_WALLS: usize = 512;
+
+/// With a light table, each tile lists the walls its floor's shadow rays
+/// to each light can cross where lights times walls are at most this: that
+/// many wall tests per tile (16 x 16 pixels).
+pub const TILE_SHADOW_TESTS: usize = 8192;
 
 /// Pixels rendered with fewer samples than this (over the passes rendered
 /// together) take their culling lists from their whole tile, not from
@@ -638,19 +643,30 @@ impl Estimator for PixelEstimator<'_> {
         let mut block = BlockCulling::default();
         let mut batch = Batch::default();
         let corner = |x: u32, y: u32| scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
-        // The shadow lists serve the floor's own shadow rays: those of the
-        // floor memo's strata (a ray to every light) and of paths that
-        // start with the floor's direct light. With a light table the
-        // memo's points read none.
+        // The shadow lists serve the floor's own shadow rays. Where every
+        // light takes a ray from each point (the floor memo's strata, or
+        // paths that start with the floor's light), each block has its
+        // own. The points of a light table take a few lights each: the
+        // tile's lists serve its blocks, where lights times walls stay
+        // within a budget.
         let trace = &context.trace;
         let shadow_lists =
             trace.shadows && (trace.floor_direct || trace.force || trace.light_table.is_none());
+        let tile_shadow_lists = trace.shadows
+            && !shadow_lists
+            && scene.lights.len() * scene.walls.len() <= TILE_SHADOW_TESTS;
         if context.culling {
             let (lo, hi) = (corner(x0, y0), corner(x1, y1));
+            if tile_shadow_lists {
+                block.fill_shadows(scene, lo, hi, true);
+                block.drop_long_shadow_lists();
+            }
             // A block's lists come from its tile's: the walls its rays
             // can meet, less those that walls opaque to them hide.
             let lists = if block_size == TILE {
-                block.fill_shadows(scene, lo, hi, shadow_lists);
+                if !tile_shadow_lists {
+                    block.fill_shadows(scene, lo, hi, shadow_lists);
+                }
                 &mut block.arcs
             } else {
                 &mut tile_arcs
@@ -963,7 +979,11 @@ fn render_pixel(
                     }
                     visibility[light]
                 };
-                direct_light_chosen(scene, table, floor, vis, stats);
+                let receiver = Receiver {
+                    shadow_walls,
+                    ..Receiver::FLOOR
+                };
+                direct_light_chosen(scene, table, receiver, floor, vis, stats);
                 stats.merge(&centre_stats);
             }
             None if options.takes(FastPath::StrataLoops) => {
@@ -1556,8 +1576,19 @@ impl BlockCulling {
         self.fill_shadows(scene, lo, hi, shadows);
     }
 
+    /// Shadow rays whose list holds more walls than this ask the BVH: the
+    /// same answer, for less work than a long list.
+    fn drop_long_shadow_lists(&mut self) {
+        for list in &mut self.shadows {
+            if list.as_ref().is_some_and(|l| l.len() > LONG_LIST) {
+                *list = None;
+            }
+        }
+    }
+
     /// The shadow lists for the block `[lo, hi]` (only when shadow rays
-    /// are cast).
+    /// are cast). Without `shadows`, the lists stay as they are: those of
+    /// the block's tile, or none.
     fn fill_shadows(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, shadows: bool) {
         self.shadows.resize(scene.lights.len(), None);
         if !shadows {

@@ -5,7 +5,9 @@ use std::fmt;
 
 use super::{Inventory, Plan};
 use crate::mirror::MIRROR_PIECE;
-use crate::render::{CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE};
+use crate::render::{
+    CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE, TILE_SHADOW_TESTS,
+};
 use crate::render::{FastPath, LightChoice, MANY_LIGHTS};
 use crate::sampling::ARCS;
 
@@ -380,7 +382,13 @@ impl Plan {
                 } else {
                     String::new()
                 };
-                let shadow_lists = if light_table {
+                let shadow_lists = if !shadows {
+                    String::new()
+                } else if light_table && lights * walls <= TILE_SHADOW_TESTS {
+                    format!(
+                        "; the chosen lights' shadow rays, only the walls between the {TILE}x{TILE} tile and the light"
+                    )
+                } else if light_table {
                     String::new()
                 } else {
                     "; the floor cache's shadow rays, only the walls between the pixels and the light".into()
