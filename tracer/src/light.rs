@@ -1,6 +1,6 @@
 //! Direct light: shadow rays from a receiver point to every light.
 
-use flatray_geometry::{DVec2, Ray, Skip};
+use flatray_geometry::{DVec2, Ray, Skip, Strategy};
 
 use crate::lights::arriving;
 use crate::lights::choice::{LightTable, NUMBERS};
@@ -259,8 +259,10 @@ pub(crate) fn light_contribution(
 /// What fraction of light gets along `ray` for `0 < t < t_max`: zero when
 /// an opaque wall is in the way, else the product of the transparent
 /// walls' tints, taken in the order of the walls' indices whatever order
-/// the query visits them in (a BVH visits near boxes first, a list in
-/// index order): the same bits either way. Counts one shadow ray.
+/// the query visits them in, so that a BVH (near boxes first) and a list
+/// or brute force (index order) give the same bits. Two tints multiply to
+/// the same bits in either order; a BVH query that crosses three panes or
+/// more finds them again by index, one query each. Counts one shadow ray.
 /// With `walls`, only those walls are tested: the same answer when they
 /// hold every wall the ray can cross.
 pub(crate) fn transmittance(
@@ -273,47 +275,30 @@ pub(crate) fn transmittance(
 ) -> Rgb {
     stats.work.shadow_rays += 1;
     let query = (ray, t_max, skip);
-    // The panes crossed, up to `PANES` of them; `None` once an opaque wall
-    // (or a pane of no tint) is met.
-    let mut panes = [(0u32, Rgb::ONE); PANES];
-    let mut count = 0;
+    let mut through = Rgb::ONE;
+    let mut panes = 0u32;
     let mut blocked = false;
-    let mut more = false;
-    crossings(
-        scene,
-        query,
-        walls,
-        &mut |index| match scene.walls[index as usize].material {
-            Material::Transparent { tint } if tint != Rgb::ZERO => {
-                if count < PANES {
-                    panes[count] = (index, tint);
-                    count += 1;
-                    true
-                } else {
-                    more = true;
-                    true
-                }
+    crossings(scene, query, walls, &mut |index| {
+        match scene.walls[index as usize].material {
+            Material::Transparent { tint } => {
+                through *= tint;
+                panes += 1;
+                through != Rgb::ZERO
             }
             // Glass refracts: no straight shadow ray gets through it.
-            _ => {
+            Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. } => {
+                through = Rgb::ZERO;
                 blocked = true;
                 false
             }
-        },
-    );
-    if blocked {
-        return Rgb::ZERO;
-    }
-    let mut through = Rgb::ONE;
-    if !more {
-        let panes = &mut panes[..count];
-        panes.sort_unstable_by_key(|&(index, _)| index);
-        for &(_, tint) in panes.iter() {
-            through *= tint;
         }
+    });
+    let index_order = walls.is_some() || scene.segments.strategy() == Strategy::BruteForce;
+    if panes < 3 || blocked || index_order {
         return through;
     }
-    // More panes than kept (rare): each next one by index, one query each.
+    // Each next pane by index.
+    let mut through = Rgb::ONE;
     let mut after: Option<u32> = None;
     loop {
         let mut next: Option<(u32, Rgb)> = None;
@@ -352,15 +337,11 @@ fn crossings(
     };
 }
 
-/// The panes a shadow ray keeps to multiply their tints in index order;
-/// beyond, it finds them again one by one.
-const PANES: usize = 8;
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::{Canvas, Floor, Wall};
-    use flatray_geometry::{Segment, Strategy};
+    use flatray_geometry::Segment;
 
     /// Panes across a ray, in an order of indices unlike their order
     /// along it, with tints whose products round differently by order;
