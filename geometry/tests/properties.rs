@@ -220,6 +220,27 @@ fn in_arc(k: usize, arcs: usize, f: f64) -> DVec2 {
     DVec2::new(angle.cos(), angle.sin())
 }
 
+/// The side of a box rays leave from: large, one pixel, tiny.
+fn box_size() -> impl Strategy<Value = f64> {
+    prop_oneof![0.5..40.0f64, Just(1.0), Just(1e-6)]
+}
+
+/// 64 rays leaving a box: where in it (`x`, `y` as fractions of its
+/// sides, often on its edges and corners), in which of up to 64 arcs, and
+/// where in the arc (often at its ends).
+fn rays_from_box() -> impl Strategy<Value = Vec<(f64, f64, usize, f64)>> {
+    let edge_or_inside = || prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64];
+    prop::collection::vec(
+        (
+            edge_or_inside(),
+            edge_or_inside(),
+            0usize..64,
+            prop_oneof![Just(0.0), Just(1.0 - 1e-12), 0.0..1.0f64],
+        ),
+        64,
+    )
+}
+
 /// Short segments around the box `[lo, lo + size]`, where culling decides
 /// most, with random long ones.
 fn segments_near(lo: DVec2, size: f64) -> impl Strategy<Value = Vec<Segment>> {
@@ -237,13 +258,10 @@ proptest! {
 
     #[test]
     fn culled_queries_return_exactly_what_the_full_scan_returns(
-        (lo, size, segments) in (point(), prop_oneof![0.5..40.0f64, Just(1.0), Just(1e-6)])
+        (lo, size, segments) in (point(), box_size())
             .prop_flat_map(|(lo, size)| (Just(lo), Just(size), segments_near(lo, size))),
         arcs in prop_oneof![Just(8usize), Just(16), Just(64)],
-        rays in prop::collection::vec(
-            (prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64], prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64],
-             0usize..64, prop_oneof![Just(0.0), Just(1.0 - 1e-12), 0.0..1.0f64]),
-            64),
+        rays in rays_from_box(),
     ) {
         let set = SegmentSet::new(segments);
         let hi = lo + DVec2::splat(size);
@@ -375,14 +393,11 @@ proptest! {
     /// every segment that does not block, to the first that does.
     #[test]
     fn lists_without_blocked_segments_give_the_closest_hits_along_the_line(
-        (lo, size, segments) in (point(), prop_oneof![0.5..40.0f64, Just(1.0), Just(1e-6)])
+        (lo, size, segments) in (point(), box_size())
             .prop_flat_map(|(lo, size)| (Just(lo), Just(size), room_around(lo, size))),
         blocking in prop::collection::vec(prop::bool::weighted(0.8), 64),
         arcs in prop_oneof![Just(8usize), Just(16), Just(64)],
-        rays in prop::collection::vec(
-            (prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64], prop_oneof![Just(0.0), Just(1.0), 0.0..1.0f64],
-             0usize..64, prop_oneof![Just(0.0), Just(1.0 - 1e-12), 0.0..1.0f64]),
-            64),
+        rays in rays_from_box(),
     ) {
         let set = SegmentSet::new(segments);
         let blocks = |i: u32| blocking[i as usize % blocking.len()];
