@@ -139,7 +139,7 @@ impl ArcCandidates {
         blocks: impl Fn(u32) -> bool,
     ) {
         let scale = lo.abs().max(hi.abs()).max_element();
-        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        let corners = box_corners(lo, hi);
         let mut kept = 0;
         let mut start = 0;
         for k in 0..self.arcs() {
@@ -159,9 +159,7 @@ impl ArcCandidates {
                 let index = self.indices[j];
                 let s = set.get(index);
                 let extent = scale.max(s.a.abs().max(s.b.abs()).max_element());
-                // A lower bound on the segment's distance from the box.
-                let gap = (lo - s.a.max(s.b)).max(s.a.min(s.b) - hi).max_element();
-                let hidden = gap > reach + 1e-6 * extent;
+                let hidden = gap(lo, hi, s.a, s.b) > reach + 1e-6 * extent;
                 if !hidden {
                     self.indices[kept] = index;
                     kept += 1;
@@ -264,20 +262,18 @@ fn blocked_beyond(
 /// several times over.
 fn arc_range(lo: DVec2, hi: DVec2, a: DVec2, b: DVec2, arcs: usize, margin: f64) -> (usize, usize) {
     let all = (0, arcs);
-    let (smin, smax) = (a.min(b), a.max(b));
-    // A lower bound on the distance between the segment and the box.
-    let gap = (lo - smax).max(smin - hi).max_element();
+    let least = gap(lo, hi, a, b);
     let scale = lo
         .abs()
         .max(hi.abs())
         .max(a.abs())
         .max(b.abs())
         .max_element();
-    let apart = gap > 1e-6 * scale && gap > 1e3 * margin && scale.is_finite();
+    let apart = least > 1e-6 * scale && least > 1e3 * margin && scale.is_finite();
     if !apart {
         return all;
     }
-    let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+    let corners = box_corners(lo, hi);
     // A direction inside the span: from the box's centre to the
     // segment's middle, a point of the polygon.
     let inside = (a + b) * 0.5 - (lo + hi) * 0.5;
@@ -293,7 +289,7 @@ fn arc_range(lo: DVec2, hi: DVec2, a: DVec2, b: DVec2, arcs: usize, margin: f64)
         }
     }
     let width = std::f64::consts::TAU / arcs as f64;
-    let pad = 4.0 * ARC_MARGIN + 4.0 * margin / gap + 1e-9;
+    let pad = 4.0 * ARC_MARGIN + 4.0 * margin / least + 1e-9;
     let from = most_cw.y.atan2(most_cw.x) - pad;
     let mut to = most_ccw.y.atan2(most_ccw.x) + pad;
     if to < from {
@@ -313,6 +309,19 @@ fn arc_range(lo: DVec2, hi: DVec2, a: DVec2, b: DVec2, arcs: usize, margin: f64)
     (first, count)
 }
 
+/// The corners of the box `[lo, hi]`, counter-clockwise from `lo` (in a
+/// y-up frame).
+fn box_corners(lo: DVec2, hi: DVec2) -> [DVec2; 4] {
+    [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]
+}
+
+/// A lower bound on the distance between the box `[lo, hi]` and segment
+/// `a b`: the widest gap between their extents along either axis
+/// (negative where both extents overlap).
+fn gap(lo: DVec2, hi: DVec2, a: DVec2, b: DVec2) -> f64 {
+    (lo - a.max(b)).max(a.min(b) - hi).max_element()
+}
+
 /// The region swept by rays leaving a box with directions in a cone less
 /// than half a turn wide.
 struct Wedge {
@@ -329,7 +338,7 @@ impl Wedge {
         Wedge {
             lo,
             hi,
-            corners: [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)],
+            corners: box_corners(lo, hi),
             d0,
             d1,
         }
@@ -749,7 +758,7 @@ mod tests {
         ) {
             let lo = DVec2::new(x, y);
             let hi = lo + DVec2::new(w, h);
-            let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+            let corners = box_corners(lo, hi);
             let segments: Vec<Segment> = ends
                 .iter()
                 .enumerate()
