@@ -569,6 +569,39 @@ impl SegmentSet {
         visit_crossings(ray, t_max, skip, segments, &mut visit)
     }
 
+    /// [`SegmentSet::closest_hit_among`] `candidates` where they are
+    /// given, else [`SegmentSet::closest_hit`] over the whole set.
+    #[inline(always)]
+    pub fn closest_hit_within(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        candidates: Option<&[u32]>,
+    ) -> Option<(u32, Hit)> {
+        match candidates {
+            Some(candidates) => self.closest_hit_among(ray, t_max, skip, candidates),
+            None => self.closest_hit(ray, t_max, skip),
+        }
+    }
+
+    /// [`SegmentSet::for_each_crossing_among`] `candidates` where they are
+    /// given, else [`SegmentSet::for_each_crossing`] over the whole set.
+    #[inline(always)]
+    pub fn for_each_crossing_within(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        candidates: Option<&[u32]>,
+        visit: impl FnMut(u32, Hit) -> bool,
+    ) -> bool {
+        match candidates {
+            Some(candidates) => self.for_each_crossing_among(ray, t_max, skip, candidates, visit),
+            None => self.for_each_crossing(ray, t_max, skip, visit),
+        }
+    }
+
     /// [`SegmentSet::closest_hit`] among `candidates` only (ascending
     /// indices): the same answer whenever every segment the ray crosses
     /// before `t_max` is a candidate, as [`ArcCandidates`] guarantees for

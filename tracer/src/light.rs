@@ -274,11 +274,11 @@ pub(crate) fn transmittance(
     stats: &mut Stats,
 ) -> Rgb {
     stats.work.shadow_rays += 1;
-    let query = (ray, t_max, skip);
     let mut through = Rgb::ONE;
     let mut panes = 0u32;
     let mut blocked = false;
-    crossings(scene, query, walls, &mut |index| {
+    let segments = &scene.segments;
+    segments.for_each_crossing_within(ray, t_max, skip, walls, |index, _| {
         match scene.walls[index as usize].material {
             Material::Transparent { tint } => {
                 through *= tint;
@@ -293,7 +293,7 @@ pub(crate) fn transmittance(
             }
         }
     });
-    let index_order = walls.is_some() || scene.segments.strategy() == Strategy::BruteForce;
+    let index_order = walls.is_some() || segments.strategy() == Strategy::BruteForce;
     if panes < 3 || blocked || index_order {
         return through;
     }
@@ -302,7 +302,7 @@ pub(crate) fn transmittance(
     let mut after: Option<u32> = None;
     loop {
         let mut next: Option<(u32, Rgb)> = None;
-        crossings(scene, query, walls, &mut |index| {
+        segments.for_each_crossing_within(ray, t_max, skip, walls, |index, _| {
             if let Material::Transparent { tint } = scene.walls[index as usize].material
                 && after.is_none_or(|a| index > a)
                 && next.is_none_or(|(n, _)| index < n)
@@ -317,24 +317,6 @@ pub(crate) fn transmittance(
         through *= tint;
         after = Some(index);
     }
-}
-
-/// Calls `visit(index)` for the walls `ray` crosses before `t_max` (of
-/// `walls` only, where given) until it returns `false`.
-#[inline(always)]
-fn crossings(
-    scene: &Scene,
-    (ray, t_max, skip): (&Ray, f64, Skip),
-    walls: Option<&[u32]>,
-    visit: &mut impl FnMut(u32) -> bool,
-) {
-    let visit = |index, _| visit(index);
-    match walls {
-        Some(walls) => scene
-            .segments
-            .for_each_crossing_among(ray, t_max, skip, walls, visit),
-        None => scene.segments.for_each_crossing(ray, t_max, skip, visit),
-    };
 }
 
 #[cfg(test)]

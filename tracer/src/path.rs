@@ -210,12 +210,9 @@ pub(crate) fn follow(
         stats.work.bounce_rays += 1;
         let hit = match first_hit.take() {
             Some(hit) => hit,
-            None => match line_walls {
-                Some(walls) => scene
-                    .segments
-                    .closest_hit_among(&ray, f64::INFINITY, skip, walls),
-                _ => scene.segments.closest_hit(&ray, f64::INFINITY, skip),
-            },
+            None => scene
+                .segments
+                .closest_hit_within(&ray, f64::INFINITY, skip, line_walls),
         };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
         if mirror_emission && (after_mirror || force) {

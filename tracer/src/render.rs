@@ -1370,15 +1370,11 @@ fn culled_samples<const CHECKED: bool>(
             let value = match begun.ray {
                 Some(ray) => {
                     let walls = Some(walls).filter(|w| w.len() <= LONG_LIST);
-                    let hit = match walls {
-                        Some(walls) => {
-                            stats.work.culled_walls_tested += walls.len() as u64;
-                            scene
-                                .segments
-                                .closest_hit_among(&ray, f64::INFINITY, Skip::NONE, walls)
-                        }
-                        None => scene.segments.closest_hit(&ray, f64::INFINITY, Skip::NONE),
-                    };
+                    stats.work.culled_walls_tested += walls.map_or(0, |w| w.len() as u64);
+                    let hit =
+                        scene
+                            .segments
+                            .closest_hit_within(&ray, f64::INFINITY, Skip::NONE, walls);
                     finish(
                         context,
                         begun.fluence,
