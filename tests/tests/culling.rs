@@ -221,10 +221,26 @@ fn floor_plans_of_many_walls_render_the_same_testing_few_of_them() {
         seed: 5,
         ..Default::default()
     };
-    for (name, text) in [("apartment", plan.to_ron()), ("turned", turned_plan())] {
+    // So many lights that a tile lists the shadow rays only of those its
+    // table's cells take most.
+    let lamps = flatray_io::generate::Apartment {
+        lamps_per_room: 12,
+        ..plan
+    };
+    for (name, text) in [
+        ("apartment", plan.to_ron()),
+        ("many lights", lamps.to_ron()),
+        ("turned", turned_plan()),
+    ] {
         let loaded = scene(&text);
         let walls = loaded.scene.walls.len() as u64;
         assert!(walls > 32, "{name}: {walls} walls: a BVH");
+        let tests = walls as usize * loaded.scene.lights.len();
+        assert_eq!(
+            name == "many lights",
+            tests > flatray_tracer::TILE_SHADOW_TESTS,
+            "{name}: {tests} wall tests for every light's shadow list"
+        );
         // Below 64 samples the tiles' lists, from 64 the blocks'; two
         // bounces, and three without the memo (every sample casts the
         // floor's shadow rays and follows its path wall to wall).
@@ -253,6 +269,7 @@ fn floor_plans_of_many_walls_render_the_same_testing_few_of_them() {
                 stats.work.culled_rays
             );
             assert!(stats.work.culled_mirror_rays > 0, "{name}");
+            assert!(stats.work.listed_shadow_rays > 0, "{name}");
         }
     }
 }

@@ -53,7 +53,7 @@ pub use passes::{FIRST_PASS, Progressive, next_pass_end};
 pub use plan::Plan;
 pub use render::{
     FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS, MAX_CULLED_WALLS,
-    RenderOptions, Rendered, TILE, image_size, pixel_sample, render,
+    RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, image_size, pixel_sample, render,
 };
 pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
 pub use stats::{Noise, Physics, Stats, Work};

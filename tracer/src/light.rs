@@ -274,6 +274,7 @@ pub(crate) fn transmittance(
     stats: &mut Stats,
 ) -> Rgb {
     stats.work.shadow_rays += 1;
+    stats.work.listed_shadow_rays += walls.is_some() as u64;
     let mut through = Rgb::ONE;
     let mut panes = 0u32;
     let mut blocked = false;

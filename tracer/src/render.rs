@@ -647,24 +647,24 @@ impl Estimator for PixelEstimator<'_> {
         // light takes a ray from each point (the floor memo's strata, or
         // paths that start with the floor's light), each block has its
         // own. The points of a light table take a few lights each: the
-        // tile's lists serve its blocks, where lights times walls stay
-        // within a budget.
+        // tile's lists serve its blocks, for the lights its points take
+        // most, within a budget of wall tests.
         let trace = &context.trace;
         let shadow_lists =
             trace.shadows && (trace.floor_direct || trace.force || trace.light_table.is_none());
-        let tile_shadow_lists = trace.shadows
-            && !shadow_lists
-            && scene.lights.len() * scene.walls.len() <= TILE_SHADOW_TESTS;
+        let tile_table = trace.light_table.filter(|_| trace.shadows && !shadow_lists);
         if context.culling {
             let (lo, hi) = (corner(x0, y0), corner(x1, y1));
-            if tile_shadow_lists {
-                block.fill_shadows(scene, lo, hi, true);
+            if let Some(table) = tile_table {
+                let listed = &mut batch.listed;
+                tile_lights(scene, table, (lo, hi), listed);
+                block.fill_shadows_of(scene, lo, hi, |light| listed[light]);
                 block.drop_long_shadow_lists();
             }
             // A block's lists come from its tile's: the walls its rays
             // can meet, less those that walls opaque to them hide.
             let lists = if block_size == TILE {
-                if !tile_shadow_lists {
+                if tile_table.is_none() {
                     block.fill_shadows(scene, lo, hi, shadow_lists);
                 }
                 &mut block.arcs
@@ -1587,12 +1587,25 @@ impl BlockCulling {
     /// the block's tile, or none.
     fn fill_shadows(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, shadows: bool) {
         self.shadows.resize(scene.lights.len(), None);
-        if !shadows {
-            return;
+        if shadows {
+            self.fill_shadows_of(scene, lo, hi, |_| true);
         }
+    }
+
+    /// The shadow lists for the block `[lo, hi]` of the lights that
+    /// `listed` takes; the other lights have none.
+    fn fill_shadows_of(
+        &mut self,
+        scene: &Scene,
+        lo: DVec2,
+        hi: DVec2,
+        listed: impl Fn(usize) -> bool,
+    ) {
+        self.shadows.resize(scene.lights.len(), None);
         let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
-        for (light, list) in scene.lights.iter().zip(&mut self.shadows) {
-            let Some(hull) = light.shape.hull() else {
+        for (index, (light, list)) in scene.lights.iter().zip(&mut self.shadows).enumerate() {
+            let hull = light.shape.hull().filter(|_| listed(index));
+            let Some(hull) = hull else {
                 *list = None;
                 continue;
             };
@@ -1618,6 +1631,30 @@ struct Batch {
     floor: Strata,
     /// The path samples' sums of each pass.
     sums: Vec<Sums>,
+    /// Per light, whether the tile's points have its shadow list.
+    listed: Vec<bool>,
+}
+
+/// Marks in `listed` the lights whose shadow rays from the tile `[lo, hi]`
+/// take a list: every light where lights times walls fit
+/// [`TILE_SHADOW_TESTS`]; else those that the table's cells under the tile
+/// take at every point or by what their probes saw, or else their
+/// always-lights alone, as long as they fit; else none (the BVH answers).
+fn tile_lights(scene: &Scene, table: &LightTable, tile: (DVec2, DVec2), listed: &mut Vec<bool>) {
+    let walls = scene.walls.len().max(1);
+    let lights = scene.lights.len();
+    listed.clear();
+    if lights * walls <= TILE_SHADOW_TESTS {
+        listed.resize(lights, true);
+        return;
+    }
+    if table.lights_in_box(tile, true, listed) * walls <= TILE_SHADOW_TESTS
+        || table.lights_in_box(tile, false, listed) * walls <= TILE_SHADOW_TESTS
+    {
+        return;
+    }
+    listed.clear();
+    listed.resize(lights, false);
 }
 
 /// One sample of the fluence averaged over pixel `(x, y)` of an image of

@@ -69,6 +69,9 @@ pub struct Work {
     /// Rays off mirrors tested only against the walls of their mirror
     /// piece's arc of directions (a part of `bounce_rays`).
     pub culled_mirror_rays: u64,
+    /// Shadow rays tested only against a list of the walls between their
+    /// pixels and the light (a part of `shadow_rays`).
+    pub listed_shadow_rays: u64,
     /// Entries of the wall memo: (wall, side, bin, light) keys.
     pub memo_entries: u64,
     /// Bytes held by the wall memo.
@@ -243,6 +246,7 @@ impl Work {
         self.culled_walls_tested += other.culled_walls_tested;
         self.culled_empty += other.culled_empty;
         self.culled_mirror_rays += other.culled_mirror_rays;
+        self.listed_shadow_rays += other.listed_shadow_rays;
         self.memo_entries += other.memo_entries;
         self.memo_bytes += other.memo_bytes;
         self.memo_fill_rays += other.memo_fill_rays;
@@ -326,6 +330,7 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  walls tested     {:>14}", w.culled_walls_tested)?;
             writeln!(f, "  arc has no wall  {:>14}", w.culled_empty)?;
             writeln!(f, "  culled off mirrors {:>12}", w.culled_mirror_rays)?;
+            writeln!(f, "  listed shadow rays {:>12}", w.listed_shadow_rays)?;
             writeln!(f, "  floor albedo     {:>14}", w.floor_albedo_reads)?;
             writeln!(f, "  emission tests   {:>14}", w.emission_tests)?;
             writeln!(f, "  wall entries     {:>14}", w.memo_entries)?;

@@ -216,6 +216,48 @@ impl LightTable {
             + self.defensive.len() * 8
     }
 
+    /// Marks in `taken` (one flag per light) the lights that points of the
+    /// box `[lo, hi]` take most: the always-lights of every cell the box
+    /// meets, and with `seen` their seen lights too. Other lights are
+    /// taken only by their defensive share. Returns how many are marked.
+    pub(crate) fn lights_in_box(
+        &self,
+        (lo, hi): (DVec2, DVec2),
+        seen: bool,
+        taken: &mut Vec<bool>,
+    ) -> usize {
+        taken.clear();
+        taken.resize(self.lights, false);
+        let (first, last) = (self.cell_of(lo), self.cell_of(hi));
+        let columns = self.columns as usize;
+        let (c0, r0) = (first % columns, first / columns);
+        let (c1, r1) = (last % columns, last / columns);
+        let mut count = 0;
+        let mut mark = |light: u32| {
+            if let Some(t) = taken.get_mut(light as usize)
+                && !*t
+            {
+                *t = true;
+                count += 1;
+            }
+        };
+        for row in r0.min(r1)..=r0.max(r1) {
+            for column in c0.min(c1)..=c0.max(c1) {
+                let cell = row * columns + column;
+                self.always[cell]
+                    .iter()
+                    .take_while(|&&l| l != u32::MAX)
+                    .for_each(|&l| mark(l));
+                if seen {
+                    let range =
+                        self.seen_starts[cell] as usize..self.seen_starts[cell + 1] as usize;
+                    self.seen[range].iter().for_each(|s| mark(s.light));
+                }
+            }
+        }
+        count
+    }
+
     /// The cell that holds `x`; a point off the canvas takes the nearest.
     #[inline]
     fn cell_of(&self, x: DVec2) -> usize {
@@ -478,6 +520,89 @@ fn defensive_shares(importance: &[f64], taken: &[bool]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A box marks the always-lights (and with `seen`, the seen lights)
+    /// of exactly the cells it meets, also where it reaches past the
+    /// canvas.
+    #[test]
+    fn a_box_marks_the_lights_of_the_cells_it_meets() {
+        let (columns, rows, lights) = (5u32, 3u32, 11usize);
+        let count = (columns * rows) as usize;
+        let seen: Vec<Seen> = (0..count)
+            .flat_map(|c| {
+                (0..c % 3).map(move |k| Seen {
+                    light: ((c * 3 + k + 4) % lights) as u32,
+                    scale: 1.0,
+                })
+            })
+            .collect();
+        let mut seen_starts = vec![0u32];
+        for c in 0..count {
+            seen_starts.push(seen_starts[c] + (c % 3) as u32);
+        }
+        let table = LightTable {
+            origin: DVec2::new(-3.0, 7.0),
+            cell: DVec2::new(2.0, 0.5),
+            columns,
+            rows,
+            lights,
+            always: (0..count)
+                .map(|c| {
+                    [
+                        (c % lights) as u32,
+                        ((c + 2) % lights) as u32,
+                        u32::MAX,
+                        u32::MAX,
+                    ]
+                })
+                .collect(),
+            seen_starts,
+            seen,
+            defensive: vec![0.0; count * lights],
+            probe_rays: 0,
+        };
+        let mut stream = Stream::new(7, 0, 0);
+        let mut taken = Vec::new();
+        for _ in 0..2000 {
+            // Corners from before the canvas to past it.
+            let mut point =
+                || DVec2::new(-5.0 + 14.0 * stream.uniform(), 6.0 + 2.5 * stream.uniform());
+            let (a, b) = (point(), point());
+            let (lo, hi) = (a.min(b), a.max(b));
+            for with_seen in [false, true] {
+                let mut expected = vec![false; lights];
+                let (end_x, end_y) = (-3.0 + 10.0, 7.0 + 1.5);
+                let (lo_c, hi_c) = (
+                    lo.max(DVec2::new(-3.0, 7.0)).min(DVec2::new(end_x, end_y)),
+                    hi.max(DVec2::new(-3.0, 7.0)).min(DVec2::new(end_x, end_y)),
+                );
+                for c in 0..count {
+                    let (column, row) = ((c % 5) as f64, (c / 5) as f64);
+                    let cell_lo = DVec2::new(-3.0 + 2.0 * column, 7.0 + 0.5 * row);
+                    let cell_hi = cell_lo + DVec2::new(2.0, 0.5);
+                    let meets = lo_c.x <= cell_hi.x
+                        && hi_c.x >= cell_lo.x
+                        && lo_c.y <= cell_hi.y
+                        && hi_c.y >= cell_lo.y;
+                    if meets {
+                        for &l in table.always[c].iter().filter(|&&l| l != u32::MAX) {
+                            expected[l as usize] = true;
+                        }
+                        if with_seen {
+                            let range =
+                                table.seen_starts[c] as usize..table.seen_starts[c + 1] as usize;
+                            for s in &table.seen[range] {
+                                expected[s.light as usize] = true;
+                            }
+                        }
+                    }
+                }
+                let marked = table.lights_in_box((lo, hi), with_seen, &mut taken);
+                assert_eq!(taken, expected, "{lo} {hi} seen {with_seen}");
+                assert_eq!(marked, expected.iter().filter(|&&t| t).count());
+            }
+        }
+    }
 
     #[test]
     fn every_free_light_keeps_a_positive_defensive_share_and_they_end_at_one() {

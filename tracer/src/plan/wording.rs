@@ -389,7 +389,9 @@ impl Plan {
                         "; the chosen lights' shadow rays, only the walls between the {TILE}x{TILE} tile and the light"
                     )
                 } else if light_table {
-                    String::new()
+                    format!(
+                        "; the shadow rays of the lights a {TILE}x{TILE} tile's cells take most, only the walls between the tile and the light (at most {TILE_SHADOW_TESTS} wall tests a tile)"
+                    )
                 } else {
                     "; the floor cache's shadow rays, only the walls between the pixels and the light".into()
                 };
