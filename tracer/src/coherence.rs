@@ -407,11 +407,13 @@ fn segments_meet(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
 
 /// The transmittance from a pixel's `centre` to light `index`: what every
 /// stratum of a `Same` pixel gets (aimed at the middle of a line light,
-/// though any point of it would do: see `line_coherence`).
+/// though any point of it would do: see `line_coherence`). `walls`, where
+/// given, lists every wall between the pixel and the light.
 pub(crate) fn centre_transmittance(
     scene: &Scene,
     index: usize,
     centre: DVec2,
+    walls: Option<&[u32]>,
     stats: &mut Stats,
 ) -> Rgb {
     let skip = Skip(u32::MAX, scene.light_wall[index].unwrap_or(u32::MAX));
@@ -421,7 +423,7 @@ pub(crate) fn centre_transmittance(
             &Ray::new(centre, at - centre),
             1.0,
             skip,
-            None,
+            walls,
             stats,
         ),
         LightShape::Directional { direction } => crate::light::transmittance(
@@ -429,7 +431,7 @@ pub(crate) fn centre_transmittance(
             &Ray::new(centre, -direction),
             f64::INFINITY,
             Skip::NONE,
-            None,
+            walls,
             stats,
         ),
         LightShape::Line { segment, .. } => crate::light::transmittance(
@@ -437,7 +439,7 @@ pub(crate) fn centre_transmittance(
             &Ray::new(centre, segment.point_at(0.5) - centre),
             1.0,
             skip,
-            None,
+            walls,
             stats,
         ),
         // Not supported (`supports`): no pixel of it is `Same`.
@@ -446,7 +448,7 @@ pub(crate) fn centre_transmittance(
             &Ray::new(centre, at - centre),
             1.0,
             skip,
-            None,
+            walls,
             stats,
         ),
     }

@@ -884,6 +884,11 @@ fn render_pixel(
     if floor_memo && !points.is_empty() {
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
+        // The centre's shadow rays take the pixel's block lists.
+        let centre_walls = Receiver {
+            shadow_walls: culled.map(|c| &c.shadows[..]),
+            ..Receiver::FLOOR
+        };
         let visibility = &mut batch.visibility;
         batch.shared.clear();
         match coherence {
@@ -915,7 +920,13 @@ fn render_pixel(
                             Coherence::Varies => Visibility::Trace,
                             Coherence::Same => {
                                 stats.work.floor_shared_visibility += 1;
-                                Visibility::Known(centre_transmittance(scene, light, centre, stats))
+                                Visibility::Known(centre_transmittance(
+                                    scene,
+                                    light,
+                                    centre,
+                                    centre_walls.walls_towards(light),
+                                    stats,
+                                ))
                             }
                             Coherence::Clear => {
                                 stats.work.floor_shared_visibility += 1;
@@ -974,6 +985,7 @@ fn render_pixel(
                             scene,
                             light,
                             centre,
+                            centre_walls.walls_towards(light),
                             &mut centre_stats,
                         ));
                     }
