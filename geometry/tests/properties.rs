@@ -339,6 +339,33 @@ proptest! {
                 );
             }
         }
+        // Fewer lanes than a register holds (one or two samples of an
+        // arc): the same answers, lane by lane.
+        for set in [&set, &scalar] {
+            let one = first_lanes::<1>(&lanes);
+            let two = first_lanes::<2>(&lanes);
+            let four = first_lanes::<4>(&lanes);
+            let hits = set.closest_hits_among(&one, &candidates);
+            prop_assert_eq!(hits.hit(0), set.closest_hit_among(&one.ray(0), f64::INFINITY, Skip::NONE, &candidates));
+            let hits = set.closest_hits_among(&two, &candidates);
+            for k in 0..2 {
+                prop_assert_eq!(hits.hit(k), set.closest_hit_among(&two.ray(k), f64::INFINITY, Skip::NONE, &candidates));
+            }
+            let hits = set.closest_hits_among(&four, &candidates);
+            for k in 0..4 {
+                prop_assert_eq!(hits.hit(k), set.closest_hit_among(&four.ray(k), f64::INFINITY, Skip::NONE, &candidates));
+            }
+        }
+    }
+}
+
+/// The first `N` of eight lanes.
+fn first_lanes<const N: usize>(lanes: &RayLanes<8>) -> RayLanes<N> {
+    RayLanes {
+        ox: std::array::from_fn(|k| lanes.ox[k]),
+        oy: std::array::from_fn(|k| lanes.oy[k]),
+        dx: std::array::from_fn(|k| lanes.dx[k]),
+        dy: std::array::from_fn(|k| lanes.dy[k]),
     }
 }
 
@@ -613,6 +640,11 @@ fn rays_in_lanes_break_ties_as_each_ray_alone() {
                 assert_eq!(alone.map(|(i, _)| i), Some(candidates[0]), "lane {k}");
                 assert_eq!(hits.hit(k), alone, "lane {k}, {:?}", set.kernel());
             }
+            // One and two lanes take another loop.
+            let one = set.closest_hits_among(&first_lanes::<1>(&lanes), &candidates);
+            let two = set.closest_hits_among(&first_lanes::<2>(&lanes), &candidates);
+            assert_eq!(one.hit(0), hits.hit(0), "{:?}", set.kernel());
+            assert_eq!([two.hit(0), two.hit(1)], [hits.hit(0), hits.hit(1)]);
         }
     }
 }
