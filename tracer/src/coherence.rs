@@ -95,109 +95,31 @@ impl FloorCoherence {
             scene.canvas.width as f64 / size.0 as f64,
             scene.canvas.height as f64 / size.1 as f64,
         );
-        let to_pixels = |p: DVec2| (p - scene.canvas.origin) / step;
         let mut cells = vec![Coherence::Varies; width * height * lights];
-        for (index, light) in scene.lights.iter().enumerate() {
-            if !supports(&light.shape) {
-                // Every pixel traces its strata for this light.
-                continue;
-            }
-            let mut mask = Mask::new(width, height);
-            let own = scene.light_wall[index];
-            let walls = || {
-                scene
-                    .walls
-                    .iter()
-                    .enumerate()
-                    .filter(move |(i, _)| own != Some(*i as u32))
-                    .map(|(_, w)| w.segment)
-            };
-            let mut complete = true;
-            for wall in walls() {
-                let (a, b) = (to_pixels(wall.a), to_pixels(wall.b));
-                mask.mark(a, b - a, 0.0, 1.0);
-                for end in [wall.a, wall.b] {
-                    let e = to_pixels(end);
-                    match light.shape {
-                        LightShape::Point { at } | LightShape::Spot { at, .. } => {
-                            // A wall that all but touches the light leaves
-                            // its shadow rays' `t < 1` test to rounding.
-                            complete &= !near(at, &wall);
-                            let end_t = umbra_entry(scene, own, end, end - at, step);
-                            mask.mark(e, e - to_pixels(at), 0.0, end_t);
-                        }
-                        LightShape::Directional { direction } => {
-                            let end_t = umbra_entry(scene, own, end, direction, step);
-                            mask.mark(e, direction / step, 0.0, end_t);
-                        }
-                        LightShape::Circle { .. } => {}
-                        LightShape::Line { segment, .. } => {
-                            // A wall that touches an end of the light cuts
-                            // every triangle: the centre test below says
-                            // so, and no boundary is needed.
-                            for light_end in [segment.a, segment.b] {
-                                let away = e - to_pixels(light_end);
-                                if away != DVec2::ZERO {
-                                    mask.mark(e, away, 0.0, f64::INFINITY);
-                                }
-                            }
+        // A few lights at a time, one per thread (each light's drawing is
+        // serial), each holding its pixels' states until they are
+        // written in.
+        let batch = rayon::current_num_threads().max(1);
+        for first in (0..lights).step_by(batch) {
+            let group = first..(first + batch).min(lights);
+            let states: Vec<Option<Vec<Coherence>>> = group
+                .clone()
+                .into_par_iter()
+                .map(|index| light_states(scene, index, (width, height), step))
+                .collect();
+            cells
+                .par_chunks_mut(width * lights)
+                .enumerate()
+                .for_each(|(y, row)| {
+                    for (index, states) in group.clone().zip(&states) {
+                        let Some(states) = states else { continue };
+                        let of_row = &states[y * width..(y + 1) * width];
+                        for (cell, &state) in row.iter_mut().skip(index).step_by(lights).zip(of_row)
+                        {
+                            *cell = state;
                         }
                     }
-                }
-            }
-            if let LightShape::Line { segment, .. } = light.shape {
-                let (a, b) = (to_pixels(segment.a), to_pixels(segment.b));
-                mask.mark(a, b - a, f64::NEG_INFINITY, f64::INFINITY);
-            }
-            if let LightShape::Point { at } | LightShape::Spot { at, .. } = light.shape {
-                // The light's own pixel, where no direction is defined.
-                let p = to_pixels(at);
-                mask.mark(p, DVec2::ZERO, 0.0, 0.0);
-            }
-            if !complete || mask.overflow {
-                continue;
-            }
-            // A wall that touches the light's ends (or the light, its
-            // ends) leaves its rays' `t < 1` test to rounding: then every
-            // pixel traces the line light.
-            let far_walls: Option<Vec<Segment>> = match light.shape {
-                LightShape::Line { segment, .. } => {
-                    let all: Vec<Segment> = walls().collect();
-                    (!all.iter().any(|w| near_light(w, &segment))).then_some(all)
-                }
-                _ => None,
-            };
-            // Rows in parallel: a line light tests every wall at every
-            // unmarked pixel.
-            let (marked, far_walls) = (&mask.marked, far_walls.as_deref());
-            let states: Vec<Coherence> = (0..height)
-                .into_par_iter()
-                .flat_map_iter(|y| {
-                    (0..width).map(move |x| {
-                        if marked[y * width + x] {
-                            return Coherence::Varies;
-                        }
-                        match (light.shape, far_walls) {
-                            (LightShape::Line { segment, .. }, Some(walls)) => {
-                                let centre = scene.canvas.origin
-                                    + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-                                line_coherence(walls, centre, &segment)
-                            }
-                            (LightShape::Line { .. }, None) => Coherence::Varies,
-                            (
-                                LightShape::Point { .. }
-                                | LightShape::Spot { .. }
-                                | LightShape::Directional { .. },
-                                _,
-                            ) => Coherence::Same,
-                            (LightShape::Circle { .. }, _) => Coherence::Varies,
-                        }
-                    })
-                })
-                .collect();
-            for (cell, state) in cells.iter_mut().skip(index).step_by(lights).zip(states) {
-                *cell = state;
-            }
+                });
         }
         Some(FloorCoherence {
             width,
@@ -212,6 +134,117 @@ impl FloorCoherence {
         let first = (y as usize * self.width + x as usize) * self.lights;
         &self.cells[first..first + self.lights]
     }
+}
+
+/// Light `index`'s state at every pixel of an image of `width` x `height`
+/// pixels of `step` world units, row by row; `None` where every pixel
+/// traces its strata for it.
+fn light_states(
+    scene: &Scene,
+    index: usize,
+    (width, height): (usize, usize),
+    step: DVec2,
+) -> Option<Vec<Coherence>> {
+    let light = &scene.lights[index];
+    let to_pixels = |p: DVec2| (p - scene.canvas.origin) / step;
+    if !supports(&light.shape) {
+        // Every pixel traces its strata for this light.
+        return None;
+    }
+    let mut mask = Mask::new(width, height);
+    let own = scene.light_wall[index];
+    let walls = || {
+        scene
+            .walls
+            .iter()
+            .enumerate()
+            .filter(move |(i, _)| own != Some(*i as u32))
+            .map(|(_, w)| w.segment)
+    };
+    let mut complete = true;
+    for wall in walls() {
+        let (a, b) = (to_pixels(wall.a), to_pixels(wall.b));
+        mask.mark(a, b - a, 0.0, 1.0);
+        for end in [wall.a, wall.b] {
+            let e = to_pixels(end);
+            match light.shape {
+                LightShape::Point { at } | LightShape::Spot { at, .. } => {
+                    // A wall that all but touches the light leaves
+                    // its shadow rays' `t < 1` test to rounding.
+                    complete &= !near(at, &wall);
+                    let end_t = umbra_entry(scene, own, end, end - at, step);
+                    mask.mark(e, e - to_pixels(at), 0.0, end_t);
+                }
+                LightShape::Directional { direction } => {
+                    let end_t = umbra_entry(scene, own, end, direction, step);
+                    mask.mark(e, direction / step, 0.0, end_t);
+                }
+                LightShape::Circle { .. } => {}
+                LightShape::Line { segment, .. } => {
+                    // A wall that touches an end of the light cuts
+                    // every triangle: the centre test below says
+                    // so, and no boundary is needed.
+                    for light_end in [segment.a, segment.b] {
+                        let away = e - to_pixels(light_end);
+                        if away != DVec2::ZERO {
+                            mask.mark(e, away, 0.0, f64::INFINITY);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if let LightShape::Line { segment, .. } = light.shape {
+        let (a, b) = (to_pixels(segment.a), to_pixels(segment.b));
+        mask.mark(a, b - a, f64::NEG_INFINITY, f64::INFINITY);
+    }
+    if let LightShape::Point { at } | LightShape::Spot { at, .. } = light.shape {
+        // The light's own pixel, where no direction is defined.
+        let p = to_pixels(at);
+        mask.mark(p, DVec2::ZERO, 0.0, 0.0);
+    }
+    if !complete || mask.overflow {
+        return None;
+    }
+    // A wall that touches the light's ends (or the light, its
+    // ends) leaves its rays' `t < 1` test to rounding: then every
+    // pixel traces the line light.
+    let far_walls: Option<Vec<Segment>> = match light.shape {
+        LightShape::Line { segment, .. } => {
+            let all: Vec<Segment> = walls().collect();
+            (!all.iter().any(|w| near_light(w, &segment))).then_some(all)
+        }
+        _ => None,
+    };
+    // Rows in parallel: a line light tests every wall at every
+    // unmarked pixel.
+    let (marked, far_walls) = (&mask.marked, far_walls.as_deref());
+    let states: Vec<Coherence> = (0..height)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            (0..width).map(move |x| {
+                if marked[y * width + x] {
+                    return Coherence::Varies;
+                }
+                match (light.shape, far_walls) {
+                    (LightShape::Line { segment, .. }, Some(walls)) => {
+                        let centre =
+                            scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
+                        line_coherence(walls, centre, &segment)
+                    }
+                    (LightShape::Line { .. }, None) => Coherence::Varies,
+                    (
+                        LightShape::Point { .. }
+                        | LightShape::Spot { .. }
+                        | LightShape::Directional { .. },
+                        _,
+                    ) => Coherence::Same,
+                    (LightShape::Circle { .. }, _) => Coherence::Varies,
+                }
+            })
+        })
+        .collect();
+    Some(states)
 }
 
 /// How far, in pixels, a shadow edge's crossing must lie from the ends of
