@@ -180,8 +180,12 @@ pub(crate) fn run<E: Estimator>(
     mut stats: Stats,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Outcome<E::Output> {
+    // One unit at a time: rayon would otherwise hand a thread a run of
+    // units that no other thread can take from, leaving the others idle
+    // at the end while it finishes them.
     let parts: Vec<(Part, Stats)> = (0..estimator.units())
         .into_par_iter()
+        .with_max_len(1)
         .map(|unit| {
             let mut stats = Stats::default();
             let part = estimator.render_unit(unit, &mut stats, progress);
