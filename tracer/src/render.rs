@@ -658,7 +658,7 @@ impl Estimator for PixelEstimator<'_> {
             if let Some(table) = tile_table {
                 let listed = &mut batch.listed;
                 tile_lights(scene, table, (lo, hi), listed);
-                block.fill_shadows_of(scene, lo, hi, |light| listed[light]);
+                block.fill_shadows_of(scene, lo, hi, |light| listed.get(light) == Some(&true));
                 block.drop_long_shadow_lists();
             }
             // A block's lists come from its tile's: the walls its rays
