@@ -1,7 +1,7 @@
 //! Images are a pure function of (scene, options): bit-identical for any
 //! number of threads, and for any order in which tiles finish.
 
-use flatray_tests::{TempDir, render_on, workspace_root};
+use flatray_tests::{TempDir, render_on, scene, workspace_root};
 use flatray_tracer::{Integrator, RenderOptions};
 
 #[test]
@@ -37,6 +37,35 @@ fn one_thread_and_several_threads_give_bit_identical_images() {
         }
         assert!(one.image.pixels.iter().any(|p| p[0] > 0.0));
     }
+}
+
+#[test]
+fn a_floor_plan_of_many_lights_renders_the_same_on_any_number_of_threads() {
+    // The light table, its tiles' shadow lists, the coherence masks drawn
+    // a few lights at a time, the onward memo and the caustic pass.
+    let plan = flatray_io::generate::Apartment {
+        rooms: 6,
+        lamps_per_room: 3,
+        mirrors: 1.0,
+        seed: 3,
+        ..Default::default()
+    };
+    let loaded = scene(&plan.to_ron());
+    let options = RenderOptions {
+        samples: 4,
+        bounces: 3,
+        scale: 0.3,
+        ..loaded.options
+    };
+    let table = flatray_tracer::Plan::new(&loaded.scene, &options);
+    assert!(table.light_table && table.floor_coherence);
+    let one = render_on(&loaded.scene, &options, 1);
+    for threads in [2, 3] {
+        let many = render_on(&loaded.scene, &options, threads);
+        assert_eq!(one.image, many.image, "{threads} threads");
+        assert_eq!(one.stats, many.stats, "{threads} threads");
+    }
+    assert!(one.stats.work.listed_shadow_rays > 0);
 }
 
 #[test]
