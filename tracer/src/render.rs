@@ -26,7 +26,7 @@ use crate::sampling::{
 };
 use crate::scene::Scene;
 use crate::shortcut::memo_bounce;
-use crate::strata::direct_light_strata;
+use crate::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::{Rgb, Stats};
 
 /// Which estimator a render uses.
@@ -995,7 +995,11 @@ fn render_pixel(
                     shadow_walls,
                     ..Receiver::FLOOR
                 };
-                direct_light_chosen(scene, table, receiver, floor, vis, stats);
+                if options.takes(FastPath::StrataLoops) {
+                    direct_light_chosen_strata(scene, table, receiver, floor, vis, stats);
+                } else {
+                    direct_light_chosen(scene, table, receiver, floor, vis, stats);
+                }
                 stats.merge(&centre_stats);
             }
             None if options.takes(FastPath::StrataLoops) => {

@@ -6,10 +6,13 @@
 
 use flatray_geometry::{DVec2, Ray};
 
-use crate::light::{Receiver, Strata, Visibility, light_contribution, transmittance};
+use crate::light::{
+    Receiver, Strata, Visibility, direct_light_chosen, light_contribution, transmittance,
+};
+use crate::lights::choice::{LightTable, NUMBERS};
 use crate::lights::{arriving, point_incident};
 use crate::sampling::angle_sample_lanes;
-use crate::scene::{EMITTING_SIDE, LightShape, Scene};
+use crate::scene::{EMITTING_SIDE, Light, LightShape, Scene};
 use crate::{Rgb, Stats};
 
 /// The floor strata a line light's angle samples take at once.
@@ -63,19 +66,7 @@ pub(crate) fn direct_light_strata(
         }
         match (light.shape, vis) {
             (LightShape::Point { at }, Visibility::Known(known)) => {
-                for (value, &x) in values.iter_mut().zip(points.iter()) {
-                    // As `light_contribution` computes it for the floor.
-                    // `LightShape::incident` of a point, inlined into this
-                    // loop.
-                    let s = point_incident(at, light, x, r0);
-                    let v = arriving(light.intensity, s.value, 1.0, s.pdf);
-                    let v = if s.at_the_light() {
-                        Rgb::splat(v)
-                    } else {
-                        Rgb::splat(v) * known
-                    };
-                    *value += v * light.color;
-                }
+                add_point_known(light, at, known, points, values, r0);
             }
             (
                 LightShape::Line {
@@ -141,6 +132,93 @@ pub(crate) fn direct_light_strata(
     }
 }
 
+/// Adds point light `light` at `at`, whose transmittance to every one of
+/// `points` is `known`, to each point's value, as `light_contribution`
+/// computes it for the floor (`LightShape::incident` of a point, inlined
+/// into this loop).
+#[inline(always)]
+fn add_point_known(
+    light: &Light,
+    at: DVec2,
+    known: Rgb,
+    points: &[DVec2],
+    values: &mut [Rgb],
+    r0: f64,
+) {
+    for (value, &x) in values.iter_mut().zip(points) {
+        let s = point_incident(at, light, x, r0);
+        let v = arriving(light.intensity, s.value, 1.0, s.pdf);
+        let v = if s.at_the_light() {
+            Rgb::splat(v)
+        } else {
+            Rgb::splat(v) * known
+        };
+        *value += v * light.color;
+    }
+}
+
+/// [`direct_light_chosen`] at every point of `strata`, each value computed
+/// exactly as it would be there, but where all the points lie in one cell
+/// of `table`, its always-lights light by light over all points (a point
+/// light whose visibility is known in one loop), then each point's chosen
+/// light. Each point still adds its lights in the same order. Points
+/// spread over several cells take the model's loop.
+#[inline(always)]
+pub(crate) fn direct_light_chosen_strata(
+    scene: &Scene,
+    table: &LightTable,
+    receiver: Receiver,
+    strata: &mut Strata,
+    mut vis: impl FnMut(usize) -> Visibility,
+    stats: &mut Stats,
+) {
+    let cell = match strata.points.first() {
+        Some(&x) => table.cell_at(x),
+        None => {
+            strata.values.clear();
+            return;
+        }
+    };
+    if receiver.normal.is_some() || strata.points.iter().any(|&x| table.cell_at(x) != cell) {
+        direct_light_chosen(scene, table, receiver, strata, vis, stats);
+        return;
+    }
+    let Strata {
+        points,
+        numbers,
+        values,
+    } = strata;
+    // As many points as have their numbers, as the model takes.
+    let points = &points[..points.len().min(numbers.len() / NUMBERS)];
+    values.clear();
+    values.resize(points.len(), Rgb::ZERO);
+    let r0 = scene.small_radius;
+    for (k, index) in table.always(cell).enumerate() {
+        let light = &scene.lights[index];
+        let v = vis(index);
+        match (light.shape, v) {
+            (LightShape::Point { at }, Visibility::Known(known)) => {
+                add_point_known(light, at, known, points, values, r0);
+            }
+            _ => {
+                for (value, (&x, numbers)) in values
+                    .iter_mut()
+                    .zip(points.iter().zip(numbers.chunks_exact(NUMBERS)))
+                {
+                    *value += light_contribution(scene, index, x, receiver, numbers[k], v, stats);
+                }
+            }
+        }
+    }
+    for (value, (&x, numbers)) in values
+        .iter_mut()
+        .zip(points.iter().zip(numbers.chunks_exact(NUMBERS)))
+    {
+        let numbers: &[f64; NUMBERS] = numbers.try_into().unwrap_or(&[0.0; NUMBERS]);
+        *value += table.chosen_light(scene, (cell, x), receiver, numbers, &mut vis, stats);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -150,11 +228,9 @@ mod tests {
     use crate::scene::{Canvas, Falloff, Floor, Light, Wall};
     use flatray_geometry::Segment;
 
-    /// The floor memo's light-by-light passes give every point exactly what
-    /// `direct_light_with` gives it, for every kind of light, with shadow
-    /// rays traced or known, and with culled shadow walls.
-    #[test]
-    fn strata_light_by_light_equal_each_point_alone() {
+    /// Walls, and a light of every kind: points, lines, a spot, a sun, a
+    /// circle.
+    fn every_kind_of_light() -> Scene {
         let light = |shape, falloff| Light {
             shape,
             color: Rgb::new(1.0, 0.8, 0.6),
@@ -229,7 +305,15 @@ mod tests {
             height: 40,
             origin: DVec2::ZERO,
         };
-        let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights);
+        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights)
+    }
+
+    /// The floor memo's light-by-light passes give every point exactly what
+    /// `direct_light_with` gives it, for every kind of light, with shadow
+    /// rays traced or known, and with culled shadow walls.
+    #[test]
+    fn strata_light_by_light_equal_each_point_alone() {
+        let scene = every_kind_of_light();
         let lines = 3;
         let mut stream = Stream::new(1, 2, 3);
         let mut strata = Strata::default();
@@ -261,5 +345,64 @@ mod tests {
                 assert_eq!(a.work.shadow_rays, b.work.shadow_rays);
             }
         }
+    }
+
+    /// With a light table, the always-lights taken light by light over
+    /// the points of one cell and then each point's chosen light give every
+    /// point exactly what the model's point-by-point loop gives it, and the
+    /// same counts; for every kind of light, visibility traced, known or
+    /// mixed, and points in one cell or spread over several.
+    #[test]
+    fn chosen_lights_light_by_light_equal_each_point_alone() {
+        let scene = every_kind_of_light();
+        let Some(table) = LightTable::build(&scene, 1.0, 7, true) else {
+            panic!("a scene with lights has a table");
+        };
+        let mut stream = Stream::new(4, 5, 6);
+        let tint = Visibility::Known(Rgb::new(0.5, 1.0, 0.25));
+        let visibilities = [
+            vec![Visibility::Trace; 7],
+            vec![tint; 7],
+            (0..7)
+                .map(|l| match l % 3 {
+                    0 => Visibility::Trace,
+                    1 => tint,
+                    _ => Visibility::Known(Rgb::ZERO),
+                })
+                .collect(),
+        ];
+        let mut in_one_cell = 0;
+        for spread in [0.5, 3.0, 40.0] {
+            for _ in 0..20 {
+                let corner = DVec2::new(stream.uniform() * 39.0, stream.uniform() * 39.0);
+                let mut strata = Strata::default();
+                for _ in 0..37 {
+                    let offset = DVec2::new(stream.uniform(), stream.uniform()) * spread;
+                    strata.points.push(corner + offset);
+                    for _ in 0..NUMBERS {
+                        strata.numbers.push(stream.uniform());
+                    }
+                }
+                let cell = table.cell_at(strata.points[0]);
+                in_one_cell += strata.points.iter().all(|&x| table.cell_at(x) == cell) as u32;
+                for visibility in &visibilities {
+                    let (mut a, mut b) = (Stats::default(), Stats::default());
+                    let vis = |light: usize| visibility[light];
+                    direct_light_chosen_strata(
+                        &scene,
+                        &table,
+                        Receiver::FLOOR,
+                        &mut strata,
+                        vis,
+                        &mut a,
+                    );
+                    let fast = strata.values.clone();
+                    direct_light_chosen(&scene, &table, Receiver::FLOOR, &mut strata, vis, &mut b);
+                    assert_eq!(fast, strata.values, "spread {spread}");
+                    assert_eq!(a.work, b.work, "spread {spread}");
+                }
+            }
+        }
+        assert!(in_one_cell >= 20, "{in_one_cell} sets in one cell");
     }
 }

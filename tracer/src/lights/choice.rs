@@ -283,27 +283,57 @@ impl LightTable {
     ) -> Rgb {
         let cell = self.cell_of(x);
         let mut sum = Rgb::ZERO;
-        for (k, &light) in self.always[cell].iter().enumerate() {
-            if light == u32::MAX {
-                break;
-            }
-            let index = light as usize;
+        for (k, index) in self.always(cell).enumerate() {
             sum += light_contribution(scene, index, x, receiver, numbers[k], vis(index), stats);
         }
-        if let Some((index, p)) = self.choose(scene, cell, x, numbers[ALWAYS]) {
-            let v = light_contribution(
-                scene,
-                index,
-                x,
-                receiver,
-                numbers[ALWAYS + 1],
-                vis(index),
-                stats,
-            );
-            stats.work.chosen_lights += 1;
-            sum += v / p;
-        }
-        sum
+        sum + self.chosen_light(scene, (cell, x), receiver, numbers, vis, stats)
+    }
+
+    /// The cell that holds `x` (a point off the canvas takes the nearest).
+    #[inline]
+    pub(crate) fn cell_at(&self, x: DVec2) -> usize {
+        self.cell_of(x)
+    }
+
+    /// The always-lights of `cell`, in the order [`LightTable::direct_light`]
+    /// takes them (the `k`-th takes the point's number `k`).
+    #[inline]
+    pub(crate) fn always(&self, cell: usize) -> impl Iterator<Item = usize> + '_ {
+        self.always
+            .get(cell)
+            .into_iter()
+            .flatten()
+            .take_while(|&&l| l != u32::MAX)
+            .map(|&l| l as usize)
+    }
+
+    /// The part of [`LightTable::direct_light`] at `x` in `cell` beyond the
+    /// always-lights: the light chosen among the rest, its contribution
+    /// divided by its probability, or zero where none is chosen.
+    #[inline]
+    pub(crate) fn chosen_light(
+        &self,
+        scene: &Scene,
+        (cell, x): (usize, DVec2),
+        receiver: Receiver,
+        numbers: &[f64; NUMBERS],
+        mut vis: impl FnMut(usize) -> Visibility,
+        stats: &mut Stats,
+    ) -> Rgb {
+        let Some((index, p)) = self.choose(scene, cell, x, numbers[ALWAYS]) else {
+            return Rgb::ZERO;
+        };
+        let v = light_contribution(
+            scene,
+            index,
+            x,
+            receiver,
+            numbers[ALWAYS + 1],
+            vis(index),
+            stats,
+        );
+        stats.work.chosen_lights += 1;
+        v / p
     }
 
     /// The light that the number `u` chooses at `x` in cell `cell`, with
