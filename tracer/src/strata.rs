@@ -162,7 +162,8 @@ fn add_point_known(
 /// of `table`, its always-lights light by light over all points (a point
 /// light whose visibility is known in one loop), then each point's chosen
 /// light. Each point still adds its lights in the same order. Points
-/// spread over several cells take the model's loop.
+/// spread over several cells, and receivers other than the floor, take
+/// the model's loop.
 #[inline(always)]
 pub(crate) fn direct_light_chosen_strata(
     scene: &Scene,
@@ -179,7 +180,8 @@ pub(crate) fn direct_light_chosen_strata(
             return;
         }
     };
-    if receiver.normal.is_some() || strata.points.iter().any(|&x| table.cell_at(x) != cell) {
+    let on_floor = receiver.normal.is_none() && receiver.wall.is_none();
+    if !on_floor || strata.points.iter().any(|&x| table.cell_at(x) != cell) {
         direct_light_chosen(scene, table, receiver, strata, vis, stats);
         return;
     }
@@ -191,6 +193,9 @@ pub(crate) fn direct_light_chosen_strata(
     // As many points as have their numbers, as the model takes.
     let points = &points[..points.len().min(numbers.len() / NUMBERS)];
     values.clear();
+    if points.is_empty() {
+        return;
+    }
     values.resize(points.len(), Rgb::ZERO);
     let r0 = scene.small_radius;
     for (k, index) in table.always(cell).enumerate() {
