@@ -884,9 +884,11 @@ fn render_pixel(
     if floor_memo && !points.is_empty() {
         // Each light's transmittance where the whole pixel shares it.
         let centre = corner + 0.5 * step;
-        // The centre's shadow rays take the pixel's block lists.
-        let centre_walls = Receiver {
-            shadow_walls: culled.map(|c| &c.shadows[..]),
+        // The floor's shadow rays, its points' and its centre's, take the
+        // pixel's block lists.
+        let shadow_walls = culled.map(|c| &c.shadows[..]);
+        let receiver = Receiver {
+            shadow_walls,
             ..Receiver::FLOOR
         };
         let visibility = &mut batch.visibility;
@@ -924,7 +926,7 @@ fn render_pixel(
                                     scene,
                                     light,
                                     centre,
-                                    centre_walls.walls_towards(light),
+                                    receiver.walls_towards(light),
                                     stats,
                                 ))
                             }
@@ -968,7 +970,6 @@ fn render_pixel(
                 }
             }
         }
-        let shadow_walls = culled.map(|c| &c.shadows[..]);
         match trace.light_table {
             Some(table) => {
                 // A light the whole pixel shares is traced once, from the
@@ -985,15 +986,11 @@ fn render_pixel(
                             scene,
                             light,
                             centre,
-                            centre_walls.walls_towards(light),
+                            receiver.walls_towards(light),
                             &mut centre_stats,
                         ));
                     }
                     visibility[light]
-                };
-                let receiver = Receiver {
-                    shadow_walls,
-                    ..Receiver::FLOOR
                 };
                 if options.takes(FastPath::StrataLoops) {
                     direct_light_chosen_strata(scene, table, receiver, floor, vis, stats);
