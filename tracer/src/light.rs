@@ -329,8 +329,8 @@ mod tests {
     /// Panes across a ray, in an order of indices unlike their order
     /// along it, with tints whose products round differently by order;
     /// and enough other walls for a BVH. The BVH (near boxes first), a
-    /// list (index order) and brute force give the same bits, for up to
-    /// and beyond the panes kept at once.
+    /// list (index order) and brute force give the same bits, for three
+    /// panes and many more.
     #[test]
     fn panes_tint_a_shadow_ray_in_index_order_whatever_the_query() {
         for panes in [3, 8, 9, 13] {
