@@ -164,6 +164,41 @@ fn scenes_without_mirrors_glass_or_lamps_trace_no_photon() {
     }
 }
 
+/// The caustic pass takes its full rate of photons where the mirrors take
+/// a quarter of the lights' power or more, and less in proportion to the
+/// square of their share below that, down to a sixteenth: a point light
+/// facing one mirror that subtends a known angle, nothing in between.
+#[test]
+fn the_photon_rate_follows_the_mirrors_share_of_the_light() {
+    use flatray_tracer::{FULL_RATE_SHARE, LEAST_RATE, PHOTONS_PER_SAMPLE};
+    // Half the mirror's length, and its distance from the light.
+    for (half, distance) in [(40.0_f64, 10.0), (20.0, 60.0), (8.0, 60.0), (1.0, 70.0)] {
+        let text = format!(
+            "Scene(canvas: (100, 100), floor: Color((0.8, 0.8, 0.8)),
+                walls: [Wall(a: ({x}, {y0}), b: ({x}, {y1}), material: Mirror())],
+                lights: [Point(at: (20, 50), intensity: 5.0)])",
+            x = 20.0 + distance,
+            y0 = 50.0 - half,
+            y1 = 50.0 + half,
+        );
+        let loaded = scene(&text);
+        let options = RenderOptions {
+            samples: 16,
+            bounces: 1,
+            ..RenderOptions::default()
+        };
+        let rendered = render(&loaded.scene, &options);
+        let share = 2.0 * (half / distance).atan() / std::f64::consts::TAU;
+        let factor = ((share / FULL_RATE_SHARE).powi(2)).clamp(LEAST_RATE, 1.0);
+        let expected = 16.0 * 100.0 * 100.0 * PHOTONS_PER_SAMPLE * factor;
+        let photons = rendered.stats.physics.caustic_photons as f64;
+        assert!(
+            (photons - expected).abs() <= 1.0,
+            "mirror {half} x 2 at {distance}: {photons} photons, expected {expected}"
+        );
+    }
+}
+
 /// A generated apartment (`flatray generate`): rooms with doors, windows
 /// letting the sun in, furniture, mirrors and lamps, three bounces.
 #[test]

@@ -216,8 +216,9 @@ fn both_integrators_see_a_point_light_in_a_mirror() {
         "extra light outside the patch {}",
         mean(&outside)
     );
-    // The same for the default render: 4 photons per pixel aimed at the
-    // mirror, each lighting a whole line of the patch.
+    // The same for the default render: 0.4 photons per pixel aimed at the
+    // mirror (it takes 8 % of the light's power: `caustics::photon_rate`),
+    // each lighting a whole line of the patch.
     assert!(
         (mean(&path_inside) - 1.0).abs() < 0.02,
         "default render: ratio inside the patch {}",

@@ -48,6 +48,7 @@ mod strata;
 /// A linear RGB triple: a colour, an albedo, or a light quantity.
 pub type Rgb = glam::DVec3;
 
+pub use caustics::{FULL_RATE_SHARE, LEAST_RATE, PHOTONS_PER_SAMPLE, photon_rate};
 pub use memo::MemoOptions;
 pub use passes::{FIRST_PASS, Progressive, next_pass_end};
 pub use plan::Plan;

@@ -333,7 +333,7 @@ impl Plan {
                 "the caustic pass is switched off (--caustics off): path tracing alone cannot see them".into()
             } else {
                 format!(
-                    "a photon pass from {} towards {} (the parts walls do not hide): their light on the floor by track length, on diffuse walls in bins",
+                    "a photon pass from {} towards {} (the parts walls do not hide): their light on the floor by track length, on diffuse walls in bins; fewer photons where these take under a quarter of the lights' power",
                     n(points + spots + suns, "point, spot or directional light"),
                     n(specular, "mirror or glass edge")
                 )
