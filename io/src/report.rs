@@ -166,6 +166,25 @@ fn register_font() -> Result<(), String> {
         .map_err(|_| "the embedded DejaVu font did not load".to_string())
 }
 
+/// A label at `v` of a log axis whose range spans a factor `span`: on a
+/// range of a decade or more, its value at 1, 2 and 5 times a power of
+/// ten and nothing elsewhere, so that the ticks between do not run into
+/// each other; on a shorter range, at every tick. With as many decimals
+/// as the value needs.
+fn log_label(v: f64, span: f64) -> String {
+    if !(v.is_finite() && v > 0.0) {
+        return String::new();
+    }
+    let power = v.log10().floor();
+    let mantissa = v / 10f64.powf(power);
+    let near = |m: f64| (mantissa - m).abs() < 1e-6 * m;
+    if span >= 10.0 && !(near(1.0) || near(2.0) || near(5.0)) {
+        return String::new();
+    }
+    let decimals = if power < 0.0 { -power as usize } else { 0 };
+    format!("{v:.decimals$}")
+}
+
 /// The chart: relative RMSE against seconds, log-log, a line per
 /// configuration, a slope -1/2 guide and the reference's noise level.
 pub fn chart_png(
@@ -217,8 +236,8 @@ pub fn chart_png(
             .y_desc("relative RMSE")
             .label_style((FONT, 15))
             .axis_desc_style((FONT, 17))
-            .x_label_formatter(&|v| format!("{v:.3}"))
-            .y_label_formatter(&|v| format!("{v:.3}"))
+            .x_label_formatter(&|v| log_label(*v, x1 / x0))
+            .y_label_formatter(&|v| log_label(*v, y1 / y0))
             .draw()
             .map_err(|e| e.to_string())?;
         let palette = [
@@ -292,3 +311,36 @@ pub fn chart_png(
 }
 
 use image::ImageEncoder as _;
+
+#[cfg(test)]
+mod tests {
+    use super::log_label;
+
+    #[test]
+    fn log_axes_label_one_two_and_five_times_a_power_of_ten() {
+        for (v, label) in [
+            (0.01, "0.01"),
+            (0.02, "0.02"),
+            (0.05, "0.05"),
+            (0.1, "0.1"),
+            (0.30000000000000004, ""),
+            (1.0, "1"),
+            (2.0, "2"),
+            (4.0, ""),
+            (5.0, "5"),
+            (6.0, ""),
+            (9.0, ""),
+            (10.0, "10"),
+            (20.000000000000004, "20"),
+            (500.0, "500"),
+            (0.0, ""),
+            (f64::NAN, ""),
+        ] {
+            assert_eq!(log_label(v, 100.0), label, "{v}");
+        }
+        // A range short of a decade may hold none of those: every tick
+        // is labelled.
+        assert_eq!(log_label(3.0, 4.0), "3");
+        assert_eq!(log_label(0.7, 4.0), "0.7");
+    }
+}
