@@ -69,8 +69,14 @@ pub const LEAST_RATE: f64 = 1.0 / 16.0;
 /// share", measures what it buys).
 pub fn photon_rate(share: f64) -> f64 {
     let ratio = share / FULL_RATE_SHARE;
-    // NaN (no power at all) takes the least rate.
-    PHOTONS_PER_SAMPLE * (ratio * ratio).clamp(LEAST_RATE, 1.0).max(LEAST_RATE)
+    let factor = ratio * ratio;
+    // NaN (a scene of no power) takes the least rate.
+    PHOTONS_PER_SAMPLE
+        * if factor.is_nan() {
+            LEAST_RATE
+        } else {
+            factor.clamp(LEAST_RATE, 1.0)
+        }
 }
 
 /// Fixed work chunks, as the light tracer's: at least two (the noise
@@ -536,6 +542,30 @@ impl Estimator for CausticPass<'_> {
             bins: self.bins.clone(),
             walls,
             bounces: self.bounces,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The full rate from a quarter on, the square of the share below,
+    /// a sixteenth at least, and the least rate where the share is not a
+    /// number.
+    #[test]
+    fn the_photon_rate_at_its_ends() {
+        for (share, factor) in [
+            (0.25, 1.0),
+            (0.5, 1.0),
+            (f64::INFINITY, 1.0),
+            (0.125, 0.25),
+            (0.0625, LEAST_RATE),
+            (0.01, LEAST_RATE),
+            (0.0, LEAST_RATE),
+            (f64::NAN, LEAST_RATE),
+        ] {
+            assert_eq!(photon_rate(share), PHOTONS_PER_SAMPLE * factor, "{share}");
         }
     }
 }
