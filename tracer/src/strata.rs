@@ -174,14 +174,14 @@ pub(crate) fn direct_light_chosen_strata(
     stats: &mut Stats,
 ) {
     let cell = match strata.points.first() {
-        Some(&x) => table.cell_at(x),
+        Some(&x) => table.cell_of(x),
         None => {
             strata.values.clear();
             return;
         }
     };
     let on_floor = receiver.normal.is_none() && receiver.wall.is_none();
-    if !on_floor || strata.points.iter().any(|&x| table.cell_at(x) != cell) {
+    if !on_floor || strata.points.iter().any(|&x| table.cell_of(x) != cell) {
         direct_light_chosen(scene, table, receiver, strata, vis, stats);
         return;
     }
@@ -388,8 +388,8 @@ mod tests {
                         strata.numbers.push(stream.uniform());
                     }
                 }
-                let cell = table.cell_at(strata.points[0]);
-                in_one_cell += strata.points.iter().all(|&x| table.cell_at(x) == cell) as u32;
+                let cell = table.cell_of(strata.points[0]);
+                in_one_cell += strata.points.iter().all(|&x| table.cell_of(x) == cell) as u32;
                 for visibility in &visibilities {
                     let (mut a, mut b) = (Stats::default(), Stats::default());
                     let vis = |light: usize| visibility[light];

@@ -233,8 +233,8 @@ impl LightTable {
         let (c0, r0) = (first % columns, first / columns);
         let (c1, r1) = (last % columns, last / columns);
         let mut count = 0;
-        let mut mark = |light: u32| {
-            if let Some(t) = taken.get_mut(light as usize)
+        let mut mark = |light: usize| {
+            if let Some(t) = taken.get_mut(light)
                 && !*t
             {
                 *t = true;
@@ -244,14 +244,11 @@ impl LightTable {
         for row in r0.min(r1)..=r0.max(r1) {
             for column in c0.min(c1)..=c0.max(c1) {
                 let cell = row * columns + column;
-                self.always[cell]
-                    .iter()
-                    .take_while(|&&l| l != u32::MAX)
-                    .for_each(|&l| mark(l));
+                self.always(cell).for_each(&mut mark);
                 if seen {
                     let range =
                         self.seen_starts[cell] as usize..self.seen_starts[cell + 1] as usize;
-                    self.seen[range].iter().for_each(|s| mark(s.light));
+                    self.seen[range].iter().for_each(|s| mark(s.light as usize));
                 }
             }
         }
@@ -260,7 +257,7 @@ impl LightTable {
 
     /// The cell that holds `x`; a point off the canvas takes the nearest.
     #[inline]
-    fn cell_of(&self, x: DVec2) -> usize {
+    pub(crate) fn cell_of(&self, x: DVec2) -> usize {
         let at = (x - self.origin) / self.cell;
         // NaN clamps to 0 through the cast.
         let column = (at.x.max(0.0) as u64).min(self.columns as u64 - 1);
@@ -287,12 +284,6 @@ impl LightTable {
             sum += light_contribution(scene, index, x, receiver, numbers[k], vis(index), stats);
         }
         sum + self.chosen_light(scene, (cell, x), receiver, numbers, vis, stats)
-    }
-
-    /// The cell that holds `x` (a point off the canvas takes the nearest).
-    #[inline]
-    pub(crate) fn cell_at(&self, x: DVec2) -> usize {
-        self.cell_of(x)
     }
 
     /// The always-lights of `cell`, in the order [`LightTable::direct_light`]
