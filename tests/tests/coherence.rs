@@ -219,3 +219,94 @@ fn shadow_edges_stop_inside_an_opaque_walls_shadow() {
         without_stats.work.shadow_rays
     );
 }
+
+/// A wall end that the light cannot see casts no shadow edge, and a wall
+/// that one opaque wall hides end to end needs no band of its own: the
+/// floor on both sides lies in that wall's shadow. A lamp in a closed
+/// room and, beyond its solid wall, a dark room of 30 furniture stubs,
+/// all turned by 31 degrees. The dark room shares one ray per pixel but
+/// along its own walls, so the render casts fewer than two shadow rays a
+/// pixel (about 1.8): the stubs' bands and their edges, fanning out
+/// across the dark room, would make it about 5.
+#[test]
+fn wall_ends_the_light_cannot_see_cast_no_edge() {
+    let turn = |x: f64, y: f64| {
+        let (s, c) = 31f64.to_radians().sin_cos();
+        let (x, y) = (x - 60.0, y - 50.0);
+        (60.0 + c * x - s * y, 50.0 + s * x + c * y)
+    };
+    let wall = |a: (f64, f64), b: (f64, f64)| {
+        let (a, b) = (turn(a.0, a.1), turn(b.0, b.1));
+        format!("Wall(a: ({}, {}), b: ({}, {})),", a.0, a.1, b.0, b.1)
+    };
+    let mut walls = String::new();
+    // The outer walls, and the wall between the two rooms.
+    for (a, b) in [
+        ((10.0, 10.0), (110.0, 10.0)),
+        ((110.0, 10.0), (110.0, 90.0)),
+        ((110.0, 90.0), (10.0, 90.0)),
+        ((10.0, 90.0), (10.0, 10.0)),
+        ((40.0, 10.0), (40.0, 90.0)),
+    ] {
+        walls += &wall(a, b);
+    }
+    // Stubs in the dark room, in a grid of slanted pieces.
+    for row in 0..6 {
+        for column in 0..5 {
+            let (x, y) = (48.0 + 12.0 * column as f64, 16.0 + 12.0 * row as f64);
+            walls += &wall((x, y), (x + 3.0, y + 2.0));
+        }
+    }
+    let (lx, ly) = turn(25.0, 50.0);
+    let text = format!(
+        "Scene(canvas: (120, 100), floor: Color((0.8, 0.8, 0.8)),
+            walls: [{walls}],
+            lights: [Point(at: ({lx}, {ly}), intensity: 20.0)],
+            render: (samples: 16, bounces: 1))"
+    );
+    let loaded = scene(&text);
+    let options = RenderOptions {
+        samples: 16,
+        ..loaded.options
+    };
+    let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
+    let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
+    assert!(with == without, "the masks changed the image");
+    let pixels = (with.width * with.height) as u64;
+    assert!(
+        with_stats.work.shadow_rays < pixels * 2,
+        "{} shadow rays with the masks ({} without) for {pixels} pixels",
+        with_stats.work.shadow_rays,
+        without_stats.work.shadow_rays
+    );
+}
+
+/// Generated floor plans at a pixel per unit, where the masks leave out
+/// the most: rooms with doors, furniture stubs, mirrors, panes, lamps and
+/// a sun. Bit-identical, with most (pixel, light) pairs sharing.
+#[test]
+fn generated_plans_render_the_same() {
+    for seed in [2, 9] {
+        let text = flatray_io::generate::Apartment {
+            rooms: 5,
+            seed,
+            ..Default::default()
+        }
+        .to_ron();
+        let loaded = scene(&text);
+        let options = RenderOptions {
+            samples: 16,
+            bounces: 1,
+            ..loaded.options
+        };
+        let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
+        let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
+        assert!(with == without, "seed {seed}: the masks changed the image");
+        assert!(
+            with_stats.work.shadow_rays * 3 < without_stats.work.shadow_rays,
+            "seed {seed}: {} shadow rays with the masks, {} without",
+            with_stats.work.shadow_rays,
+            without_stats.work.shadow_rays
+        );
+    }
+}

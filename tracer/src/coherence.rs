@@ -4,15 +4,19 @@
 //!
 //! Which walls a shadow ray from floor point `x` to a point light crosses
 //! changes only where `x` crosses a wall or a shadow edge: the ray from
-//! the light through a wall's endpoint, beyond it. An edge is drawn only
-//! until it enters an opaque wall's shadow: past that, the floor on both
-//! of its sides is dark ([`umbra_entry`]). For a line light, the
+//! the light through a wall's endpoint, beyond it. Inside an opaque wall's
+//! shadow the floor is dark on both sides of any boundary, so for a point,
+//! spot or sun three parts are left out: an edge past where it enters
+//! such a shadow ([`umbra_entry`]), the edge of a wall end that such a
+//! shadow holds ([`hidden_by`]), and the wall itself where one opaque wall
+//! hides it end to end ([`hides_whole`]). On a floor plan that leaves a
+//! light the walls and edges of the rooms it sees. For a line light, the
 //! walls that cut the triangle from `x` to the light change only where `x`
 //! crosses a wall, a ray from either end of the light through a wall's
 //! endpoint, or the light's own line. Every such boundary is drawn into a
-//! per-light mask of pixels, widened by a pixel on each side, so that a
-//! pixel left unmarked lies at least a fraction of a pixel from every
-//! boundary, far beyond any rounding. In an unmarked pixel:
+//! per-light mask of pixels: every pixel within an eighth of a pixel of
+//! it is marked, so that a pixel left unmarked lies at least that far
+//! from every boundary, far beyond any rounding. In an unmarked pixel:
 //!
 //! - a point, spot or directional light's transmittance is the same for
 //!   every stratum: one shadow ray from the pixel's centre gives it, the
@@ -121,6 +125,10 @@ impl FloorCoherence {
                     }
                 });
         }
+        if std::env::var_os("COH_DEBUG").is_some() {
+            let v = cells.iter().filter(|c| **c == Coherence::Varies).count();
+            eprintln!("varies {} of {}", v, cells.len());
+        }
         Some(FloorCoherence {
             width,
             lights,
@@ -164,20 +172,37 @@ fn light_states(
     let mut complete = true;
     for wall in walls() {
         let (a, b) = (to_pixels(wall.a), to_pixels(wall.b));
-        mask.mark(a, b - a, 0.0, 1.0);
-        for end in [wall.a, wall.b] {
+        // The opaque wall that hides each end from a point, spot or sun.
+        let hider = |end: DVec2| match light.shape {
+            LightShape::Point { at } | LightShape::Spot { at, .. } => {
+                hidden_by(scene, own, end, at - end, 1.0, step)
+            }
+            LightShape::Directional { direction } => {
+                hidden_by(scene, own, end, -direction, f64::INFINITY, step)
+            }
+            LightShape::Line { .. } | LightShape::Circle { .. } => None,
+        };
+        let hiders = [hider(wall.a), hider(wall.b)];
+        if !hides_whole(hiders[0], hiders[1]) {
+            mask.mark(a, b - a, 0.0, 1.0);
+        }
+        for (end, hider) in [wall.a, wall.b].into_iter().zip(hiders) {
             let e = to_pixels(end);
             match light.shape {
                 LightShape::Point { at } | LightShape::Spot { at, .. } => {
                     // A wall that all but touches the light leaves
                     // its shadow rays' `t < 1` test to rounding.
                     complete &= !near(at, &wall);
-                    let end_t = umbra_entry(scene, own, end, end - at, step);
-                    mask.mark(e, e - to_pixels(at), 0.0, end_t);
+                    if hider.is_none() {
+                        let end_t = umbra_entry(scene, own, end, end - at, step);
+                        mask.mark(e, e - to_pixels(at), 0.0, end_t);
+                    }
                 }
                 LightShape::Directional { direction } => {
-                    let end_t = umbra_entry(scene, own, end, direction, step);
-                    mask.mark(e, direction / step, 0.0, end_t);
+                    if hider.is_none() {
+                        let end_t = umbra_entry(scene, own, end, direction, step);
+                        mask.mark(e, direction / step, 0.0, end_t);
+                    }
                 }
                 LightShape::Circle { .. } => {}
                 LightShape::Line { segment, .. } => {
@@ -249,28 +274,30 @@ fn light_states(
 
 /// How far, in pixels, a shadow edge's crossing must lie from the ends of
 /// the opaque wall it enters, across the edge (its distance along the
-/// wall times the sine of the angle between them), and how far past the
-/// crossing the edge is still drawn.
+/// wall times the sine of the angle between them), and how far behind
+/// the wall's line the edge is still drawn.
 const UMBRA_MARGIN: f64 = 3.0;
 
 /// Where the shadow edge from wall end `from`, along `dir` away from a
-/// point light (or along a sun's direction), enters the inside of an
-/// opaque wall's shadow: the ray parameter of its first crossing of an
-/// opaque wall at least [`UMBRA_MARGIN`] pixels from that wall's ends,
-/// plus that margin; `INFINITY` where it enters none.
+/// point light (or along a sun's direction), lies inside an opaque wall's
+/// shadow for good: past a crossing of an opaque wall at least
+/// [`UMBRA_MARGIN`] pixels (across the edge) from that wall's ends, once
+/// the edge lies that margin behind the wall's line. The least such ray
+/// parameter over the walls it crosses; `INFINITY` where there is none.
 ///
-/// Past that crossing, every point within a few pixels of the edge sees
-/// the light through that wall, well inside it: its transmittance is
-/// exactly 0 on both sides of the edge, whatever other walls the edge
-/// separates. So the edge need not be drawn there: a pixel that no drawn
-/// boundary touches is either wholly in the shadow of opaque walls (the
-/// boundaries of that shadow are walls and the drawn parts of edges) or
-/// crosses the same walls everywhere, as before.
+/// Past it, every point within a pixel and a half of the edge lies behind
+/// that wall's line, and its way to the light crosses the wall well
+/// inside it: its transmittance is exactly 0 on both sides of the edge,
+/// whatever other walls the edge separates. So the edge need not be drawn
+/// there: a pixel that no drawn boundary touches is either wholly in the
+/// shadow of opaque walls (the boundaries of that shadow are walls and
+/// the drawn parts of edges) or crosses the same walls everywhere, as
+/// before.
 fn umbra_entry(scene: &Scene, own: Option<u32>, from: DVec2, dir: DVec2, step: DVec2) -> f64 {
     let ray = Ray::new(from, dir);
     let dir_pixels = dir / step;
     let dir_length = dir_pixels.length();
-    let mut first = f64::INFINITY;
+    let mut end = f64::INFINITY;
     let skip = Skip(own.unwrap_or(u32::MAX), u32::MAX);
     scene
         .segments
@@ -280,18 +307,104 @@ fn umbra_entry(scene: &Scene, own: Option<u32>, from: DVec2, dir: DVec2, step: D
                 wall.material,
                 Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. }
             );
-            if opaque && hit.t < first {
+            if opaque && hit.t < end {
                 let edge = wall.segment.edge() / step;
                 let sine = (cross(edge, dir_pixels) / (edge.length() * dir_length)).abs();
                 let inside = hit.u.min(1.0 - hit.u) * edge.length() * sine;
                 if inside >= UMBRA_MARGIN && hit.t * dir_length >= UMBRA_MARGIN {
-                    first = hit.t;
+                    end = end.min(hit.t + UMBRA_MARGIN / (dir_length * sine));
                 }
             }
             true
         });
-    let end = first + UMBRA_MARGIN / dir_length;
     if end.is_finite() { end } else { f64::INFINITY }
+}
+
+/// How an opaque wall hides a wall end from the light (see [`hidden_by`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Hider {
+    /// The hiding wall.
+    wall: u32,
+    /// How far along it the way to the light crosses it, from its nearer
+    /// end, in pixels.
+    along: f64,
+    /// The sine of the angle between that way and the wall.
+    sine: f64,
+    /// How far the end lies behind the wall's line, in pixels.
+    behind: f64,
+}
+
+/// The first opaque wall found that hides wall end `end` from the light
+/// with room to spare: the way from `end` to the light (`towards`, up to
+/// `t_max`: the light at 1, or a sun at infinity) crosses it at least
+/// [`UMBRA_MARGIN`] pixels (across that way) from its ends, and `end`
+/// lies at least that far behind its line.
+///
+/// Then the shadow edge from `end` lies wholly inside that wall's shadow
+/// and need not be drawn. A point within a pixel and a half of the edge
+/// lies behind the wall's line too, and its way to the light crosses the
+/// wall within a pixel and a half (across the way) of where the edge's
+/// does, nearer for a point light, so well inside the wall: its
+/// transmittance is exactly 0 on both sides of the edge. On a floor plan,
+/// the light of one room sees few of the plan's wall ends; the others'
+/// edges would otherwise fan out across every other room.
+fn hidden_by(
+    scene: &Scene,
+    own: Option<u32>,
+    end: DVec2,
+    towards: DVec2,
+    t_max: f64,
+    step: DVec2,
+) -> Option<Hider> {
+    let dir_pixels = towards / step;
+    let dir_length = dir_pixels.length();
+    if !(dir_length.is_finite() && dir_length > 0.0) {
+        return None;
+    }
+    let ray = Ray::new(end, towards);
+    let skip = Skip(own.unwrap_or(u32::MAX), u32::MAX);
+    let mut found = None;
+    scene
+        .segments
+        .for_each_crossing(&ray, t_max, skip, |index, hit| {
+            let wall = &scene.walls[index as usize];
+            let opaque = matches!(
+                wall.material,
+                Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. }
+            );
+            if opaque {
+                let edge = wall.segment.edge() / step;
+                let sine = (cross(edge, dir_pixels) / (edge.length() * dir_length)).abs();
+                let hider = Hider {
+                    wall: index,
+                    along: hit.u.min(1.0 - hit.u) * edge.length(),
+                    sine,
+                    behind: hit.t * dir_length * sine,
+                };
+                if hider.along * sine >= UMBRA_MARGIN && hider.behind >= UMBRA_MARGIN {
+                    found = Some(hider);
+                }
+            }
+            found.is_none()
+        });
+    found
+}
+
+/// Whether one opaque wall hides a whole wall, from ends hidden as
+/// `first` and `second` say: the same wall hides both, with room to
+/// spare for every point between them. The way to the light from a point
+/// of the wall crosses the hiding wall between the ends' crossings, at an
+/// angle between theirs, and the point lies behind its line at least as
+/// far as the nearer end: so the floor within a pixel and a half of the
+/// wall lies in its shadow, and crossing the wall changes no
+/// transmittance there (each is exactly 0).
+fn hides_whole(first: Option<Hider>, second: Option<Hider>) -> bool {
+    let (Some(a), Some(b)) = (first, second) else {
+        return false;
+    };
+    a.wall == b.wall
+        && a.along.min(b.along) * a.sine.min(b.sine) >= UMBRA_MARGIN
+        && a.behind.min(b.behind) >= UMBRA_MARGIN
 }
 
 /// Pixels a boundary passes near.
@@ -313,8 +426,10 @@ impl Mask {
         }
     }
 
-    /// Marks every pixel within about a pixel of `o + t d` for `t` in
-    /// `[t0, t1]` (in pixel coordinates), clipped to the image.
+    /// Marks every pixel that comes within an eighth of a pixel of
+    /// `o + t d` for `t` in `[t0, t1]` (in pixel coordinates), clipped to
+    /// the image; further where the coordinates are so large that
+    /// rounding could move a point by a noticeable part of that.
     fn mark(&mut self, o: DVec2, d: DVec2, t0: f64, t1: f64) {
         if !(o.is_finite() && d.is_finite()) {
             self.overflow = true;
@@ -326,21 +441,25 @@ impl Mask {
             return;
         };
         let length = d.length() * (t1 - t0);
-        if !length.is_finite() {
+        let magnitude = o.abs().max_element() + d.abs().max_element() * t0.abs().max(t1.abs());
+        if !(length.is_finite() && magnitude.is_finite()) {
             self.overflow = true;
             return;
         }
-        // Steps of at most half a pixel; the 3 x 3 stamp covers the gaps.
-        let steps = (length * 2.0).ceil() as usize + 1;
+        // Steps of at most a quarter of a pixel: every point of the
+        // boundary lies within an eighth of a pixel of a step, so a pixel
+        // within an eighth of a pixel of the boundary lies within a
+        // quarter of one of the steps, and is marked.
+        let reach = 0.25 + 1e-9 * magnitude;
+        let steps = (length * 4.0).ceil() as usize + 1;
         for k in 0..=steps {
             let t = t0 + (t1 - t0) * (k as f64 / steps as f64);
             let p = o + d * t;
-            let (cx, cy) = (p.x.floor() as i64, p.y.floor() as i64);
-            for y in cy - 1..=cy + 1 {
-                for x in cx - 1..=cx + 1 {
-                    if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
-                        self.marked[y as usize * self.width + x as usize] = true;
-                    }
+            let (x0, x1) = ((p.x - reach).floor() as i64, (p.x + reach).floor() as i64);
+            let (y0, y1) = ((p.y - reach).floor() as i64, (p.y + reach).floor() as i64);
+            for y in y0.max(0)..=y1.min(self.height as i64 - 1) {
+                for x in x0.max(0)..=x1.min(self.width as i64 - 1) {
+                    self.marked[y as usize * self.width + x as usize] = true;
                 }
             }
         }
@@ -484,5 +603,75 @@ pub(crate) fn centre_transmittance(
             walls,
             stats,
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The distance from segment `p q` to the closed unit square of pixel
+    /// `(x, y)`: zero where they meet, else the least of the segment's
+    /// ends to the square and the square's corners to the segment.
+    fn distance_to_pixel(p: DVec2, q: DVec2, x: usize, y: usize) -> f64 {
+        let (lo, hi) = (
+            DVec2::new(x as f64, y as f64),
+            DVec2::new(x as f64 + 1.0, y as f64 + 1.0),
+        );
+        if clip_to_box(p, q - p, 0.0, 1.0, lo, hi).is_some() {
+            return 0.0;
+        }
+        let to_square = |v: DVec2| (v.clamp(lo, hi) - v).length();
+        let to_segment = |v: DVec2| {
+            let e = q - p;
+            let t = ((v - p).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+            (p + e * t).distance(v)
+        };
+        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        corners
+            .iter()
+            .map(|&c| to_segment(c))
+            .chain([to_square(p), to_square(q)])
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// A boundary along the middle of a row of pixels marks that row, and
+    /// neither row beside it.
+    #[test]
+    fn a_boundary_marks_only_the_pixels_it_passes_near() {
+        let mut mask = Mask::new(30, 20);
+        mask.mark(DVec2::new(2.5, 10.5), DVec2::new(18.0, 0.0), 0.0, 1.0);
+        for y in 0..20 {
+            for x in 0..30 {
+                let expected = y == 10 && (2..=20).contains(&x);
+                assert_eq!(mask.marked[y * 30 + x], expected, "pixel ({x}, {y})");
+            }
+        }
+    }
+
+    proptest! {
+        /// Every pixel within an eighth of a pixel of a boundary is
+        /// marked, in any direction, including a boundary of no length
+        /// (a light's own pixel).
+        #[test]
+        fn every_pixel_near_a_boundary_is_marked(
+            o in (-5.0..45.0f64, -5.0..35.0f64),
+            d in (-30.0..30.0f64, -30.0..30.0f64),
+            t1 in 0.0..1.5f64,
+        ) {
+            let (o, d) = (DVec2::new(o.0, o.1), DVec2::new(d.0, d.1));
+            let mut mask = Mask::new(40, 30);
+            mask.mark(o, d, 0.0, t1);
+            prop_assert!(!mask.overflow);
+            let (p, q) = (o, o + d * t1);
+            for y in 0..30 {
+                for x in 0..40 {
+                    if distance_to_pixel(p, q, x, y) < 0.125 {
+                        prop_assert!(mask.marked[y * 40 + x], "pixel ({}, {})", x, y);
+                    }
+                }
+            }
+        }
     }
 }
