@@ -294,6 +294,7 @@ enum FastPathArg {
     Shortcut,
     Tables,
     Avx,
+    DarkCells,
 }
 
 impl FastPathArg {
@@ -305,6 +306,7 @@ impl FastPathArg {
             FastPathArg::Shortcut => FastPath::Shortcut,
             FastPathArg::Tables => FastPath::Tables,
             FastPathArg::Avx => FastPath::Avx,
+            FastPathArg::DarkCells => FastPath::DarkCells,
         }
     }
 }

@@ -5,7 +5,7 @@
 //! tolerance in standard errors, with fixed seeds.
 
 use flatray_tests::{block_stats, render, scene};
-use flatray_tracer::{LightChoice, MemoOptions, RenderOptions};
+use flatray_tracer::{FastPath, FastPaths, LightChoice, MemoOptions, RenderOptions};
 
 /// A rotated, non-convex plan of three rooms (doors, a pane, a mirror, a
 /// furniture stub) lit by 13 lights of every kind and falloff.
@@ -160,4 +160,53 @@ fn shadow_rays_per_point_do_not_grow_with_the_lights() {
     let (few, many) = (per_point(4), per_point(16));
     assert!(few <= 5.5 && many <= 5.5, "{few} and {many} per point");
     assert!(many < few * 1.5, "{few} then {many} per point");
+}
+
+/// A chosen light that one opaque wall hides from the point's whole cell
+/// brings exactly nothing, and costs no shadow ray: the image is the same
+/// bit for bit without that fast path. On a generated plan of 12 rooms,
+/// turned, with two lamps a room and a sun, most lights chosen at random
+/// lie in other rooms, and at least a third of the chosen lights need
+/// no ray.
+#[test]
+fn lights_a_wall_hides_from_the_whole_cell_cost_no_shadow_ray() {
+    let text = flatray_io::generate::Apartment {
+        rooms: 12,
+        lamps_per_room: 2,
+        seed: 4,
+        ..Default::default()
+    }
+    .to_ron();
+    let loaded = scene(&text);
+    let options = RenderOptions {
+        samples: 16,
+        scale: 0.5,
+        bounces: 1,
+        light_choice: LightChoice::Table,
+        ..loaded.options
+    };
+    let with = render(&loaded.scene, &options);
+    let without = render(
+        &loaded.scene,
+        &RenderOptions {
+            fast_paths: FastPaths::ALL.without(FastPath::DarkCells),
+            ..options
+        },
+    );
+    assert!(with.image == without.image, "dark cells changed the image");
+    let (w, wo) = (with.stats.work, without.stats.work);
+    assert_eq!(w.chosen_lights, wo.chosen_lights);
+    assert_eq!(wo.chosen_dark, 0);
+    assert!(
+        w.chosen_dark * 3 > w.chosen_lights,
+        "{} of {} chosen lights dark",
+        w.chosen_dark,
+        w.chosen_lights
+    );
+    assert!(
+        w.shadow_rays < wo.shadow_rays,
+        "{} shadow rays, {} without",
+        w.shadow_rays,
+        wo.shadow_rays
+    );
 }

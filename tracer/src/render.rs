@@ -107,17 +107,21 @@ pub enum FastPath {
     Tables,
     /// The pixel loop compiled a second time with AVX2.
     Avx,
+    /// No shadow ray to a chosen light that a wall hides from the whole
+    /// cell of the light table (`LightTable::mark_dark`).
+    DarkCells,
 }
 
 impl FastPath {
     /// Every fast path, in a fixed order.
-    pub const ALL: [FastPath; 6] = [
+    pub const ALL: [FastPath; 7] = [
         FastPath::Culling,
         FastPath::Coherence,
         FastPath::StrataLoops,
         FastPath::Shortcut,
         FastPath::Tables,
         FastPath::Avx,
+        FastPath::DarkCells,
     ];
 
     fn bit(self) -> u8 {
@@ -131,7 +135,7 @@ pub struct FastPaths(u8);
 
 impl FastPaths {
     /// Every fast path.
-    pub const ALL: FastPaths = FastPaths(0b11_1111);
+    pub const ALL: FastPaths = FastPaths(0b111_1111);
 
     /// All but `path`.
     pub fn without(self, path: FastPath) -> FastPaths {
@@ -784,9 +788,14 @@ fn pixel_fn() -> PixelFn {
 
 /// The light table of a render, where its plan chooses lights by one.
 fn light_table_for(scene: &Scene, options: &RenderOptions, plan: &Plan) -> Option<LightTable> {
-    plan.light_table
+    let mut table = plan
+        .light_table
         .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
-        .flatten()
+        .flatten()?;
+    if plan.shadows && options.takes(FastPath::DarkCells) {
+        table.mark_dark(scene);
+    }
+    Some(table)
 }
 
 /// The switches of a path sample, from the plan, with a pass's fills.

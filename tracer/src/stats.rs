@@ -92,6 +92,9 @@ pub struct Work {
     /// Lights chosen by the light table beside its always-lights (each a
     /// part of `shadow_rays`).
     pub chosen_lights: u64,
+    /// Of those, lights that a wall hides from the point's whole cell:
+    /// no shadow ray cast (`LightTable::mark_dark`).
+    pub chosen_dark: u64,
     /// Bytes held by the light table, and the shadow rays its probes cast
     /// (not in `shadow_rays`).
     pub light_table_bytes: u64,
@@ -256,6 +259,7 @@ impl Work {
         self.floor_albedo_reads += other.floor_albedo_reads;
         self.emission_tests += other.emission_tests;
         self.chosen_lights += other.chosen_lights;
+        self.chosen_dark += other.chosen_dark;
         self.light_table_bytes += other.light_table_bytes;
         self.light_table_rays += other.light_table_rays;
         self.onward_lookups += other.onward_lookups;
@@ -343,6 +347,7 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  floor reuses     {:>14}", w.floor_memo_reuses)?;
             writeln!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
             writeln!(f, "  chosen lights    {:>14}", w.chosen_lights)?;
+            writeln!(f, "  chosen dark      {:>14}", w.chosen_dark)?;
             writeln!(f, "  light table rays {:>14}", w.light_table_rays)?;
             writeln!(f, "  onward hits      {:>14}", w.onward_lookups)?;
             writeln!(f, "  onward bytes     {:>14}", w.onward_bytes)?;

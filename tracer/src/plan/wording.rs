@@ -143,10 +143,16 @@ impl Plan {
             } else if no_lights {
                 "no light in the scene".into()
             } else if light_table {
+                let dark = shadows && !reference && fast_paths.contains(FastPath::DarkCells);
                 format!(
-                    "{}: at each point, the up to {} brightest there (estimated per cell of the plan), and at most one more drawn at random by what each brings",
+                    "{}: at each point, the up to {} brightest there (estimated per cell of the plan), and at most one more drawn at random by what each brings{}",
                     n(lights, "light"),
-                    crate::lights::choice::ALWAYS
+                    crate::lights::choice::ALWAYS,
+                    if dark {
+                        " (no shadow ray to one that a wall hides from the whole cell)"
+                    } else {
+                        ""
+                    }
                 )
             } else if light_choice == LightChoice::Every {
                 "one shadow ray to every light (--lights every)".into()
