@@ -740,6 +740,57 @@ impl SegmentSet {
     }
 }
 
+impl SegmentSet {
+    /// [`SegmentSet::closest_hits_among`] for a single ray: its
+    /// candidates four at a time, each candidate's test in a lane (as the
+    /// compiler vectorises it), then the lanes compared in order. The same
+    /// operations as that query's one lane, so the same answer, bit for
+    /// bit; a short last group repeats its first candidate, whose equal
+    /// `t` never wins twice.
+    #[inline(always)]
+    pub fn closest_hit_among_wide(&self, ray: &Ray, candidates: &[u32]) -> HitLanes<1> {
+        const W: usize = 4;
+        let segments = self.segments();
+        let none = Segment {
+            a: DVec2::NAN,
+            b: DVec2::NAN,
+        };
+        let (o, d) = (ray.origin, ray.dir);
+        let (mut best_t, mut best_index, mut best_sa, mut best_sb) =
+            (f64::INFINITY, u32::MAX, 0.0, 0.0);
+        for group in candidates.chunks(W) {
+            let mut index = [group[0]; W];
+            index[..group.len()].copy_from_slice(group);
+            let segment = index.map(|i| segments.get(i as usize).copied().unwrap_or(none));
+            let (mut sa, mut sb, mut t, mut crosses) = ([0.0; W], [0.0; W], [0.0; W], [false; W]);
+            for k in 0..W {
+                // `crossing_parts`, lane by lane.
+                let Segment { a, b } = segment[k];
+                let (pax, pay) = (a.x - o.x, a.y - o.y);
+                let (pbx, pby) = (b.x - o.x, b.y - o.y);
+                sa[k] = d.x * pay - d.y * pax;
+                sb[k] = d.x * pby - d.y * pbx;
+                let apart = (sa[k] > 0.0 && sb[k] > 0.0)
+                    | (sa[k] < 0.0 && sb[k] < 0.0)
+                    | (sa[k] == 0.0 && sb[k] == 0.0);
+                let e = b - a;
+                t[k] = (pax * e.y - pay * e.x) / (sb[k] - sa[k]);
+                crosses[k] = !apart & (t[k] > 0.0);
+            }
+            for k in 0..W {
+                if crosses[k] && t[k] < best_t {
+                    (best_t, best_index, best_sa, best_sb) = (t[k], index[k], sa[k], sb[k]);
+                }
+            }
+        }
+        HitLanes {
+            index: [best_index],
+            t: [best_t],
+            u: [best_sa / (best_sa - best_sb)],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -210,6 +210,8 @@ fn ties_at_a_shared_corner_go_to_the_lower_index_in_every_set() {
             };
             let hits = set.closest_hits_among(&lanes, &candidates);
             assert_eq!(std::array::from_fn(|k| hits.hit(k)), [hit; 8]);
+            // One ray, the list in lanes.
+            assert_eq!(set.closest_hit_among_wide(&ray, &candidates).hit(0), hit);
         }
     }
 }
@@ -347,6 +349,12 @@ proptest! {
             let four = first_lanes::<4>(&lanes);
             let hits = set.closest_hits_among(&one, &candidates);
             prop_assert_eq!(hits.hit(0), set.closest_hit_among(&one.ray(0), f64::INFINITY, Skip::NONE, &candidates));
+            // One ray, its candidates in lanes: each of the eight rays.
+            for k in 0..8 {
+                let ray = lanes.ray(k);
+                let wide = set.closest_hit_among_wide(&ray, &candidates);
+                prop_assert_eq!(wide.hit(0), set.closest_hit_among(&ray, f64::INFINITY, Skip::NONE, &candidates), "lane {}", k);
+            }
             let hits = set.closest_hits_among(&two, &candidates);
             for k in 0..2 {
                 prop_assert_eq!(hits.hit(k), set.closest_hit_among(&two.ray(k), f64::INFINITY, Skip::NONE, &candidates));

@@ -1517,7 +1517,17 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
     (rays.dx, rays.dy) = arc_points(arc, &fractions);
     let hits = if walls.len() <= LONG_LIST {
         stats.work.culled_walls_tested += (walls.len() * count) as u64;
-        scene.segments.closest_hits_among(&rays, walls)
+        if N == 1 {
+            // One sample of the arc: its walls in lanes instead.
+            let hit = scene.segments.closest_hit_among_wide(&rays.ray(0), walls);
+            HitLanes {
+                index: [hit.index[0]; N],
+                t: [hit.t[0]; N],
+                u: [hit.u[0]; N],
+            }
+        } else {
+            scene.segments.closest_hits_among(&rays, walls)
+        }
     } else {
         // A long list costs more than the BVH: each lane asks the BVH.
         let mut hits = HitLanes {
