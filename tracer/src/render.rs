@@ -1517,7 +1517,7 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
     (rays.dx, rays.dy) = arc_points(arc, &fractions);
     let hits = if walls.len() <= LONG_LIST {
         stats.work.culled_walls_tested += (walls.len() * count) as u64;
-        if N == 1 {
+        if N == 1 && walls.len() >= WIDE_LIST {
             // One sample of the arc: its walls in lanes instead.
             let hit = scene.segments.closest_hit_among_wide(&rays.ray(0), walls);
             HitLanes {
@@ -1577,6 +1577,11 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
 /// (its BVH, or in a set of a few dozen walls its scan in lanes): the
 /// same answers, for less work than a long list.
 pub(crate) const LONG_LIST: usize = 16;
+
+/// A ray alone in its arc whose list holds at least this many walls tests
+/// them four at a time (`SegmentSet::closest_hit_among_wide`); a shorter
+/// list costs less one wall at a time.
+const WIDE_LIST: usize = 4;
 
 /// Samples of one arc in one chunk, at most: [`arc_in_lanes`] takes them
 /// in this many lanes.
