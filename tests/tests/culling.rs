@@ -269,6 +269,15 @@ fn floor_plans_of_many_walls_render_the_same_testing_few_of_them() {
                 stats.work.culled_rays
             );
             assert!(stats.work.culled_mirror_rays > 0, "{name}");
+            // With the memo, the onward memo's gathers take the lists of
+            // their wall's piece: at least one for every four of its rays.
+            if memo {
+                let (listed, rays) = (stats.work.onward_listed_rays, stats.work.onward_rays);
+                assert!(
+                    listed * 4 > rays,
+                    "{name}: {listed} gathers listed, {rays} fill rays"
+                );
+            }
             assert!(stats.work.listed_shadow_rays > 0, "{name}");
         }
     }

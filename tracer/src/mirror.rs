@@ -1,19 +1,23 @@
-//! Culling the rays that leave mirrors: each mirror is cut into short
+//! Culling the rays that leave walls: each mirror is cut into short
 //! pieces, and for each piece and arc of directions the walls its
 //! reflected rays can meet are listed once per render
 //! (`flatray_geometry::ArcCandidates` of the piece's bounding box). A ray
 //! off a mirror then tests only its list, with the same answer as a test
-//! of every wall.
+//! of every wall. Where the onward memo gathers paths from the diffuse
+//! walls (two bounces or more), their first rays take lists too, per
+//! longer piece.
 
 use flatray_geometry::{ArcCandidates, DVec2};
+use rayon::prelude::*;
 
+use crate::render::LONG_LIST;
 use crate::sampling::ARCS;
 use crate::scene::{Material, Scene};
 
-/// The lists of every mirror's pieces, by wall.
+/// The lists of every mirror's pieces (and diffuse wall's), by wall.
 #[derive(Debug, Default)]
 pub(crate) struct MirrorArcs {
-    /// Per wall: its pieces' lists (empty for a wall that is no mirror).
+    /// Per wall: its pieces' lists (empty for a wall that takes none).
     walls: Vec<Vec<ArcCandidates>>,
 }
 
@@ -21,30 +25,54 @@ pub(crate) struct MirrorArcs {
 pub(crate) const MIRROR_PIECE: u32 = 4;
 /// At most this many pieces per mirror.
 const MAX_PIECES: usize = 256;
+/// The length of a diffuse wall's piece, in pixels, for the onward memo's
+/// gathers: they leave the walls' bins once per render pass, not once
+/// per pixel sample, so longer pieces serve them.
+pub(crate) const GATHER_PIECE: u32 = 16;
+/// At most this many pieces of diffuse walls in all: their pieces grow
+/// on a large canvas.
+const MAX_GATHER_PIECES: f64 = 8192.0;
 /// A piece's box holds the points a little beyond its ends in `u`, for
 /// the rounding of the piece found from a hit's `u`.
 const REACH: f64 = 1e-9;
 
 impl MirrorArcs {
-    /// The lists for `scene` rendered at `scale` pixels per unit; `None`
-    /// without mirrors.
-    pub(crate) fn build(scene: &Scene, scale: f64) -> Option<MirrorArcs> {
+    /// The lists for `scene` rendered at `scale` pixels per unit: for its
+    /// mirrors, and with `gathers` for its diffuse walls; `None` where no
+    /// wall takes any.
+    pub(crate) fn build(scene: &Scene, scale: f64, gathers: bool) -> Option<MirrorArcs> {
         let mirror = |m: &Material| matches!(m, Material::Mirror { .. });
-        if !scene.walls.iter().any(|w| mirror(&w.material)) {
-            return None;
-        }
-        let piece = MIRROR_PIECE as f64 / scale;
-        let walls = scene
+        let diffuse = |m: &Material| gathers && matches!(m, Material::Diffuse { .. });
+        if !scene
             .walls
             .iter()
+            .any(|w| mirror(&w.material) || diffuse(&w.material))
+        {
+            return None;
+        }
+        let mirror_piece = MIRROR_PIECE as f64 / scale;
+        let diffuse_length: f64 = scene
+            .walls
+            .iter()
+            .filter(|w| diffuse(&w.material))
+            .map(|w| w.segment.length())
+            .sum();
+        let gather_piece = (GATHER_PIECE as f64 / scale).max(diffuse_length / MAX_GATHER_PIECES);
+        let walls = scene
+            .walls
+            .par_iter()
             .map(|wall| {
-                if !mirror(&wall.material) {
+                let (piece, most) = if mirror(&wall.material) {
+                    (mirror_piece, MAX_PIECES)
+                } else if diffuse(&wall.material) {
+                    (gather_piece, MAX_GATHER_PIECES as usize)
+                } else {
                     return Vec::new();
-                }
+                };
                 let s = wall.segment;
                 let pieces = (s.length() / piece).ceil();
                 let n = if pieces.is_finite() {
-                    (pieces as usize).clamp(1, MAX_PIECES)
+                    (pieces as usize).clamp(1, most)
                 } else {
                     1
                 };
@@ -61,15 +89,16 @@ impl MirrorArcs {
         Some(MirrorArcs { walls })
     }
 
-    /// The walls that a ray leaving mirror `wall` from its point at `u`,
-    /// in direction `dir`, can meet; `None` for a wall that is no mirror.
+    /// The walls that a ray leaving wall `wall` from its point at `u`, in
+    /// direction `dir`, can meet; `None` for a wall that takes no lists,
+    /// and where the list is long (the whole set costs less).
     #[inline(always)]
     fn lists(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]> {
         let pieces = self.walls.get(wall as usize)?;
         let n = pieces.len();
         // u in [0, 1]: the cast saturates (NaN gives 0).
         let piece = pieces.get(((u * n as f64) as usize).min(n.checked_sub(1)?))?;
-        Some(piece.arc(arc_of(dir)))
+        Some(piece.arc(arc_of(dir))).filter(|list| list.len() <= LONG_LIST)
     }
 }
 

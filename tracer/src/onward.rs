@@ -126,7 +126,7 @@ pub(crate) fn build_onward(
     let scene = trace.scene;
     let bounces = trace.bounces;
     let gathers = gathers.max(1);
-    let (mut rays, mut bytes) = (0u64, 0u64);
+    let (mut rays, mut listed, mut bytes) = (0u64, 0u64, 0u64);
     let kept = copies.clamp(1, 2) as usize;
     let mut copies: [Vec<WallMemo>; 2] = [Vec::new(), Vec::new()];
     for (copy, tables) in copies.iter_mut().enumerate().take(kept) {
@@ -141,6 +141,7 @@ pub(crate) fn build_onward(
                 ..*trace
             };
             let counted = std::sync::atomic::AtomicU64::new(0);
+            let counted_listed = std::sync::atomic::AtomicU64::new(0);
             let table = wall_memo.build_like(gathers as usize, |wall, side, u, k| {
                 let w = &scene.walls[wall as usize];
                 if !matches!(w.material, Material::Diffuse { .. }) {
@@ -158,13 +159,19 @@ pub(crate) fn build_onward(
                     bounce: bounces - m,
                     skip: Skip::one(wall),
                 };
+                // The walls the first ray can meet, where a fast path
+                // lists them.
+                let line_walls = trace.mirror_arcs.and_then(|arcs| arcs.walls(wall, u, dir));
+                if line_walls.is_some() {
+                    counted_listed.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
                 let mut local = Stats::default();
                 let value = follow(
                     &gather_trace,
                     Rgb::ZERO,
                     Ray::new(x, dir),
                     None,
-                    None,
+                    line_walls,
                     leg,
                     Some(lower),
                     &mut stream,
@@ -181,11 +188,13 @@ pub(crate) fn build_onward(
                 }
             });
             rays += counted.into_inner();
+            listed += counted_listed.into_inner();
             bytes += table.memory_bytes() as u64;
             tables.push(table);
         }
     }
     stats.work.onward_rays += rays;
+    stats.work.onward_listed_rays += listed;
     // A part of the wall cache's bytes, and apart.
     stats.work.onward_bytes += bytes;
     stats.work.memo_bytes += bytes;

@@ -382,9 +382,10 @@ pub(crate) fn diffuse_albedo(
     }
 }
 
-/// The walls that a ray leaving mirror `wall` at `u` in direction `dir`
-/// can meet, in index order, where a fast path knows them (`mirror.rs`);
-/// the path loop then tests only those. `None`: every wall.
+/// The walls that a ray leaving wall `wall` (a mirror, or a diffuse wall
+/// the onward memo gathers from) at `u` in direction `dir` can meet, in
+/// index order, where a fast path knows them (`mirror.rs`); the path loop
+/// then tests only those. `None`: every wall.
 pub(crate) trait MirrorWalls: Sync {
     fn walls(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]>;
 }
@@ -415,8 +416,9 @@ pub(crate) struct Trace<'a> {
     /// the scene's table along the walls (the same values) rather than
     /// from the floor.
     pub tables: bool,
-    /// The walls that rays leaving each mirror can meet, when the plan
-    /// culls rays by direction (a fast path: `mirror.rs`).
+    /// The walls that rays leaving each mirror (and diffuse wall, for the
+    /// onward memo's gathers) can meet, when the plan culls rays by
+    /// direction (a fast path: `mirror.rs`).
     pub mirror_arcs: Option<&'a dyn MirrorWalls>,
     /// The lights each receiver's next-event estimation takes, where the
     /// plan chooses them (`lights::choice`); `None`: every light.

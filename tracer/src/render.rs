@@ -338,10 +338,11 @@ impl<'a> Passes<'a> {
                     &mut stats,
                 )
             });
-            // Rays off mirrors are culled wherever the floor's are.
+            // Rays off mirrors are culled wherever the floor's are, and so
+            // are the onward memo's gathers.
             let mirror_arcs = plan
                 .floor_ray_culling
-                .then(|| MirrorArcs::build(scene, options.scale))
+                .then(|| MirrorArcs::build(scene, options.scale, plan.onward))
                 .flatten();
             let light_table = light_table_for(scene, options, &plan);
             if let Some(table) = &light_table {

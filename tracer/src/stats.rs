@@ -105,6 +105,9 @@ pub struct Work {
     /// bytes it holds (a part of `memo_bytes`).
     pub onward_rays: u64,
     pub onward_bytes: u64,
+    /// Gathers whose first ray tested only its wall piece's list
+    /// (`mirror.rs`).
+    pub onward_listed_rays: u64,
 }
 
 /// A render's estimate of its own error, from the samples themselves: each
@@ -264,6 +267,7 @@ impl Work {
         self.light_table_rays += other.light_table_rays;
         self.onward_lookups += other.onward_lookups;
         self.onward_rays += other.onward_rays;
+        self.onward_listed_rays += other.onward_listed_rays;
         self.onward_bytes += other.onward_bytes;
     }
 }
@@ -328,6 +332,9 @@ impl fmt::Display for StatsText<'_> {
         writeln!(f, "  bounce rays      {:>14}", w.bounce_rays)?;
         if w.onward_rays > 0 {
             writeln!(f, "  onward fill rays {:>14}", w.onward_rays)?;
+            if verbose {
+                writeln!(f, "  onward listed    {:>14}", w.onward_listed_rays)?;
+            }
         }
         if verbose {
             writeln!(f, "  culled rays      {:>14}", w.culled_rays)?;

@@ -4,7 +4,7 @@
 use std::fmt;
 
 use super::{Inventory, Plan};
-use crate::mirror::MIRROR_PIECE;
+use crate::mirror::{GATHER_PIECE, MIRROR_PIECE};
 use crate::render::{
     CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE, TILE_SHADOW_TESTS,
 };
@@ -388,6 +388,12 @@ impl Plan {
                 } else {
                     String::new()
                 };
+                let gathers = if onward {
+                    format!(", and for the onward memo's gathers per {GATHER_PIECE} pixels of wall")
+                } else {
+                    String::new()
+                };
+                let off_mirrors = off_mirrors + &gathers;
                 let shadow_lists = if !shadows {
                     String::new()
                 } else if light_table && lights * walls <= TILE_SHADOW_TESTS {
