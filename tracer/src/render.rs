@@ -1003,7 +1003,8 @@ fn render_pixel(
                     visibility[light]
                 };
                 if options.takes(FastPath::StrataLoops) {
-                    direct_light_chosen_strata(scene, table, receiver, floor, vis, stats);
+                    let strata = (floor, &mut batch.weights);
+                    direct_light_chosen_strata(scene, table, receiver, strata, vis, stats);
                 } else {
                     direct_light_chosen(scene, table, receiver, floor, vis, stats);
                 }
@@ -1667,6 +1668,8 @@ struct Batch {
     shared: Vec<bool>,
     /// The floor memo's points of one pixel, for all its passes.
     floor: Strata,
+    /// The light table's weights of the seen lights at those points.
+    weights: Vec<f64>,
     /// The path samples' sums of each pass.
     sums: Vec<Sums>,
     /// Per light, whether the tile's points have its shadow list.

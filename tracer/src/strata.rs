@@ -169,7 +169,7 @@ pub(crate) fn direct_light_chosen_strata(
     scene: &Scene,
     table: &LightTable,
     receiver: Receiver,
-    strata: &mut Strata,
+    (strata, weights): (&mut Strata, &mut Vec<f64>),
     mut vis: impl FnMut(usize) -> Visibility,
     stats: &mut Stats,
 ) {
@@ -215,12 +215,25 @@ pub(crate) fn direct_light_chosen_strata(
             }
         }
     }
-    for (value, (&x, numbers)) in values
+    // The seen lights' weights at every point, light by light; then each
+    // point's choice.
+    table.seen_weights(scene, cell, points, weights);
+    for (k, (value, (&x, numbers))) in values
         .iter_mut()
         .zip(points.iter().zip(numbers.chunks_exact(NUMBERS)))
+        .enumerate()
     {
         let numbers: &[f64; NUMBERS] = numbers.try_into().unwrap_or(&[0.0; NUMBERS]);
-        *value += table.chosen_light(scene, (cell, x), receiver, numbers, &mut vis, stats);
+        let column = (weights.get(k..).unwrap_or(&[]), points.len());
+        *value += table.chosen_light_weighed(
+            scene,
+            (cell, x),
+            column,
+            receiver,
+            numbers,
+            &mut vis,
+            stats,
+        );
     }
 }
 
@@ -397,7 +410,7 @@ mod tests {
                         &scene,
                         &table,
                         Receiver::FLOOR,
-                        &mut strata,
+                        (&mut strata, &mut Vec::new()),
                         vis,
                         &mut a,
                     );

@@ -389,10 +389,34 @@ impl LightTable {
         (cell, x): (usize, DVec2),
         receiver: Receiver,
         numbers: &[f64; NUMBERS],
+        vis: impl FnMut(usize) -> Visibility,
+        stats: &mut Stats,
+    ) -> Rgb {
+        let seen = self.seen_of(cell);
+        let mut weights = [0.0; MAX_SEEN];
+        for (w, s) in weights.iter_mut().zip(seen) {
+            *w = seen_weight(scene, s, x);
+        }
+        let weights = (&weights[..seen.len()], 1);
+        self.chosen_light_weighed(scene, (cell, x), weights, receiver, numbers, vis, stats)
+    }
+
+    /// [`LightTable::chosen_light`], with the weights of the cell's seen
+    /// lights at `x` given: the `j`-th at `weights.0[j * weights.1]`, as
+    /// [`LightTable::seen_weights`] leaves them.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(crate) fn chosen_light_weighed(
+        &self,
+        scene: &Scene,
+        (cell, x): (usize, DVec2),
+        weights: (&[f64], usize),
+        receiver: Receiver,
+        numbers: &[f64; NUMBERS],
         mut vis: impl FnMut(usize) -> Visibility,
         stats: &mut Stats,
     ) -> Rgb {
-        let Some((index, p)) = self.choose(scene, cell, x, numbers[ALWAYS]) else {
+        let Some((index, p)) = self.choose(cell, weights, numbers[ALWAYS]) else {
             return Rgb::ZERO;
         };
         // A light that a wall hides from the whole cell brings exactly
@@ -415,11 +439,63 @@ impl LightTable {
         v / p
     }
 
-    /// The light that the number `u` chooses at `x` in cell `cell`, with
-    /// the probability of choosing it there, or none.
+    /// The seen lights of `cell`.
     #[inline]
-    fn choose(&self, scene: &Scene, cell: usize, x: DVec2, u: f64) -> Option<(usize, f64)> {
-        let seen = &self.seen[self.seen_starts[cell] as usize..self.seen_starts[cell + 1] as usize];
+    fn seen_of(&self, cell: usize) -> &[Seen] {
+        &self.seen[self.seen_starts[cell] as usize..self.seen_starts[cell + 1] as usize]
+    }
+
+    /// The weight of each seen light of `cell` at each of `points`, light
+    /// by light: the `j`-th light's at point `k` in
+    /// `weights[j * points.len() + k]`, each the very value
+    /// [`LightTable::chosen_light`] computes there (a point light's over
+    /// all points in one loop, which the compiler vectorises: inlined
+    /// always, for the caller's target features).
+    #[inline(always)]
+    pub(crate) fn seen_weights(
+        &self,
+        scene: &Scene,
+        cell: usize,
+        points: &[DVec2],
+        weights: &mut Vec<f64>,
+    ) {
+        let seen = self.seen_of(cell);
+        weights.clear();
+        weights.resize(seen.len() * points.len(), 0.0);
+        if points.is_empty() {
+            return;
+        }
+        let r0 = scene.small_radius;
+        for (column, s) in weights.chunks_exact_mut(points.len()).zip(seen) {
+            let light = &scene.lights[s.light as usize];
+            match light.shape {
+                LightShape::Point { at } => {
+                    let falloff = light.falloff;
+                    // `LightShape::reach` of a point light, at a point.
+                    for (w, &x) in column.iter_mut().zip(points) {
+                        *w = s.scale * falloff.g((at.clamp(x, x) - at).length(), r0);
+                    }
+                }
+                _ => {
+                    for (w, &x) in column.iter_mut().zip(points) {
+                        *w = seen_weight(scene, s, x);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The light that the number `u` chooses in cell `cell`, with the
+    /// probability of choosing it there, or none; `weights` as in
+    /// [`LightTable::chosen_light_weighed`].
+    #[inline]
+    fn choose(
+        &self,
+        cell: usize,
+        (weights, stride): (&[f64], usize),
+        u: f64,
+    ) -> Option<(usize, f64)> {
+        let seen = self.seen_of(cell);
         let defensive = &self.defensive[cell * self.lights..(cell + 1) * self.lights];
         let a = if seen.is_empty() { 0.0 } else { SEEN };
         let b = if defensive.last().is_some_and(|&c| c > 0.0) {
@@ -427,22 +503,19 @@ impl LightTable {
         } else {
             0.0
         };
-        // Each seen light's weight at `x`: its visibility in the cell
-        // times what it could bring `x` without shadows.
-        let mut weights = [0.0; MAX_SEEN];
+        // Each seen light's weight at the point: its visibility in the
+        // cell times what it could bring the point without shadows.
+        let weight = |k: usize| weights.get(k * stride).copied().unwrap_or(0.0);
         let mut total = 0.0;
-        for (w, s) in weights.iter_mut().zip(seen) {
-            let light = &scene.lights[s.light as usize];
-            *w = s.scale * light.shape.reach(light, (x, x), scene.small_radius);
-            total += *w;
+        for k in 0..seen.len() {
+            total += weight(k);
         }
-        let weights = &weights[..seen.len()];
         let chosen = if u < a {
             let target = u / a * total;
             let mut cumulative = 0.0;
             let mut found = None;
-            for (s, &w) in seen.iter().zip(weights) {
-                cumulative += w;
+            for (k, s) in seen.iter().enumerate() {
+                cumulative += weight(k);
                 if target < cumulative {
                     found = Some(s.light as usize);
                     break;
@@ -460,7 +533,7 @@ impl LightTable {
         if total > 0.0
             && let Some(k) = seen.iter().position(|s| s.light as usize == chosen)
         {
-            p += a * weights[k] / total;
+            p += a * weight(k) / total;
         }
         let before = if chosen == 0 {
             0.0
@@ -470,6 +543,14 @@ impl LightTable {
         p += b * (defensive[chosen] - before);
         (p > 0.0).then_some((chosen, p))
     }
+}
+
+/// Seen light `s`'s weight at `x`: its visibility in the cell times what
+/// it could bring `x` without shadows.
+#[inline(always)]
+fn seen_weight(scene: &Scene, s: &Seen, x: DVec2) -> f64 {
+    let light = &scene.lights[s.light as usize];
+    s.scale * light.shape.reach(light, (x, x), scene.small_radius)
 }
 
 /// Per light, what a cell's probes received from it without shadows and
