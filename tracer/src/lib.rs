@@ -25,6 +25,7 @@
 mod bsdf;
 mod caustics;
 mod coherence;
+mod dark;
 mod film;
 mod glass;
 mod light;

@@ -108,7 +108,7 @@ pub enum FastPath {
     /// The pixel loop compiled a second time with AVX2.
     Avx,
     /// No shadow ray to a chosen light that a wall hides from the whole
-    /// cell of the light table (`LightTable::mark_dark`).
+    /// cell of the light table (`dark.rs`).
     DarkCells,
 }
 
@@ -794,7 +794,7 @@ fn light_table_for(scene: &Scene, options: &RenderOptions, plan: &Plan) -> Optio
         .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
         .flatten()?;
     if plan.shadows && options.takes(FastPath::DarkCells) {
-        table.mark_dark(scene);
+        table.set_dark(crate::dark::dark_cells(scene, &table));
     }
     Some(table)
 }

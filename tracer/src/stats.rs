@@ -93,7 +93,7 @@ pub struct Work {
     /// part of `shadow_rays`).
     pub chosen_lights: u64,
     /// Of those, lights that a wall hides from the point's whole cell:
-    /// no shadow ray cast (`LightTable::mark_dark`).
+    /// no shadow ray cast (`dark.rs`).
     pub chosen_dark: u64,
     /// Bytes held by the light table, and the shadow rays its probes cast
     /// (not in `shadow_rays`).
