@@ -407,6 +407,10 @@ fn hides_whole(first: Option<Hider>, second: Option<Hider>) -> bool {
         && a.behind.min(b.behind) >= UMBRA_MARGIN
 }
 
+/// The widest a mark reaches around a boundary's steps, in pixels: past
+/// this (coordinates of trillions of pixels) the light's mask is not used.
+const MAX_REACH: f64 = 4.0;
+
 /// Pixels a boundary passes near.
 struct Mask {
     width: usize,
@@ -449,8 +453,16 @@ impl Mask {
         // Steps of at most a quarter of a pixel: every point of the
         // boundary lies within an eighth of a pixel of a step, so a pixel
         // within an eighth of a pixel of the boundary lies within a
-        // quarter of one of the steps, and is marked.
-        let reach = 0.25 + 1e-9 * magnitude;
+        // quarter of one of the steps, and is marked; and a step's own
+        // rounding (thousands of times less than 1e-12 of the coordinates'
+        // magnitude) is added to the reach.
+        let reach = 0.25 + 1e-12 * magnitude;
+        if reach > MAX_REACH {
+            // Coordinates so far out that rounding could move a point by
+            // pixels: trust no pixel of this light.
+            self.overflow = true;
+            return;
+        }
         let steps = (length * 4.0).ceil() as usize + 1;
         for k in 0..=steps {
             let t = t0 + (t1 - t0) * (k as f64 / steps as f64);
@@ -648,6 +660,22 @@ mod tests {
                 assert_eq!(mask.marked[y * 30 + x], expected, "pixel ({x}, {y})");
             }
         }
+    }
+
+    /// A boundary from billions of pixels away: a little wider, where
+    /// rounding could move it, and past that the light's mask is given up
+    /// (every pixel traces) rather than drawn pixels wide.
+    #[test]
+    fn a_boundary_from_far_away_widens_then_gives_up() {
+        let mut near = Mask::new(400, 300);
+        near.mark(DVec2::new(-2e9, 150.5), DVec2::new(1.0, 0.0), 0.0, 3e9);
+        assert!(!near.overflow);
+        let rows: Vec<usize> = (0..300).filter(|&y| near.marked[y * 400 + 200]).collect();
+        assert!(rows.contains(&150) && rows.len() <= 7, "{rows:?}");
+        // From ten trillion pixels away.
+        let mut far = Mask::new(400, 300);
+        far.mark(DVec2::new(-2e13, 150.5), DVec2::new(1.0, 0.0), 0.0, 3e13);
+        assert!(far.overflow);
     }
 
     proptest! {
