@@ -5,7 +5,7 @@
 //! (`RenderOptions::reference`: no masks, and no other fast path).
 
 use flatray_tests::{render, scene, workspace_root};
-use flatray_tracer::{RenderOptions, Scene, Stats};
+use flatray_tracer::{Image, RenderOptions, Scene, Stats};
 
 fn image_and_stats(
     scene: &Scene,
@@ -18,6 +18,19 @@ fn image_and_stats(
     };
     let rendered = render(scene, &options);
     (rendered.image, rendered.stats)
+}
+
+/// Renders with and without the masks, which must give the same image:
+/// that image, and the shadow rays cast with the masks and without.
+fn rays_both_ways(name: &str, scene: &Scene, options: &RenderOptions) -> (Image, u64, u64) {
+    let (with, with_stats) = image_and_stats(scene, options, true);
+    let (without, without_stats) = image_and_stats(scene, options, false);
+    assert!(with == without, "{name}: the masks changed the image");
+    (
+        with,
+        with_stats.work.shadow_rays,
+        without_stats.work.shadow_rays,
+    )
 }
 
 /// Renders with and without the masks; returns how many (pixel, light)
@@ -133,18 +146,14 @@ fn a_line_light_shares_one_ray_where_walls_cut_it_off_whole() {
         scale: 2.0,
         ..loaded.options
     };
-    let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
-    let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
-    assert!(with == without, "the masks changed the image");
+    let (with, rays, rays_without) = rays_both_ways("line light", &loaded.scene, &options);
     // Without the shared umbra and pane, the floor left of the pane
     // traces every stratum (two thirds of all rays, with the pixels near
     // the other walls and the light's line); with them, only the pixels
     // near an edge or in the soft shadow do (two fifths).
     assert!(
-        with_stats.work.shadow_rays * 2 < without_stats.work.shadow_rays,
-        "{} shadow rays with the masks, {} without",
-        with_stats.work.shadow_rays,
-        without_stats.work.shadow_rays
+        rays * 2 < rays_without,
+        "{rays} shadow rays with the masks, {rays_without} without"
     );
     // The pane lets light through, tinted; the umbra is dark.
     let behind_pane = with.get(54, 70)[0];
@@ -209,14 +218,10 @@ fn shadow_edges_stop_inside_an_opaque_walls_shadow() {
         samples: 16,
         ..loaded.options
     };
-    let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
-    let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
-    assert!(with == without, "the masks changed the image");
+    let (_, rays, rays_without) = rays_both_ways("umbra", &loaded.scene, &options);
     assert!(
-        with_stats.work.shadow_rays * 10 < without_stats.work.shadow_rays * 3,
-        "{} shadow rays with the masks, {} without",
-        with_stats.work.shadow_rays,
-        without_stats.work.shadow_rays
+        rays * 10 < rays_without * 3,
+        "{rays} shadow rays with the masks, {rays_without} without"
     );
 }
 
@@ -269,15 +274,11 @@ fn wall_ends_the_light_cannot_see_cast_no_edge() {
         samples: 16,
         ..loaded.options
     };
-    let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
-    let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
-    assert!(with == without, "the masks changed the image");
+    let (with, rays, rays_without) = rays_both_ways("dark room", &loaded.scene, &options);
     let pixels = (with.width * with.height) as u64;
     assert!(
-        with_stats.work.shadow_rays < pixels * 2,
-        "{} shadow rays with the masks ({} without) for {pixels} pixels",
-        with_stats.work.shadow_rays,
-        without_stats.work.shadow_rays
+        rays < pixels * 2,
+        "{rays} shadow rays with the masks ({rays_without} without) for {pixels} pixels"
     );
 }
 
@@ -299,14 +300,11 @@ fn generated_plans_render_the_same() {
             bounces: 1,
             ..loaded.options
         };
-        let (with, with_stats) = image_and_stats(&loaded.scene, &options, true);
-        let (without, without_stats) = image_and_stats(&loaded.scene, &options, false);
-        assert!(with == without, "seed {seed}: the masks changed the image");
+        let name = format!("seed {seed}");
+        let (_, rays, rays_without) = rays_both_ways(&name, &loaded.scene, &options);
         assert!(
-            with_stats.work.shadow_rays * 3 < without_stats.work.shadow_rays,
-            "seed {seed}: {} shadow rays with the masks, {} without",
-            with_stats.work.shadow_rays,
-            without_stats.work.shadow_rays
+            rays * 3 < rays_without,
+            "{name}: {rays} shadow rays with the masks, {rays_without} without"
         );
     }
 }
