@@ -125,10 +125,6 @@ impl FloorCoherence {
                     }
                 });
         }
-        if std::env::var_os("COH_DEBUG").is_some() {
-            let v = cells.iter().filter(|c| **c == Coherence::Varies).count();
-            eprintln!("varies {} of {}", v, cells.len());
-        }
         Some(FloorCoherence {
             width,
             lights,
