@@ -36,7 +36,7 @@
 use flatray_geometry::{DVec2, Ray, Segment, Skip, clip_to_box, cross};
 use rayon::prelude::*;
 
-use crate::scene::{LightShape, Material, Scene};
+use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
 
 /// Above this many (wall, light) pairs every pixel traces its strata.
@@ -290,43 +290,62 @@ const UMBRA_MARGIN: f64 = 3.0;
 /// the drawn parts of edges) or crosses the same walls everywhere, as
 /// before.
 fn umbra_entry(scene: &Scene, own: Option<u32>, from: DVec2, dir: DVec2, step: DVec2) -> f64 {
-    let ray = Ray::new(from, dir);
-    let dir_pixels = dir / step;
-    let dir_length = dir_pixels.length();
+    let dir_length = (dir / step).length();
     let mut end = f64::INFINITY;
-    let skip = Skip(own.unwrap_or(u32::MAX), u32::MAX);
-    scene
-        .segments
-        .for_each_crossing(&ray, f64::INFINITY, skip, |index, hit| {
-            let wall = &scene.walls[index as usize];
-            let opaque = matches!(
-                wall.material,
-                Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. }
-            );
-            if opaque && hit.t < end {
-                let edge = wall.segment.edge() / step;
-                let sine = (cross(edge, dir_pixels) / (edge.length() * dir_length)).abs();
-                let inside = hit.u.min(1.0 - hit.u) * edge.length() * sine;
-                if inside >= UMBRA_MARGIN && hit.t * dir_length >= UMBRA_MARGIN {
-                    end = end.min(hit.t + UMBRA_MARGIN / (dir_length * sine));
-                }
-            }
-            true
-        });
+    opaque_crossings(scene, own, (from, dir, f64::INFINITY), step, |c, t| {
+        if t < end && c.along * c.sine >= UMBRA_MARGIN && t * dir_length >= UMBRA_MARGIN {
+            end = end.min(t + UMBRA_MARGIN / (dir_length * c.sine));
+        }
+        true
+    });
     if end.is_finite() { end } else { f64::INFINITY }
 }
 
-/// How an opaque wall hides a wall end from the light (see [`hidden_by`]).
+/// Calls `visit` with each opaque wall that the way from `from` along
+/// `dir` (for `0 < t < t_max`) crosses, measured in pixels, and the
+/// crossing's `t`, until `visit` returns `false`. The light's own wall
+/// `own` is passed by, as its shadow rays pass it.
+fn opaque_crossings(
+    scene: &Scene,
+    own: Option<u32>,
+    (from, dir, t_max): (DVec2, DVec2, f64),
+    step: DVec2,
+    mut visit: impl FnMut(Hider, f64) -> bool,
+) {
+    let dir_pixels = dir / step;
+    let dir_length = dir_pixels.length();
+    let skip = Skip(own.unwrap_or(u32::MAX), u32::MAX);
+    scene
+        .segments
+        .for_each_crossing(&Ray::new(from, dir), t_max, skip, |index, hit| {
+            if !scene.stops_rays(index) {
+                return true;
+            }
+            let edge = scene.walls[index as usize].segment.edge() / step;
+            let sine = (cross(edge, dir_pixels) / (edge.length() * dir_length)).abs();
+            let crossing = Hider {
+                wall: index,
+                along: hit.u.min(1.0 - hit.u) * edge.length(),
+                sine,
+                behind: hit.t * dir_length * sine,
+            };
+            visit(crossing, hit.t)
+        });
+}
+
+/// Where a way towards the light crosses an opaque wall, in pixels
+/// ([`opaque_crossings`]): for a wall end, how that wall hides it
+/// ([`hidden_by`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Hider {
-    /// The hiding wall.
+    /// The wall crossed.
     wall: u32,
-    /// How far along it the way to the light crosses it, from its nearer
-    /// end, in pixels.
+    /// How far along it the way crosses it, from its nearer end.
     along: f64,
-    /// The sine of the angle between that way and the wall.
+    /// The sine of the angle between the way and the wall.
     sine: f64,
-    /// How far the end lies behind the wall's line, in pixels.
+    /// How far the way's start lies off the wall's line (behind it, seen
+    /// from the light).
     behind: f64,
 }
 
@@ -352,37 +371,17 @@ fn hidden_by(
     t_max: f64,
     step: DVec2,
 ) -> Option<Hider> {
-    let dir_pixels = towards / step;
-    let dir_length = dir_pixels.length();
+    let dir_length = (towards / step).length();
     if !(dir_length.is_finite() && dir_length > 0.0) {
         return None;
     }
-    let ray = Ray::new(end, towards);
-    let skip = Skip(own.unwrap_or(u32::MAX), u32::MAX);
     let mut found = None;
-    scene
-        .segments
-        .for_each_crossing(&ray, t_max, skip, |index, hit| {
-            let wall = &scene.walls[index as usize];
-            let opaque = matches!(
-                wall.material,
-                Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. }
-            );
-            if opaque {
-                let edge = wall.segment.edge() / step;
-                let sine = (cross(edge, dir_pixels) / (edge.length() * dir_length)).abs();
-                let hider = Hider {
-                    wall: index,
-                    along: hit.u.min(1.0 - hit.u) * edge.length(),
-                    sine,
-                    behind: hit.t * dir_length * sine,
-                };
-                if hider.along * sine >= UMBRA_MARGIN && hider.behind >= UMBRA_MARGIN {
-                    found = Some(hider);
-                }
-            }
-            found.is_none()
-        });
+    opaque_crossings(scene, own, (end, towards, t_max), step, |c, _| {
+        if c.along * c.sine >= UMBRA_MARGIN && c.behind >= UMBRA_MARGIN {
+            found = Some(c);
+        }
+        found.is_none()
+    });
     found
 }
 

@@ -11,7 +11,7 @@ use flatray_geometry::{DVec2, Ray, Segment, Skip, cross};
 use rayon::prelude::*;
 
 use crate::lights::choice::LightTable;
-use crate::scene::{LightShape, Material, Scene};
+use crate::scene::{LightShape, Scene};
 
 /// For every cell of `table`, a bit per light (`table.dark_words()`
 /// words a cell): set for a light, beside the cell's always-lights, that
@@ -77,12 +77,11 @@ fn hidden_from_box(scene: &Scene, index: usize, corners: [DVec2; 4]) -> bool {
     scene
         .segments
         .for_each_crossing(&ray, t_max, skip, |wall, _| {
-            let w = &scene.walls[wall as usize];
-            let opaque = !matches!(w.material, Material::Transparent { .. });
-            hidden = opaque
+            let segment = &scene.walls[wall as usize].segment;
+            hidden = scene.stops_rays(wall)
                 && corners
                     .iter()
-                    .all(|&q| crosses_inside(&w.segment, q, way(q), sun));
+                    .all(|&q| crosses_inside(segment, q, way(q), sun));
             !hidden
         });
     hidden
@@ -134,7 +133,7 @@ mod tests {
     /// A turned plan of two rooms joined by a door, with a stub, a pane,
     /// lamps in each room, a spot, a light on a wall's end and a sun.
     fn two_rooms() -> Scene {
-        use crate::scene::{Canvas, Falloff, Floor, Light, Wall};
+        use crate::scene::{Canvas, Falloff, Floor, Light, Material, Wall};
         let (sin, cos) = 17f64.to_radians().sin_cos();
         let turn = |x: f64, y: f64| {
             let (x, y) = (x - 30.0, y - 20.0);
