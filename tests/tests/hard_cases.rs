@@ -291,6 +291,18 @@ fn no_leak_through_crossing_walls() {
     });
 }
 
+/// The caustic pass's wall bins stop where walls cross, as the wall
+/// memo's do: a mirror that overshoots a corner throws the outside lights
+/// onto the outside of the walls it crosses, next to the room's inside.
+#[test]
+fn no_leak_through_crossing_walls_into_the_caustic_bins() {
+    let walls = "Wall(a: (10, 25.3), b: (90, 25.3), material: Mirror()), Wall(a: (10, 75.1), b: (90, 75.1), material: Mirror()),
+                 Wall(a: (25.7, 10), b: (25.7, 90)), Wall(a: (74.9, 10), b: (74.9, 90), material: Mirror())";
+    assert_no_leak("crossing mirrors", walls, |p| {
+        p.x > 26.5 && p.x < 74.0 && p.y > 26.0 && p.y < 74.5
+    });
+}
+
 #[test]
 fn no_leak_through_a_rotated_room_with_inexact_corners() {
     let points: Vec<(f64, f64)> = (0..7)

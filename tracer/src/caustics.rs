@@ -96,28 +96,50 @@ const MAX_LEVELS: usize = 8;
 /// Stream sample index of caustic photons, apart from every other stream.
 const CAUSTIC_STREAM: u64 = 1 << 42;
 
-/// The layout of the diffuse walls' bins: per wall, its first value and
-/// its number of bins along it; per bin, two sides times `levels` values.
-/// Level `k - 1` holds the light that arrived after at most `k` specular
-/// events; the last level also holds what arrived after more.
+/// The layout of the diffuse walls' bins: per wall, its first value, its
+/// number of bins along it and its spans; per bin, two sides times
+/// `levels` values. Level `k - 1` holds the light that arrived after at
+/// most `k` specular events; the last level also holds what arrived after
+/// more. As the wall memo's, a wall's bins stop at every junction (where
+/// another wall meets or crosses it): the two sides of a junction can lie
+/// in different rooms, and a bin across it would carry light from one
+/// into the other.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WallBins {
-    first: Vec<usize>,
-    count: Vec<usize>,
-    /// Per wall: one over its bins' length.
-    per_length: Vec<f64>,
+    walls: Vec<BinLayout>,
+    spans: Vec<BinSpan>,
     levels: usize,
     len: usize,
 }
 
+/// A wall's bins: its first value, its bins along it, its spans.
+#[derive(Clone, Copy, Debug, Default)]
+struct BinLayout {
+    first: usize,
+    bins: usize,
+    spans: (u32, u32),
+}
+
+/// A stretch `[u0, u1]` of a wall between junctions, cut into `bins` bins
+/// from the wall's bin `offset`; `per_length` is one over a bin's length.
+#[derive(Clone, Copy, Debug)]
+struct BinSpan {
+    u0: f64,
+    u1: f64,
+    offset: usize,
+    bins: usize,
+    per_length: f64,
+}
+
 impl WallBins {
-    /// Bins of about `bin_length` world units on every diffuse wall, for
-    /// light that took up to `levels` specular events (at most
-    /// [`MAX_LEVELS`]); coarser where the walls are long, within
-    /// [`MAX_WALL_VALUES`]. With more diffuse walls than that allows one
-    /// bin each, fewer levels, and with none, no bins: the caustic light
-    /// on walls is then left out (`docs/robustness.md`).
-    fn new(scene: &Scene, bin_length: f64, levels: usize) -> WallBins {
+    /// Bins of about `bin_length` world units on every diffuse wall, cut
+    /// at the `junctions` along each (positions in `(0, 1)`), for light
+    /// that took up to `levels` specular events (at most [`MAX_LEVELS`]);
+    /// coarser where the walls are long, within [`MAX_WALL_VALUES`] (and a
+    /// bin more per junction). With more diffuse walls than that allows
+    /// one bin each, fewer levels, and with none, no bins: the caustic
+    /// light on walls is then left out (`docs/robustness.md`).
+    fn new(scene: &Scene, junctions: &[Vec<f64>], bin_length: f64, levels: usize) -> WallBins {
         let lengths = scene.diffuse_lengths();
         let walls = lengths.iter().filter(|&&l| l > 0.0).count();
         let levels = levels
@@ -125,11 +147,8 @@ impl WallBins {
             .min(MAX_WALL_VALUES / (4 * walls.max(1)));
         if levels == 0 {
             return WallBins {
-                first: vec![0; lengths.len()],
-                count: vec![0; lengths.len()],
-                per_length: vec![0.0; lengths.len()],
-                levels: 0,
-                len: 0,
+                walls: vec![BinLayout::default(); lengths.len()],
+                ..WallBins::default()
             };
         }
         // Half the values for bins along the walls, the other half for
@@ -141,33 +160,76 @@ impl WallBins {
             levels,
             ..WallBins::default()
         };
-        for length in lengths {
-            let n = if length > 0.0 {
-                ((length / bin_length).ceil() as usize).clamp(1, most)
-            } else {
-                0
-            };
-            bins.first.push(bins.len);
-            bins.count.push(n);
-            bins.per_length
-                .push(if n > 0 { n as f64 / length } else { 0.0 });
+        for (wall, length) in lengths.into_iter().enumerate() {
+            let first_span = bins.spans.len() as u32;
+            let mut n = 0;
+            if length > 0.0 {
+                let mut cuts: Vec<f64> = junctions
+                    .get(wall)
+                    .map(|j| j.iter().copied().filter(|u| *u > 0.0 && *u < 1.0).collect())
+                    .unwrap_or_default();
+                cuts.sort_by(f64::total_cmp);
+                cuts.dedup();
+                let bounds: Vec<f64> = std::iter::once(0.0)
+                    .chain(cuts)
+                    .chain(std::iter::once(1.0))
+                    .collect();
+                for pair in bounds.windows(2) {
+                    let span_length = (pair[1] - pair[0]) * length;
+                    let count = ((span_length / bin_length).ceil() as usize).clamp(1, most);
+                    bins.spans.push(BinSpan {
+                        u0: pair[0],
+                        u1: pair[1],
+                        offset: n,
+                        bins: count,
+                        per_length: count as f64 / span_length,
+                    });
+                    n += count;
+                }
+            }
+            bins.walls.push(BinLayout {
+                first: bins.len,
+                bins: n,
+                spans: (first_span, bins.spans.len() as u32),
+            });
             bins.len += n * 2 * levels;
         }
         bins
     }
 
-    /// The index of the value of wall `wall`, side `side`, at `u`, level
-    /// `level`; `None` for a wall without bins.
+    /// The span of wall `wall` that holds `u`; `None` for a wall without
+    /// bins.
     #[inline]
-    fn index(&self, wall: u32, side: Side, u: f64, level: usize) -> Option<usize> {
-        let w = wall as usize;
-        let n = *self.count.get(w)?;
-        if n == 0 || level >= self.levels {
+    fn span(&self, wall: u32, u: f64) -> Option<(&BinLayout, &BinSpan)> {
+        let layout = self.walls.get(wall as usize)?;
+        let spans = self
+            .spans
+            .get(layout.spans.0 as usize..layout.spans.1 as usize)?;
+        let k = match spans.len() {
+            0 => return None,
+            1 => 0,
+            n => spans[..n - 1].partition_point(|s| s.u1 <= u),
+        };
+        Some((layout, &spans[k]))
+    }
+
+    /// The index of the value of wall `wall`, side `side`, at `u`, level
+    /// `level`, and one over its bin's length; `None` for a wall without
+    /// bins.
+    #[inline]
+    fn index(&self, wall: u32, side: Side, u: f64, level: usize) -> Option<(usize, f64)> {
+        if level >= self.levels {
             return None;
         }
-        // u in [0, 1]: the cast saturates.
-        let bin = ((u * n as f64) as usize).min(n - 1);
-        Some(self.first[w] + (level * 2 + side.index()) * n + bin)
+        let (layout, span) = self.span(wall, u)?;
+        // u in the span: the cast saturates. A span of the whole wall
+        // divides by 1, exactly.
+        let within = ((u - span.u0) / (span.u1 - span.u0) * span.bins as f64) as usize;
+        let bin = span.offset + within.min(span.bins - 1);
+        Some((
+            layout.first + (level * 2 + side.index()) * layout.bins + bin,
+            span.per_length,
+        ))
     }
 
     /// Adds `power`, arriving after `specular` events at the point `u` of
@@ -180,16 +242,12 @@ impl WallBins {
         specular: u32,
         power: Rgb,
     ) {
-        let Some(per_length) = self.per_length.get(wall as usize) else {
-            return;
-        };
-        let irradiance = power * *per_length;
         let lowest = (specular as usize)
             .saturating_sub(1)
             .min(self.levels.saturating_sub(1));
         for level in lowest..self.levels {
-            if let Some(k) = self.index(wall, side, u, level) {
-                values[k] += irradiance;
+            if let Some((k, per_length)) = self.index(wall, side, u, level) {
+                values[k] += power * per_length;
             }
         }
     }
@@ -236,7 +294,7 @@ impl Caustics {
                 u,
                 (allowed - 1).min(self.bins.levels.saturating_sub(1)),
             )
-            .map_or(Rgb::ZERO, |k| self.walls[k])
+            .map_or(Rgb::ZERO, |(k, _)| self.walls[k])
     }
 }
 
@@ -418,7 +476,13 @@ pub(crate) fn trace_caustics(
     let rate = photon_rate(total / power);
     let photons = ((pass.count() as f64 * pixels as f64 * rate).ceil() as u64).max(1);
     let levels = bounces.saturating_sub(1) as usize;
-    let bins = WallBins::new(scene, options.memo.bin_length / options.scale, levels);
+    let junctions = crate::memo::junctions(scene);
+    let bins = WallBins::new(
+        scene,
+        &junctions,
+        options.memo.bin_length / options.scale,
+        levels,
+    );
     let chunk_bytes = (pixels + bins.len) * 24;
     // As many chunks as the budget holds, but not so many that a chunk's
     // buffers cost more to clear and merge than its photons to trace.

@@ -171,7 +171,7 @@ pub(crate) fn build_wall_memo(
 
 /// Where other walls meet or cross each diffuse wall, as positions along
 /// it: the memo's bins and its interpolation stop there.
-fn junctions(scene: &Scene) -> Vec<Vec<f64>> {
+pub(crate) fn junctions(scene: &Scene) -> Vec<Vec<f64>> {
     scene
         .walls
         .iter()
