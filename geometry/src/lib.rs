@@ -31,6 +31,7 @@ pub use glam::DVec2;
 
 mod cull;
 mod lanes;
+pub mod overlap;
 mod segment_set;
 pub use cull::{ArcCandidates, HitLanes, MAX_HULL_POINTS, RayLanes, hull_candidates};
 pub use lanes::{Kernel, portable_forced};

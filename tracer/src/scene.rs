@@ -453,6 +453,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Glass bodies, referred to by `Material::Glass` walls.
     pub glass: Vec<GlassBody>,
+    /// How many segments given to [`Scene::new`] lay along others and were
+    /// merged with them (`docs/robustness.md`, rule 8).
+    pub(crate) merged: usize,
     /// For each wall, the index of the line light it also is.
     pub(crate) wall_light: Vec<Option<u32>>,
     /// For each light, the wall it sits on, which its shadow rays ignore:
@@ -505,6 +508,7 @@ impl Scene {
                 }
             }
         }
+        let (walls, merged) = resolve_overlaps(walls, &mut lights);
         let mut wall_light = vec![None; walls.len()];
         for (index, light) in lights.iter_mut().enumerate() {
             if let LightShape::Line { wall, .. } = &mut light.shape
@@ -536,6 +540,7 @@ impl Scene {
             walls,
             lights,
             glass,
+            merged,
             wall_light,
             light_wall,
             segments,
@@ -575,10 +580,218 @@ impl Scene {
             .is_some_and(|w| !matches!(w.material, Material::Transparent { .. }))
     }
 
+    /// How many of the walls the scene was built from lay along other
+    /// walls (on top of them, within rounding) and were merged with them
+    /// by rule 8 of `docs/robustness.md`: the walls' count is that many
+    /// fewer, or more where a wall was cut.
+    pub fn merged_walls(&self) -> usize {
+        self.merged
+    }
+
     /// The line light that wall `index` also is, if any.
     pub fn light_of_wall(&self, index: u32) -> Option<u32> {
         self.wall_light.get(index as usize).copied().flatten()
     }
+}
+
+/// Walls that lie on top of each other, made into walls that do not
+/// (`docs/robustness.md`, rule 8). Each group of walls that lie along one
+/// line and overlap (`flatray_geometry::overlap`; glass edges and emitting
+/// walls never move) has its line cut at every member's endpoint, and each
+/// piece becomes one wall:
+///
+/// - where an emitting wall lies, that wall, whole and unchanged (two
+///   emitting walls on one line are both kept);
+/// - else, where an opaque wall lies, the one a path sees: a mirror before
+///   a diffuse wall, and among those the darkest (its colour's components
+///   in order; a wall that takes the floor's colour after any colour of
+///   its own), then the least by coordinates;
+/// - else, where panes alone lie, one pane whose tint is the product of
+///   theirs: light crossing the line there passes all of them.
+///
+/// Consecutive pieces of one wall stay one segment, and a wall that keeps
+/// its whole extent keeps its segment exactly. The pieces come after every
+/// other wall, group by group in order of their coordinates and in order
+/// along the line within a group, and share the members' own endpoints, so no gap opens between them or at the walls
+/// that met the members' ends. The walls that come out do not depend on
+/// the order of the walls that went in. Returns them and how many walls
+/// were merged; the lights' wall indices are moved with their walls.
+fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize) {
+    let emitting: Vec<bool> = {
+        let mut emitting = vec![false; walls.len()];
+        for light in lights.iter() {
+            if let LightShape::Line { wall: Some(w), .. } = light.shape
+                && let Some(slot) = emitting.get_mut(w as usize)
+            {
+                *slot = true;
+            }
+        }
+        emitting
+    };
+    let segments: Vec<Segment> = walls.iter().map(|w| w.segment).collect();
+    let groups = flatray_geometry::overlap::overlap_groups(&segments, |i| {
+        !matches!(walls[i].material, Material::Glass { .. })
+    });
+    if groups.is_empty() {
+        return (walls, 0);
+    }
+    // The walls that the groups' pieces replace, and the pieces, a list
+    // per group.
+    let mut removed = vec![false; walls.len()];
+    let mut resolved: Vec<Vec<Wall>> = Vec::with_capacity(groups.len());
+    let mut merged = 0;
+    for group in &groups {
+        merged += group.iter().filter(|&&i| !emitting[i]).count();
+        let pieces = flatray_geometry::overlap::pieces(&segments, group);
+        let owners: Vec<Owner> = pieces
+            .cover
+            .iter()
+            .map(|cover| owner_of(&walls, &emitting, cover))
+            .collect();
+        let mut out = Vec::new();
+        let mut k = 0;
+        while k < owners.len() {
+            let mut end = k + 1;
+            while end < owners.len() && owners[end] == owners[k] {
+                end += 1;
+            }
+            let (p, q) = (pieces.points[k], pieces.points[end]);
+            match &owners[k] {
+                Owner::Emitting | Owner::Nobody => {}
+                &Owner::Wall(m) => {
+                    let forward = group
+                        .iter()
+                        .position(|&i| i == m)
+                        .is_none_or(|g| pieces.forward[g]);
+                    let segment = if forward {
+                        Segment::new(p, q)
+                    } else {
+                        Segment::new(q, p)
+                    };
+                    out.push(Wall {
+                        segment,
+                        material: walls[m].material,
+                    });
+                }
+                Owner::Panes(members) => {
+                    let mut tints: Vec<Rgb> = members
+                        .iter()
+                        .filter_map(|&m| match walls[m].material {
+                            Material::Transparent { tint } => Some(tint),
+                            _ => None,
+                        })
+                        .collect();
+                    tints.sort_by(|x, y| colour_order(*x, *y));
+                    let tint = tints.into_iter().fold(Rgb::ONE, |t, x| t * x);
+                    out.push(Wall {
+                        segment: Segment::new(p, q),
+                        material: Material::Transparent { tint },
+                    });
+                }
+            }
+            k = end;
+        }
+        for &i in group {
+            removed[i] |= !emitting[i];
+        }
+        resolved.push(out);
+    }
+    // The groups' walls after every other, by their first piece's
+    // coordinates: the same list wherever the members were listed.
+    let first_point = |g: &Vec<Wall>| g.first().map_or([0.0; 4], coordinates);
+    resolved.sort_by(|x, y| {
+        first_point(x)
+            .iter()
+            .zip(first_point(y))
+            .map(|(p, q)| p.total_cmp(&q))
+            .find(|o| o.is_ne())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    let mut new_index = vec![u32::MAX; walls.len()];
+    let mut out = Vec::with_capacity(walls.len());
+    for (i, wall) in walls.into_iter().enumerate() {
+        if !removed[i] {
+            new_index[i] = out.len() as u32;
+            out.push(wall);
+        }
+    }
+    out.extend(resolved.into_iter().flatten());
+    for light in lights.iter_mut() {
+        if let LightShape::Line { wall, .. } = &mut light.shape
+            && let Some(w) = *wall
+        {
+            // An emitting wall is never replaced; an index out of range
+            // stays out of range, and is treated as not solid.
+            *wall = match new_index.get(w as usize) {
+                Some(&n) if n != u32::MAX => Some(n),
+                _ => Some(u32::MAX),
+            };
+        }
+    }
+    (out, merged)
+}
+
+/// What one piece of a line that several walls lie on becomes.
+#[derive(Clone, Debug, PartialEq)]
+enum Owner {
+    /// An emitting wall lies there: it stays as it is, and no other wall.
+    Emitting,
+    /// One wall's material, that wall's.
+    Wall(usize),
+    /// Only panes: one pane of all their tints.
+    Panes(Vec<usize>),
+    /// No wall (a sliver between two ends that are not the same point).
+    Nobody,
+}
+
+fn owner_of(walls: &[Wall], emitting: &[bool], cover: &[usize]) -> Owner {
+    if cover.iter().any(|&i| emitting[i]) {
+        return Owner::Emitting;
+    }
+    let opaque = cover
+        .iter()
+        .copied()
+        .filter(|&i| !matches!(walls[i].material, Material::Transparent { .. }))
+        .min_by(|&x, &y| seen_order(&walls[x], &walls[y]));
+    match (opaque, cover) {
+        (Some(i), _) => Owner::Wall(i),
+        (None, []) => Owner::Nobody,
+        (None, [one]) => Owner::Wall(*one),
+        (None, many) => Owner::Panes(many.to_vec()),
+    }
+}
+
+/// Which of two opaque walls on one line a path sees: a mirror before a
+/// diffuse wall, the darker before the brighter, a wall of its own colour
+/// before one of the floor's, then by coordinates.
+fn seen_order(x: &Wall, y: &Wall) -> std::cmp::Ordering {
+    let rank = |w: &Wall| match w.material {
+        Material::Mirror { tint } => (0, tint),
+        Material::Diffuse { albedo: Some(c) } => (1, c),
+        Material::Diffuse { albedo: None } => (2, Rgb::ZERO),
+        // Neither panes nor glass reach here.
+        Material::Transparent { tint } => (3, tint),
+        Material::Glass { .. } => (4, Rgb::ZERO),
+    };
+    let ((cx, tx), (cy, ty)) = (rank(x), rank(y));
+    cx.cmp(&cy).then(colour_order(tx, ty)).then_with(|| {
+        coordinates(x)
+            .iter()
+            .zip(coordinates(y))
+            .map(|(p, q)| p.total_cmp(&q))
+            .find(|o| o.is_ne())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    })
+}
+
+fn coordinates(w: &Wall) -> [f64; 4] {
+    [w.segment.a.x, w.segment.a.y, w.segment.b.x, w.segment.b.y]
+}
+
+fn colour_order(x: Rgb, y: Rgb) -> std::cmp::Ordering {
+    x.x.total_cmp(&y.x)
+        .then(x.y.total_cmp(&y.y))
+        .then(x.z.total_cmp(&y.z))
 }
 
 /// Whether `p` lies on `segment` to within the rounding of the numbers
