@@ -388,7 +388,7 @@ where
     let mut out = Checked::new(out);
     let result = match cli.command {
         Command::Render(args) => render(args, &mut out, err),
-        Command::Check { scene } => check(&scene, &mut out),
+        Command::Check { scene } => check(&scene, &mut out, err),
         Command::Plan {
             scene,
             bounces,
@@ -403,7 +403,7 @@ where
             (cache, caustics, lights),
             integrator,
             verbose,
-            &mut out,
+            (&mut out, err),
         ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
@@ -555,8 +555,23 @@ fn hint(message: &str, source: &str) -> Option<&'static str> {
     None
 }
 
-fn check(scene: &Path, out: &mut dyn Write) -> Result<(), Failure> {
+/// Prints a loaded scene's warnings, each with its location.
+fn warn(scene: &Path, loaded: &Loaded, err: &mut dyn Write) {
+    for w in &loaded.warnings {
+        let _ = writeln!(
+            err,
+            "{}:{}:{}: warning: {}",
+            scene.display(),
+            w.line,
+            w.column,
+            w.message
+        );
+    }
+}
+
+fn check(scene: &Path, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {
     let loaded = load(scene)?;
+    warn(scene, &loaded, err);
     let counts = loaded.counts;
     let emitting = if counts.emitting_walls > 0 {
         format!(" ({} emitting)", counts.emitting_walls)
@@ -582,9 +597,10 @@ fn plan(
     (cache, caustics, lights): (Option<CacheArg>, Option<Switch>, LightsArg),
     integrator: Option<IntegratorArg>,
     verbose: bool,
-    out: &mut dyn Write,
+    (out, err): (&mut dyn Write, &mut dyn Write),
 ) -> Result<(), Failure> {
     let loaded = load(scene)?;
+    warn(scene, &loaded, err);
     let options = RenderOptions {
         bounces: bounces.unwrap_or(loaded.options.bounces),
         integrator: integrator.map_or(loaded.options.integrator, IntegratorArg::integrator),
@@ -630,6 +646,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     }
 
     let loaded = load(&args.scene)?;
+    warn(&args.scene, &loaded, err);
     check_output(&output, &loaded.inputs)?;
     let options = RenderOptions {
         samples: args.spp.unwrap_or(loaded.options.samples),
@@ -826,6 +843,9 @@ fn import(args: ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
         flatray_io::write_bytes(&floor, bytes).map_err(Failure::other)?;
     }
     flatray_io::write_text(&output, &imported.to_ron()).map_err(Failure::other)?;
+    for note in &imported.notes {
+        let _ = writeln!(err, "note: {note}");
+    }
     for warning in &imported.warnings {
         let _ = writeln!(err, "warning: not imported: {warning}");
     }

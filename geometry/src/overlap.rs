@@ -18,6 +18,36 @@ use crate::{DVec2, Segment, cross};
 /// magnitude), and far below anything drawn on purpose.
 pub const ALONG_TOLERANCE: f64 = 1e-9;
 
+/// How near a segment must lie to another's line to lie on it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tolerance {
+    /// [`ALONG_TOLERANCE`] of the coordinates' magnitude: the rule for
+    /// walls in a scene (`docs/robustness.md`, rule 8).
+    Rounding,
+    /// At most this distance, or the rounding's if that is larger: for
+    /// plans drawn by hand or exported in single precision.
+    Distance(f64),
+}
+
+impl Tolerance {
+    fn between(self, a: &Segment, b: &Segment) -> f64 {
+        let rounding = tolerance(a, b);
+        match self {
+            Tolerance::Rounding => rounding,
+            Tolerance::Distance(d) => rounding.max(d),
+        }
+    }
+
+    /// The most it can be among segments of coordinates up to `magnitude`.
+    fn at_most(self, magnitude: f64) -> f64 {
+        let rounding = ALONG_TOLERANCE * magnitude.max(f64::MIN_POSITIVE);
+        match self {
+            Tolerance::Rounding => rounding,
+            Tolerance::Distance(d) => rounding.max(d),
+        }
+    }
+}
+
 /// The distance within which two points of segments `a` and `b` count as
 /// one: [`ALONG_TOLERANCE`] of the largest coordinate or length.
 fn tolerance(a: &Segment, b: &Segment) -> f64 {
@@ -32,15 +62,15 @@ fn tolerance(a: &Segment, b: &Segment) -> f64 {
     ALONG_TOLERANCE * magnitude.max(f64::MIN_POSITIVE)
 }
 
-/// Whether both ends of `other` lie within [`ALONG_TOLERANCE`] of the line
-/// through `host` (a segment of positive length).
-pub fn lies_along(host: &Segment, other: &Segment) -> bool {
+/// Whether both ends of `other` lie within `tolerance` of the line through
+/// `host` (a segment of positive length).
+pub fn lies_along(host: &Segment, other: &Segment, tolerance: Tolerance) -> bool {
     let e = host.edge();
     let length = e.length();
     if length.is_nan() || length <= 0.0 {
         return false;
     }
-    let tol = tolerance(host, other);
+    let tol = tolerance.between(host, other);
     [other.a, other.b]
         .iter()
         .all(|&p| (cross(e, p - host.a) / length).abs() <= tol)
@@ -48,7 +78,7 @@ pub fn lies_along(host: &Segment, other: &Segment) -> bool {
 
 /// Whether `a` and `b` lie on one line and share a stretch of it longer
 /// than the tolerance. Symmetric in its arguments.
-pub fn overlap(a: &Segment, b: &Segment) -> bool {
+pub fn overlap(a: &Segment, b: &Segment, tolerance: Tolerance) -> bool {
     // The longer is the host (ties by coordinates, so the answer does not
     // depend on the order of the arguments).
     let (host, other) = if (a.length(), key(a)) >= (b.length(), key(b)) {
@@ -56,7 +86,7 @@ pub fn overlap(a: &Segment, b: &Segment) -> bool {
     } else {
         (b, a)
     };
-    if !lies_along(host, other) {
+    if !lies_along(host, other, tolerance) {
         return false;
     }
     let e = host.edge();
@@ -64,7 +94,7 @@ pub fn overlap(a: &Segment, b: &Segment) -> bool {
     let along = |p: DVec2| (p - host.a).dot(e) / length;
     let (s0, s1) = (along(other.a), along(other.b));
     let shared = s0.max(s1).min(length) - s0.min(s1).max(0.0);
-    shared > tolerance(host, other)
+    shared > tolerance.between(host, other)
 }
 
 /// A segment's endpoints as a tuple that orders segments by coordinates.
@@ -84,10 +114,12 @@ fn canonical_direction(s: &Segment) -> DVec2 {
 }
 
 /// Width of the buckets of directions in which candidates are sought: two
-/// segments that overlap differ in direction by far less.
+/// segments that overlap within [`Tolerance::Rounding`] differ in
+/// direction by far less.
 const BUCKET: f64 = 1e-4;
 
-/// The groups of segments that overlap, each of at least two, connected
+/// The groups of segments that overlap within [`Tolerance::Rounding`],
+/// each of at least two, connected
 /// by overlaps (if `a` overlaps `b` and `b` overlaps `c`, all three are one
 /// group). Only the segments that `eligible` keeps take part. Members are
 /// in increasing index order and groups by their first member, whatever
@@ -98,6 +130,7 @@ const BUCKET: f64 = 1e-4;
 /// by the extent along the line, so a plan of many walls end to end costs
 /// about `n log n`.
 pub fn overlap_groups(segments: &[Segment], eligible: impl Fn(usize) -> bool) -> Vec<Vec<usize>> {
+    let tolerance = Tolerance::Rounding;
     let magnitude = segments
         .iter()
         .map(|s| s.a.abs().max(s.b.abs()).max_element().max(s.length()))
@@ -107,12 +140,17 @@ pub fn overlap_groups(segments: &[Segment], eligible: impl Fn(usize) -> bool) ->
     }
     // Two points of one line differ in offset by at most their distance
     // off it, twice the tolerance, plus the direction's rounding.
-    let window = 8.0 * ALONG_TOLERANCE * magnitude.max(f64::MIN_POSITIVE);
+    let window = 8.0 * tolerance.at_most(magnitude);
     // (bucket, offset, index, direction): every segment once, and those
     // within a bucket of the direction's wrap at pi once more, flipped.
     let mut entries: Vec<(i64, f64, usize, DVec2)> = Vec::new();
     for (i, s) in segments.iter().enumerate() {
-        if !eligible(i) || s.length().is_nan() || s.length() <= 0.0 || !s.a.is_finite() || !s.b.is_finite() {
+        if !eligible(i)
+            || s.length().is_nan()
+            || s.length() <= 0.0
+            || !s.a.is_finite()
+            || !s.b.is_finite()
+        {
             continue;
         }
         let d = canonical_direction(s);
@@ -145,7 +183,7 @@ pub fn overlap_groups(segments: &[Segment], eligible: impl Fn(usize) -> bool) ->
                 c1 += 1;
             }
             if c1 - c0 > 1 {
-                join_cluster(segments, &pool[c0..c1], window, &mut parent);
+                join_cluster(segments, &pool[c0..c1], (tolerance, window), &mut parent);
             }
             c0 = c1;
         }
@@ -166,7 +204,7 @@ pub fn overlap_groups(segments: &[Segment], eligible: impl Fn(usize) -> bool) ->
 fn join_cluster(
     segments: &[Segment],
     cluster: &[(f64, usize, DVec2)],
-    window: f64,
+    (tolerance, window): (Tolerance, f64),
     parent: &mut [usize],
 ) {
     let d = cluster[0].2;
@@ -183,7 +221,7 @@ fn join_cluster(
     for &(lo, hi, i) in &spans {
         active.retain(|&(end, _)| end > lo - window);
         for &(_, j) in &active {
-            if j != i && overlap(&segments[i], &segments[j]) {
+            if j != i && overlap(&segments[i], &segments[j], tolerance) {
                 let (ri, rj) = (find(parent, i), find(parent, j));
                 if ri != rj {
                     parent[ri.max(rj)] = ri.min(rj);
@@ -297,23 +335,29 @@ mod tests {
 
     #[test]
     fn duplicates_parts_and_reversed_copies_overlap_and_chains_do_not() {
+        let on = |a: &Segment, b: &Segment| overlap(a, b, Tolerance::Rounding);
         let wall = seg((0.0, 0.0), (10.0, 0.0));
-        assert!(overlap(&wall, &wall));
-        assert!(overlap(&wall, &seg((10.0, 0.0), (0.0, 0.0))));
-        assert!(overlap(&wall, &seg((3.0, 0.0), (6.0, 0.0))));
-        assert!(overlap(&seg((6.0, 0.0), (3.0, 0.0)), &wall));
-        assert!(overlap(&wall, &seg((8.0, 0.0), (12.0, 0.0))));
+        assert!(on(&wall, &wall));
+        assert!(on(&wall, &seg((10.0, 0.0), (0.0, 0.0))));
+        assert!(on(&wall, &seg((3.0, 0.0), (6.0, 0.0))));
+        assert!(on(&seg((6.0, 0.0), (3.0, 0.0)), &wall));
+        assert!(on(&wall, &seg((8.0, 0.0), (12.0, 0.0))));
         // End to end, apart, parallel and near, crossing: not on one line.
-        assert!(!overlap(&wall, &seg((10.0, 0.0), (20.0, 0.0))));
-        assert!(!overlap(&wall, &seg((11.0, 0.0), (20.0, 0.0))));
-        assert!(!overlap(&wall, &seg((2.0, 1e-6), (8.0, 1e-6))));
-        assert!(!overlap(&wall, &seg((2.0, -1.0), (8.0, 1.0))));
+        assert!(!on(&wall, &seg((10.0, 0.0), (20.0, 0.0))));
+        assert!(!on(&wall, &seg((11.0, 0.0), (20.0, 0.0))));
+        assert!(!on(&wall, &seg((2.0, 1e-6), (8.0, 1e-6))));
+        assert!(!on(&wall, &seg((2.0, -1.0), (8.0, 1.0))));
         // Within rounding of the line, turned: on it.
         let (s, c) = 0.3f64.sin_cos();
         let turn = |x: f64| DVec2::new(100.0 + c * x, 50.0 + s * x);
         let long = Segment::new(turn(0.0), turn(40.0));
         let part = Segment::new(turn(12.5), turn(27.25));
-        assert!(overlap(&long, &part) && overlap(&part, &long));
+        assert!(on(&long, &part) && on(&part, &long));
+        // Within a distance: a hand-drawn window a little off the wall.
+        let near = seg((2.0, 0.3), (8.0, -0.2));
+        assert!(!on(&wall, &near));
+        assert!(overlap(&wall, &near, Tolerance::Distance(0.5)));
+        assert!(!overlap(&wall, &near, Tolerance::Distance(0.25)));
     }
 
     #[test]

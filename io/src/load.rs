@@ -29,6 +29,17 @@ pub struct Loaded {
     pub inputs: Vec<PathBuf>,
     /// What the file lists, as it lists it.
     pub counts: Counts,
+    /// What makes the scene render otherwise than it reads, without being
+    /// an error, each with its location.
+    pub warnings: Vec<Warning>,
+}
+
+/// A warning about a scene that loads: where, and what.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Warning {
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
 }
 
 /// What a scene file lists: its walls (of which some emit), its lights
@@ -328,11 +339,14 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         }
         for i in 0..points.len() {
             let edge = Segment::new(points[i], points[(i + 1) % points.len()]);
+            // Along a wall, by the rule for walls that overlap (rule 8),
+            // which glass edges take no part in.
             let along = |w: &Wall| {
-                let s = w.segment;
-                edge.side_value(s.a) == 0.0
-                    && edge.side_value(s.b) == 0.0
-                    && segments_meet(&edge, &s)
+                flatray_geometry::overlap::overlap(
+                    &edge,
+                    &w.segment,
+                    flatray_geometry::overlap::Tolerance::Rounding,
+                )
             };
             if let Some(w) = walls.iter().position(along) {
                 return Err(located(format!(
@@ -367,6 +381,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         polygons.push(points);
     }
 
+    let warnings = overlap_warnings(text, &walls, file.walls.len());
     let scene = Scene::with_glass(canvas, floor, file.small_radius.0, walls, lights, bodies);
     let options = RenderOptions {
         samples: file.render.samples.0,
@@ -401,7 +416,55 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             lights: file.lights.len(),
             glass: file.glass.len(),
         },
+        warnings,
     })
+}
+
+/// A warning for each wall of the file (the first `listed` walls) that lies
+/// on top of an earlier one: the two are resolved into walls that do not
+/// overlap (`docs/robustness.md`, rule 8), which may not be what was meant.
+fn overlap_warnings(text: &str, walls: &[Wall], listed: usize) -> Vec<Warning> {
+    let segments: Vec<Segment> = walls.iter().map(|w| w.segment).collect();
+    let groups = flatray_geometry::overlap::overlap_groups(&segments, |i| i < listed);
+    if groups.is_empty() {
+        return Vec::new();
+    }
+    let items = locate::list_items(text, "walls");
+    let kind = |w: &Wall| match w.material {
+        Material::Diffuse { .. } => "wall",
+        Material::Mirror { .. } => "mirror",
+        Material::Transparent { .. } => "pane",
+        Material::Glass { .. } => "glass edge",
+    };
+    let same = |x: &Wall, y: &Wall| {
+        let (p, q) = (x.segment, y.segment);
+        x.material == y.material && ((p.a == q.a && p.b == q.b) || (p.a == q.b && p.b == q.a))
+    };
+    let mut out = Vec::new();
+    for group in groups {
+        let first = group[0];
+        for &i in &group[1..] {
+            let (line, column) = locate::position(text, items.get(i).copied().unwrap_or(0));
+            let what = match (kind(&walls[i]), kind(&walls[first])) {
+                ("pane", "wall" | "mirror") | ("wall" | "mirror", "pane") => {
+                    ": the pane lets no light through there; to put a window in a wall, end the wall at the window's ends"
+                }
+                ("mirror", "wall") | ("wall", "mirror") => ": the mirror is what light meets there",
+                ("wall", "wall") if same(&walls[i], &walls[first]) => ": it is the same wall twice",
+                _ => "",
+            };
+            out.push(Warning {
+                line,
+                column,
+                message: format!(
+                    "{} {i} lies on top of {} {first} (counting walls from 0), and the two are made one by the rule for walls that overlap (docs/robustness.md, rule 8){what}",
+                    kind(&walls[i]),
+                    kind(&walls[first]),
+                ),
+            });
+        }
+    }
+    out
 }
 
 /// A closed polygon of at least three points whose edges have length and

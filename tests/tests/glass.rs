@@ -196,6 +196,12 @@ fn bad_glass_is_refused_with_a_location() {
             "Scene(canvas: (10, 10), floor: Color((1, 1, 1)), walls: [Wall(a: (0, 1), b: (9, 1))],\n glass: [Glass(points: [(1, 1), (5, 1), (3, 4)])])",
             "lies along wall 0",
         ),
+        (
+            // Along a tilted wall, off its line by the rounding of the
+            // decimals only.
+            "Scene(canvas: (10, 10), floor: Color((1, 1, 1)), walls: [Wall(a: (1, 1), b: (8, 4))],\n glass: [Glass(points: [(2.4, 1.6), (5.2, 2.8), (3, 5)])])",
+            "lies along wall 0",
+        ),
     ] {
         let path = dir.write("bad.ron", text);
         let run = flatray(&["check", path.to_str().unwrap()]);

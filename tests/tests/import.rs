@@ -43,8 +43,11 @@ fn an_inkscape_svg_imports_with_units_transforms_and_marks() {
     assert_eq!(plan.canvas, (756, 567));
     let mm = 96.0 / 25.4;
     let p = |x: f64, y: f64| DVec2::new(x * mm, y * mm);
-    // The rectangle, in a layer translated by (10, 10), with its colour.
-    let kind = has_wall(&plan, p(10.0, 10.0), p(190.0, 10.0));
+    // The rectangle, in a layer translated by (10, 10), with its colour;
+    // its top edge cut where the window lies on it.
+    assert!(has_wall(&plan, p(10.0, 10.0), p(190.0, 10.0)).is_none());
+    assert!(has_wall(&plan, p(10.0, 10.0), p(40.0, 10.0)).is_some());
+    let kind = has_wall(&plan, p(80.0, 10.0), p(190.0, 10.0));
     assert!(
         matches!(kind, Some(WallKind::Diffuse(Some(c))) if (c[0] - 0.6867).abs() < 1e-3),
         "{kind:?}"
@@ -343,7 +346,13 @@ fn the_command_line_imports_and_renders_and_refuses_bad_plans() {
         out.to_str().unwrap_or_default(),
     ]);
     assert_eq!(run.code, 0, "{run:?}");
-    assert!(run.stdout.contains("17 walls"), "{run:?}");
+    assert!(run.stdout.contains("18 walls"), "{run:?}");
+    assert!(
+        run.stderr.contains(
+            "note: the window line7 lies on the wall rect1: the wall is cut there and the window put in the gap"
+        ),
+        "{run:?}"
+    );
     assert!(
         run.stderr
             .contains("warning: not imported: 1 <text> element"),
@@ -465,4 +474,120 @@ fn an_svg_bitmap_becomes_the_floor_when_asked() {
         out.to_str().unwrap_or_default(),
     ]);
     assert!(run.stderr.contains("<image>"), "{run:?}");
+}
+
+/// A window or door drawn on a wall's line opens the wall: the wall is
+/// cut at its ends (a window stays in the gap, a door leaves it open),
+/// whichever way either runs, at any angle; a door on no wall is no wall.
+#[test]
+fn windows_and_doors_drawn_on_a_wall_cut_it() {
+    let dir = TempDir::new("import-openings");
+    let (s, c) = 0.37f64.sin_cos();
+    let turn = |x: f64, y: f64| (200.0 + c * x - s * y, 150.0 + s * x + c * y);
+    let line = |id: &str, a: (f64, f64), b: (f64, f64)| {
+        let (p, q) = (turn(a.0, a.1), turn(b.0, b.1));
+        format!(
+            r#"<line id="{id}" x1="{}" y1="{}" x2="{}" y2="{}" style="stroke:#ffffff"/>"#,
+            p.0, p.1, q.0, q.1
+        )
+    };
+    let svg = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="400" height="300">{}{}{}{}</svg>"#,
+        line("wall-a", (-100.0, 0.0), (100.0, 0.0)),
+        line("window-1", (50.0, 0.0), (-20.0, 0.0)),
+        line("door-1", (60.0, 0.0), (80.0, 0.0)),
+        line("door-2", (-100.0, 50.0), (-80.0, 50.0)),
+    );
+    let path = dir.write("plan.svg", &svg);
+    let plan = imported(&path, &ImportOptions::default());
+    let point = |x: f64| {
+        let (px, py) = turn(x, 0.0);
+        DVec2::new(px, py)
+    };
+    let walls: Vec<(f64, f64, WallKind)> = plan
+        .walls
+        .iter()
+        .map(|w| {
+            let along = |p: DVec2| (p - point(0.0)).dot(point(1.0) - point(0.0));
+            (along(w.a), along(w.b), w.kind)
+        })
+        .collect();
+    let diffuse: Vec<(f64, f64)> = walls
+        .iter()
+        .filter(|w| matches!(w.2, WallKind::Diffuse(_)))
+        .map(|w| (w.0, w.1))
+        .collect();
+    // usvg computes in single precision.
+    let close = |x: f64, y: f64| (x - y).abs() < 1e-4;
+    assert_eq!(diffuse.len(), 3, "{walls:?}");
+    for (k, (a, b)) in [(-100.0, -20.0), (50.0, 60.0), (80.0, 100.0)]
+        .iter()
+        .enumerate()
+    {
+        assert!(
+            close(diffuse[k].0, *a) && close(diffuse[k].1, *b),
+            "{walls:?}"
+        );
+    }
+    assert_eq!(
+        walls
+            .iter()
+            .filter(|w| matches!(w.2, WallKind::Pane(_)))
+            .count(),
+        1
+    );
+    assert_eq!(plan.notes.len(), 2, "{:?}", plan.notes);
+    assert!(
+        plan.warnings
+            .iter()
+            .any(|w| w.contains("door-2: a door lies on no wall")),
+        "{:?}",
+        plan.warnings
+    );
+    // The written scene has nothing lying on anything.
+    assert!(scene_of(&plan).warnings.is_empty());
+}
+
+/// The imported flat is dark outside but for the light its window lets
+/// out: every pixel more than 2 px beyond its outer walls, beside and
+/// below it, is exactly 0 (its window, in the top wall, lights only what
+/// lies above that wall's line), at 0 to 3 bounces.
+#[test]
+fn the_imported_flat_is_dark_outside_but_through_its_window() {
+    let plan = imported(&fixture("flat.svg"), &ImportOptions::default());
+    let loaded = scene_of(&plan);
+    let mm = 96.0 / 25.4;
+    for bounces in [0, 1, 3] {
+        let image = render(
+            &loaded.scene,
+            &RenderOptions {
+                samples: 4,
+                bounces,
+                scale: 0.25,
+                ..loaded.options
+            },
+        )
+        .image;
+        let world = |x: u32, y: u32| DVec2::new(x as f64 + 0.5, y as f64 + 0.5) * 4.0 / mm;
+        let (mut outside, mut above) = (0, 0.0);
+        for y in 0..image.height {
+            for x in 0..image.width {
+                let p = world(x, y);
+                let v = image.get(x, y);
+                // Two pixels, in millimetres.
+                let m = 2.0 * 4.0 / mm;
+                let beside = p.y > 10.0 && (p.x < 10.0 - m || p.x > 190.0 + m);
+                if beside || p.y > 140.0 + m {
+                    outside += 1;
+                    assert_eq!(v, [0.0; 3], "D = {bounces}: light outside at ({x}, {y})");
+                } else if p.y < 10.0 - m {
+                    above += v[0] as f64;
+                }
+            }
+        }
+        assert!(outside > 500, "{outside}");
+        if bounces > 0 {
+            assert!(above > 0.0, "D = {bounces}: no light through the window");
+        }
+    }
 }

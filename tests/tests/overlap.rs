@@ -276,3 +276,49 @@ fn the_image_does_not_depend_on_the_order_of_the_walls() {
         }
     }
 }
+
+/// `flatray check` warns, with the location, about each wall that lies on
+/// another, and about none in the example scenes.
+#[test]
+fn check_warns_about_walls_lying_on_walls() {
+    let dir = flatray_tests::TempDir::new("overlap-check");
+    let path = dir.write(
+        "dup.ron",
+        "Scene(canvas: (60, 60), floor: Color((1, 1, 1)), walls: [
+  Wall(a: (10, 10), b: (50, 10)), Wall(a: (50, 10), b: (50, 50)), Wall(a: (50, 50), b: (10, 50)),
+  Wall(a: (10, 50), b: (10, 10)),
+  Wall(a: (20, 10), b: (30, 10), material: Transparent()),
+  Wall(a: (50, 20), b: (50, 40), material: Mirror()),
+  Wall(a: (10, 50), b: (50, 50)),
+], lights: [Point(at: (30, 30), intensity: 10)])",
+    );
+    let run = flatray_tests::flatray(&["check", path.to_str().unwrap_or_default()]);
+    assert_eq!(run.code, 0, "{run:?}");
+    for expected in [
+        "dup.ron:4:3: warning: pane 4 lies on top of wall 0",
+        "the pane lets no light through there",
+        "dup.ron:5:3: warning: mirror 5 lies on top of wall 1",
+        "dup.ron:6:3: warning: wall 6 lies on top of wall 2",
+        "it is the same wall twice",
+    ] {
+        assert!(run.stderr.contains(expected), "{expected}\n{}", run.stderr);
+    }
+    assert_eq!(run.stderr.lines().count(), 3, "{}", run.stderr);
+    let scenes = flatray_tests::workspace_root().join("scenes");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&scenes).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.extension().is_some_and(|e| e == "ron") {
+            let run = flatray_tests::flatray(&["check", path.to_str().unwrap_or_default()]);
+            assert_eq!(run.code, 0, "{run:?}");
+            assert!(
+                !run.stderr.contains("warning"),
+                "{}: {}",
+                path.display(),
+                run.stderr
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 8, "{checked} scenes");
+}

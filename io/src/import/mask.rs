@@ -97,6 +97,7 @@ pub(super) fn read(
         lights,
         glass: Vec::new(),
         warnings: Vec::new(),
+        notes: Vec::new(),
         floor_file: None,
     })
 }

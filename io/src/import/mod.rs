@@ -67,6 +67,9 @@ pub enum WallKind {
     Mirror,
     /// A transparent pane with its tint (linear).
     Pane([f64; 3]),
+    /// A door: drawn on a wall's line, an opening cut in the wall; it
+    /// becomes no wall of its own.
+    Door,
 }
 
 /// One imported wall.
@@ -129,6 +132,9 @@ pub struct Imported {
     pub glass: Vec<ImportedGlass>,
     /// What was in the plan and was not imported, one line each.
     pub warnings: Vec<String>,
+    /// What the import changed to make the plan mean what its drawer
+    /// meant, one line each: walls cut where a window or door lies on them.
+    pub notes: Vec<String>,
     /// A bitmap to write beside the scene for the floor: its file name
     /// (as `floor` names it) and bytes.
     pub floor_file: Option<(String, Vec<u8>)>,
@@ -199,6 +205,7 @@ pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportEr
         }
     };
     imported.source = path.display().to_string();
+    cut_openings(&mut imported, options.tolerance * options.scale);
     let (w, h) = imported.canvas;
     if w > crate::format::MAX_CANVAS_SIDE
         || h > crate::format::MAX_CANVAS_SIDE
@@ -234,6 +241,101 @@ pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportEr
             .push("the plan has no walls, lights or glass that flatray imports".to_string());
     }
     Ok(imported)
+}
+
+/// At most this many (opening, wall) pairs are compared by
+/// [`cut_openings`].
+const OPENING_PAIRS_BUDGET: usize = 1 << 26;
+
+/// Windows and doors drawn on a wall's line are what plan drawers mean by
+/// an opening: each wall that a window or door lies along (within
+/// `tolerance`, in world units) is cut there; a window stays in the gap,
+/// and a door leaves it open. Emitting walls are not cut. A door that lies
+/// on no wall is dropped with a warning. Each cut is noted.
+fn cut_openings(imported: &mut Imported, tolerance: f64) {
+    use flatray_geometry::{Segment, overlap};
+    let walls = std::mem::take(&mut imported.walls);
+    let segments: Vec<Segment> = walls.iter().map(|w| Segment::new(w.a, w.b)).collect();
+    let is_opening = |w: &ImportedWall| matches!(w.kind, WallKind::Pane(_) | WallKind::Door);
+    let openings: Vec<usize> = (0..walls.len())
+        .filter(|&i| is_opening(&walls[i]))
+        .collect();
+    // Each opening against each wall: a plan has few openings. Past the
+    // budget nothing is cut (the renderer's rule for walls that overlap
+    // still applies).
+    if openings.len().saturating_mul(walls.len()) > OPENING_PAIRS_BUDGET {
+        imported.warnings.push(format!(
+            "{} windows and doors against {} walls is more than the import compares: no wall was cut for them",
+            openings.len(),
+            walls.len()
+        ));
+        imported.walls = walls;
+        return;
+    }
+    let tolerance = overlap::Tolerance::Distance(tolerance);
+    let mut cut: Vec<Option<Vec<ImportedWall>>> = vec![None; walls.len()];
+    let mut on_a_wall = vec![false; walls.len()];
+    for host in 0..walls.len() {
+        if is_opening(&walls[host]) || walls[host].emit.is_some() {
+            continue;
+        }
+        let on_it: Vec<usize> = openings
+            .iter()
+            .copied()
+            .filter(|&o| overlap::overlap(&segments[host], &segments[o], tolerance))
+            .collect();
+        if on_it.is_empty() {
+            continue;
+        }
+        let group: Vec<usize> = std::iter::once(host).chain(on_it.iter().copied()).collect();
+        let pieces = overlap::pieces(&segments, &group);
+        // The host is the group's first member.
+        let forward = pieces.forward[0];
+        let mut kept: Vec<ImportedWall> = Vec::new();
+        for (k, cover) in pieces.cover.iter().enumerate() {
+            if !cover.contains(&host) || cover.iter().any(|&i| i != host) {
+                continue;
+            }
+            let (p, q) = (pieces.points[k], pieces.points[k + 1]);
+            // Consecutive kept pieces join into one wall.
+            match kept.last_mut() {
+                Some(last) if forward && last.b == p => last.b = q,
+                Some(last) if !forward && last.a == p => last.a = q,
+                _ => kept.push(ImportedWall {
+                    a: if forward { p } else { q },
+                    b: if forward { q } else { p },
+                    ..walls[host].clone()
+                }),
+            }
+        }
+        for &o in &on_it {
+            on_a_wall[o] = true;
+            let (what, gap) = if walls[o].kind == WallKind::Door {
+                ("door", ", an opening")
+            } else {
+                ("window", " and the window put in the gap")
+            };
+            imported.notes.push(format!(
+                "the {what} {} lies on the wall {}: the wall is cut there{gap}",
+                walls[o].source, walls[host].source
+            ));
+        }
+        cut[host] = Some(kept);
+    }
+    for (i, (wall, replacement)) in walls.into_iter().zip(cut).enumerate() {
+        match replacement {
+            Some(pieces) => imported.walls.extend(pieces),
+            None if wall.kind == WallKind::Door => {
+                if !on_a_wall[i] {
+                    imported.warnings.push(format!(
+                        "{}: a door lies on no wall (a door is an opening cut in the wall it is drawn on)",
+                        wall.source
+                    ));
+                }
+            }
+            None => imported.walls.push(wall),
+        }
+    }
 }
 
 pub(crate) fn invalid(
@@ -392,6 +494,9 @@ impl Imported {
             self.lights.len(),
             self.glass.len()
         ));
+        for note in &self.notes {
+            out.push_str(&format!("// Cut: {}\n", comment(note)));
+        }
         for warning in &self.warnings {
             out.push_str(&format!("// Not imported: {}\n", comment(warning)));
         }
@@ -415,6 +520,8 @@ impl Imported {
                 }
                 WallKind::Mirror => ", material: Mirror()".to_string(),
                 WallKind::Pane(tint) => format!(", material: Transparent(tint: {})", color(tint)),
+                // Doors were cut into their walls, and are no walls.
+                WallKind::Door => continue,
             };
             let emit = wall.emit.map_or(String::new(), |(c, i)| {
                 format!(", emit: (color: {}, intensity: {})", color(c), number(i))

@@ -19,6 +19,7 @@ enum Mark {
     Wall,
     Mirror,
     Pane,
+    Door,
     Glass,
     Lamp,
     Light,
@@ -33,6 +34,7 @@ fn mark_of(id: &str) -> Option<Mark> {
         ("mirror", Mark::Mirror),
         ("pane", Mark::Pane),
         ("window", Mark::Pane),
+        ("door", Mark::Door),
         ("glass", Mark::Glass),
         ("lamp", Mark::Lamp),
         ("light", Mark::Light),
@@ -142,6 +144,7 @@ pub(super) fn read(
             lights: Vec::new(),
             glass: Vec::new(),
             warnings: unsupported(&text, options.floor_image),
+            notes: Vec::new(),
             floor_file: None,
         },
         stem: path
@@ -361,9 +364,10 @@ impl Reader<'_> {
                     }
                 }
             }
-            Mark::Wall | Mark::Mirror | Mark::Pane | Mark::Emit => {
+            Mark::Wall | Mark::Mirror | Mark::Pane | Mark::Door | Mark::Emit => {
                 let kind = match mark {
                     Mark::Mirror => WallKind::Mirror,
+                    Mark::Door => WallKind::Door,
                     Mark::Pane => WallKind::Pane(colour.unwrap_or([1.0; 3])),
                     _ => WallKind::Diffuse(colour),
                 };

@@ -480,6 +480,7 @@ fn build(
             let kind = match material.as_str() {
                 "mirror" => WallKind::Mirror,
                 "pane" | "transparent" | "window" => WallKind::Pane(colour.unwrap_or([1.0; 3])),
+                "door" | "opening" => WallKind::Door,
                 "diffuse" | "" => WallKind::Diffuse(colour),
                 other => {
                     warnings.push(format!(
@@ -528,6 +529,7 @@ fn build(
         lights,
         glass,
         warnings,
+        notes: Vec::new(),
         floor_file: None,
     })
 }
