@@ -217,18 +217,28 @@ fn join_cluster(
         })
         .collect();
     spans.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.2.cmp(&y.2)));
+    // The extents still open, one per group among them (the one reaching
+    // farthest): a segment that overlaps a group's member lies along the
+    // group's line and starts within its farthest member's extent.
     let mut active: Vec<(f64, usize)> = Vec::new();
     for &(lo, hi, i) in &spans {
         active.retain(|&(end, _)| end > lo - window);
         for &(_, j) in &active {
-            if j != i && overlap(&segments[i], &segments[j], tolerance) {
+            if j != i
+                && find(parent, i) != find(parent, j)
+                && overlap(&segments[i], &segments[j], tolerance)
+            {
                 let (ri, rj) = (find(parent, i), find(parent, j));
-                if ri != rj {
-                    parent[ri.max(rj)] = ri.min(rj);
-                }
+                parent[ri.max(rj)] = ri.min(rj);
             }
         }
         active.push((hi, i));
+        if active.len() > 64 {
+            // Keep the farthest-reaching extent of each group.
+            active.sort_by(|x, y| y.0.total_cmp(&x.0));
+            let mut seen = std::collections::HashSet::new();
+            active.retain(|&(_, j)| seen.insert(find(parent, j)));
+        }
     }
 }
 
@@ -243,14 +253,22 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
 /// A group's common line cut at every endpoint of its members.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pieces {
-    /// The members' distinct endpoints, in order along the line.
+    /// The members' distinct endpoints, in order along the line. Piece `k`
+    /// runs from `points[k]` to `points[k + 1]`.
     pub points: Vec<DVec2>,
-    /// For each piece `k`, from `points[k]` to `points[k + 1]`, the
-    /// members (indices into `segments`) that cover it, in index order.
-    pub cover: Vec<Vec<usize>>,
+    /// For each member, in the group's order, the pieces it covers,
+    /// `lo..hi` (positions of its ends in `points`).
+    pub spans: Vec<std::ops::Range<usize>>,
     /// For each member, in the group's order, whether it runs the way the
-    /// points do (from its `a` at a lower point to its `b`).
+    /// points do (its `a` at the lower position).
     pub forward: Vec<bool>,
+}
+
+impl Pieces {
+    /// Whether member `g` (a position in the group) covers piece `k`.
+    pub fn covers(&self, g: usize, k: usize) -> bool {
+        self.spans.get(g).is_some_and(|span| span.contains(&k))
+    }
 }
 
 /// Cuts the line of `group` (members of one of [`overlap_groups`]'s
@@ -258,7 +276,8 @@ pub struct Pieces {
 /// and each endpoint is a member's own, so that the pieces join each
 /// other, and the walls that met the members' ends, with no gap. The
 /// result does not depend on the order of `group` or of `segments`, only
-/// on the members' coordinates.
+/// on the members' coordinates. Time `m log m`, memory `m`, for `m`
+/// members.
 pub fn pieces(segments: &[Segment], group: &[usize]) -> Pieces {
     // The line's direction and origin from the longest member (ties by
     // coordinates), so that any order of the members gives them.
@@ -279,42 +298,36 @@ pub fn pieces(segments: &[Segment], group: &[usize]) -> Pieces {
         reference.b
     };
     let along = |p: DVec2| (p - origin).dot(d);
+    let order = |x: &(f64, DVec2), y: &(f64, DVec2)| {
+        x.0.total_cmp(&y.0)
+            .then(x.1.x.total_cmp(&y.1.x))
+            .then(x.1.y.total_cmp(&y.1.y))
+    };
     let mut points: Vec<(f64, DVec2)> = group
         .iter()
         .flat_map(|&i| [segments[i].a, segments[i].b])
         .map(|p| (along(p), p))
         .collect();
-    points.sort_by(|x, y| {
-        x.0.total_cmp(&y.0)
-            .then(x.1.x.total_cmp(&y.1.x))
-            .then(x.1.y.total_cmp(&y.1.y))
-    });
+    points.sort_by(order);
     points.dedup_by(|x, y| x.1 == y.1);
-    // Each member's extent, as positions in `points`.
-    let position = |p: DVec2| points.iter().position(|q| q.1 == p).unwrap_or(0);
-    let spans: Vec<(usize, usize, bool)> = group
+    // Each end's position in `points`, found by the same order.
+    let position = |p: DVec2| {
+        let key = (along(p), p);
+        points
+            .binary_search_by(|q| order(q, &key))
+            .unwrap_or_else(|k| k.min(points.len().saturating_sub(1)))
+    };
+    let (spans, forward) = group
         .iter()
         .map(|&i| {
             let (pa, pb) = (position(segments[i].a), position(segments[i].b));
-            (pa.min(pb), pa.max(pb), pa <= pb)
+            (pa.min(pb)..pa.max(pb), pa <= pb)
         })
-        .collect();
-    let cover = (0..points.len().saturating_sub(1))
-        .map(|k| {
-            let mut members: Vec<usize> = group
-                .iter()
-                .zip(&spans)
-                .filter(|(_, (lo, hi, _))| *lo <= k && k < *hi)
-                .map(|(&i, _)| i)
-                .collect();
-            members.sort_unstable();
-            members
-        })
-        .collect();
+        .unzip();
     Pieces {
         points: points.into_iter().map(|(_, p)| p).collect(),
-        cover,
-        forward: spans.iter().map(|s| s.2).collect(),
+        spans,
+        forward,
     }
 }
 
@@ -407,8 +420,12 @@ mod tests {
         let p = pieces(&segments, &[0, 1, 2]);
         let xs: Vec<f64> = p.points.iter().map(|q| q.x).collect();
         assert_eq!(xs, vec![0.0, 3.0, 6.0, 8.0, 10.0, 12.0]);
+        assert_eq!(p.spans, vec![0..4, 1..2, 3..5]);
+        let cover: Vec<Vec<usize>> = (0..5)
+            .map(|k| (0..3).filter(|&g| p.covers(g, k)).collect())
+            .collect();
         assert_eq!(
-            p.cover,
+            cover,
             vec![vec![0], vec![0, 1], vec![0], vec![0, 2], vec![2]]
         );
         assert_eq!(p.forward, vec![true, false, true]);

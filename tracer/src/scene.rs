@@ -643,54 +643,7 @@ fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize
     for group in &groups {
         merged += group.iter().filter(|&&i| !emitting[i]).count();
         let pieces = flatray_geometry::overlap::pieces(&segments, group);
-        let owners: Vec<Owner> = pieces
-            .cover
-            .iter()
-            .map(|cover| owner_of(&walls, &emitting, cover))
-            .collect();
-        let mut out = Vec::new();
-        let mut k = 0;
-        while k < owners.len() {
-            let mut end = k + 1;
-            while end < owners.len() && owners[end] == owners[k] {
-                end += 1;
-            }
-            let (p, q) = (pieces.points[k], pieces.points[end]);
-            match &owners[k] {
-                Owner::Emitting | Owner::Nobody => {}
-                &Owner::Wall(m) => {
-                    let forward = group
-                        .iter()
-                        .position(|&i| i == m)
-                        .is_none_or(|g| pieces.forward[g]);
-                    let segment = if forward {
-                        Segment::new(p, q)
-                    } else {
-                        Segment::new(q, p)
-                    };
-                    out.push(Wall {
-                        segment,
-                        material: walls[m].material,
-                    });
-                }
-                Owner::Panes(members) => {
-                    let mut tints: Vec<Rgb> = members
-                        .iter()
-                        .filter_map(|&m| match walls[m].material {
-                            Material::Transparent { tint } => Some(tint),
-                            _ => None,
-                        })
-                        .collect();
-                    tints.sort_by(|x, y| colour_order(*x, *y));
-                    let tint = tints.into_iter().fold(Rgb::ONE, |t, x| t * x);
-                    out.push(Wall {
-                        segment: Segment::new(p, q),
-                        material: Material::Transparent { tint },
-                    });
-                }
-            }
-            k = end;
-        }
+        let out = resolve_group(&walls, &emitting, group, &pieces);
         for &i in group {
             removed[i] |= !emitting[i];
         }
@@ -732,33 +685,124 @@ fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize
 }
 
 /// What one piece of a line that several walls lie on becomes.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Owner {
     /// An emitting wall lies there: it stays as it is, and no other wall.
     Emitting,
-    /// One wall's material, that wall's.
+    /// One wall's material: that wall's (a position in the group).
     Wall(usize),
-    /// Only panes: one pane of all their tints.
-    Panes(Vec<usize>),
+    /// Only panes, the same set of them as long as the number is the same:
+    /// one pane of all their tints.
+    Panes(usize),
     /// No wall (a sliver between two ends that are not the same point).
     Nobody,
 }
 
-fn owner_of(walls: &[Wall], emitting: &[bool], cover: &[usize]) -> Owner {
-    if cover.iter().any(|&i| emitting[i]) {
-        return Owner::Emitting;
+/// The walls that one group's pieces become: a sweep along the line,
+/// keeping the members that cover the current piece ordered by rule 8's
+/// preference, so that time and memory stay about linear in the members.
+fn resolve_group(
+    walls: &[Wall],
+    emitting: &[bool],
+    group: &[usize],
+    pieces: &flatray_geometry::overlap::Pieces,
+) -> Vec<Wall> {
+    use std::collections::BTreeSet;
+    let pane = |g: usize| matches!(walls[group[g]].material, Material::Transparent { .. });
+    // Each member's rank in its class (opaque walls by the wall a path
+    // meets first, panes by tint then coordinates): an order of values,
+    // not of the list.
+    let mut by_preference: Vec<usize> = (0..group.len()).collect();
+    by_preference.sort_by(|&x, &y| seen_order(&walls[group[x]], &walls[group[y]]));
+    let mut rank = vec![0; group.len()];
+    for (r, &g) in by_preference.iter().enumerate() {
+        rank[g] = r;
     }
-    let opaque = cover
-        .iter()
-        .copied()
-        .filter(|&i| !matches!(walls[i].material, Material::Transparent { .. }))
-        .min_by(|&x, &y| seen_order(&walls[x], &walls[y]));
-    match (opaque, cover) {
-        (Some(i), _) => Owner::Wall(i),
-        (None, []) => Owner::Nobody,
-        (None, [one]) => Owner::Wall(*one),
-        (None, many) => Owner::Panes(many.to_vec()),
+    let count = pieces.points.len().saturating_sub(1);
+    let mut starting: Vec<Vec<usize>> = vec![Vec::new(); count + 1];
+    let mut ending: Vec<Vec<usize>> = vec![Vec::new(); count + 1];
+    for (g, span) in pieces.spans.iter().enumerate() {
+        if span.start < span.end {
+            starting[span.start].push(g);
+            ending[span.end].push(g);
+        }
     }
+    let (mut emitters, mut opaque, mut panes) = (0usize, BTreeSet::new(), BTreeSet::new());
+    let mut pane_sets = 0;
+    // Per piece, where a run of several panes starts there, the product
+    // of their tints in the order of their ranks.
+    let mut tints: Vec<Rgb> = Vec::with_capacity(count);
+    let mut owners = Vec::with_capacity(count);
+    for k in 0..count {
+        let mut panes_changed = false;
+        for &g in ending[k].iter().chain(&starting[k]) {
+            let entering = pieces.spans[g].start == k;
+            if emitting[group[g]] {
+                emitters = if entering { emitters + 1 } else { emitters - 1 };
+            } else if pane(g) {
+                panes_changed = true;
+                if entering {
+                    panes.insert((rank[g], g))
+                } else {
+                    panes.remove(&(rank[g], g))
+                };
+            } else if entering {
+                opaque.insert((rank[g], g));
+            } else {
+                opaque.remove(&(rank[g], g));
+            }
+        }
+        pane_sets += usize::from(panes_changed);
+        owners.push(if emitters > 0 {
+            Owner::Emitting
+        } else if let Some(&(_, g)) = opaque.first() {
+            Owner::Wall(g)
+        } else {
+            match panes.len() {
+                0 => Owner::Nobody,
+                1 => Owner::Wall(panes.first().map_or(0, |&(_, g)| g)),
+                _ => Owner::Panes(pane_sets),
+            }
+        });
+        // The tints of a piece's panes, where a run of them starts.
+        let starts_run = k == 0 || owners[k - 1] != owners[k];
+        tints.push(match owners[k] {
+            Owner::Panes(_) if starts_run => panes.iter().fold(Rgb::ONE, |t, &(_, g)| match walls
+                [group[g]]
+                .material
+            {
+                Material::Transparent { tint } => t * tint,
+                _ => t,
+            }),
+            _ => Rgb::ONE,
+        });
+    }
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k < owners.len() {
+        let mut end = k + 1;
+        while end < owners.len() && owners[end] == owners[k] {
+            end += 1;
+        }
+        let (p, q) = (pieces.points[k], pieces.points[end]);
+        match owners[k] {
+            Owner::Emitting | Owner::Nobody => {}
+            Owner::Wall(g) => out.push(Wall {
+                segment: if pieces.forward[g] {
+                    Segment::new(p, q)
+                } else {
+                    Segment::new(q, p)
+                },
+                material: walls[group[g]].material,
+            }),
+            Owner::Panes(_) => out.push(Wall {
+                segment: Segment::new(p, q),
+                material: Material::Transparent { tint: tints[k] },
+            }),
+        }
+        k = end;
+    }
+    out
 }
 
 /// Which of two opaque walls on one line a path sees: a mirror before a
@@ -875,6 +919,72 @@ mod tests {
             x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
             ((x ^ (x >> 31)) >> 11) as f64 / (1u64 << 53) as f64
         }
+    }
+
+    fn wall(a: (f64, f64), b: (f64, f64), material: Material) -> Wall {
+        Wall {
+            segment: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)),
+            material,
+        }
+    }
+
+    /// Rule 8's outcomes, piece by piece: the opaque wall over a pane, a
+    /// mirror over a diffuse wall, panes multiplied, an emitting wall kept
+    /// whole, and the pieces after the other walls.
+    #[test]
+    fn walls_lying_on_walls_become_the_walls_rule_8_names() {
+        let diffuse = Material::Diffuse { albedo: None };
+        let mirror = Material::Mirror { tint: Rgb::ONE };
+        let pane = |t: f64| Material::Transparent {
+            tint: Rgb::splat(t),
+        };
+        let walls = vec![
+            wall((0.0, 0.0), (10.0, 0.0), diffuse),
+            wall((0.0, 5.0), (0.0, -5.0), diffuse),
+            wall((6.0, 0.0), (2.0, 0.0), mirror),
+            wall((8.0, 0.0), (14.0, 0.0), pane(0.5)),
+            wall((12.0, 0.0), (16.0, 0.0), pane(0.25)),
+        ];
+        let (out, merged) = resolve_overlaps(walls.clone(), &mut []);
+        assert_eq!(merged, 4);
+        let expected = vec![
+            walls[1],
+            wall((0.0, 0.0), (2.0, 0.0), diffuse),
+            wall((6.0, 0.0), (2.0, 0.0), mirror),
+            wall((6.0, 0.0), (10.0, 0.0), diffuse),
+            wall((10.0, 0.0), (12.0, 0.0), pane(0.5)),
+            wall((12.0, 0.0), (14.0, 0.0), pane(0.125)),
+            wall((14.0, 0.0), (16.0, 0.0), pane(0.25)),
+        ];
+        assert_eq!(out, expected);
+        // An emitting wall stays whole; what lies on it goes.
+        let mut lights = vec![Light {
+            shape: LightShape::Line {
+                segment: walls[0].segment,
+                one_sided: false,
+                wall: Some(0),
+            },
+            color: Rgb::ONE,
+            intensity: 1.0,
+            falloff: Falloff::Flatland,
+        }];
+        let (out, _) = resolve_overlaps(walls.clone(), &mut lights);
+        assert_eq!(out[0], walls[0]);
+        assert!(matches!(
+            lights[0].shape,
+            LightShape::Line { wall: Some(0), .. }
+        ));
+        assert_eq!(out.len(), 5, "{out:?}");
+        // Many panes stacked on one wall, nested: resolved at once, to the
+        // wall.
+        let mut many = vec![wall((0.0, 0.0), (1e4, 0.0), diffuse)];
+        many.extend((1..20_000).map(|k| {
+            let k = k as f64 * 0.25;
+            wall((k, 0.0), (1e4 - k, 0.0), pane(0.9))
+        }));
+        let (out, merged) = resolve_overlaps(many, &mut []);
+        assert_eq!(merged, 20_000);
+        assert_eq!(out, vec![wall((0.0, 0.0), (1e4, 0.0), diffuse)]);
     }
 
     #[test]

@@ -292,8 +292,9 @@ fn cut_openings(imported: &mut Imported, tolerance: f64) {
         // The host is the group's first member.
         let forward = pieces.forward[0];
         let mut kept: Vec<ImportedWall> = Vec::new();
-        for (k, cover) in pieces.cover.iter().enumerate() {
-            if !cover.contains(&host) || cover.iter().any(|&i| i != host) {
+        for k in 0..pieces.points.len().saturating_sub(1) {
+            // Only the host there: neither window nor door.
+            if !pieces.covers(0, k) || (1..group.len()).any(|g| pieces.covers(g, k)) {
                 continue;
             }
             let (p, q) = (pieces.points[k], pieces.points[k + 1]);
