@@ -112,22 +112,28 @@ pub(crate) struct WallBins {
     len: usize,
 }
 
-/// A wall's bins: its first value, its bins along it, its spans.
+/// A wall's bins: its first value, its bins along it, its spans, and
+/// one over a bin's length where it has one span (most walls), which a
+/// lookup then reads without its span.
 #[derive(Clone, Copy, Debug, Default)]
 struct BinLayout {
     first: usize,
     bins: usize,
     spans: (u32, u32),
+    per_length: f64,
 }
 
 /// A stretch `[u0, u1]` of a wall between junctions, cut into `bins` bins
-/// from the wall's bin `offset`; `per_length` is one over a bin's length.
+/// from the wall's bin `offset`; `scale` is `bins / (u1 - u0)` (exactly
+/// `bins` for a span of the whole wall), `per_length` one over a bin's
+/// length.
 #[derive(Clone, Copy, Debug)]
 struct BinSpan {
     u0: f64,
     u1: f64,
     offset: usize,
     bins: usize,
+    scale: f64,
     per_length: f64,
 }
 
@@ -182,54 +188,58 @@ impl WallBins {
                         u1: pair[1],
                         offset: n,
                         bins: count,
+                        scale: count as f64 / (pair[1] - pair[0]),
                         per_length: count as f64 / span_length,
                     });
                     n += count;
                 }
             }
+            let spans = (first_span, bins.spans.len() as u32);
             bins.walls.push(BinLayout {
                 first: bins.len,
                 bins: n,
-                spans: (first_span, bins.spans.len() as u32),
+                spans,
+                per_length: if spans.1 - spans.0 == 1 {
+                    bins.spans[first_span as usize].per_length
+                } else {
+                    0.0
+                },
             });
             bins.len += n * 2 * levels;
         }
         bins
     }
 
-    /// The span of wall `wall` that holds `u`; `None` for a wall without
-    /// bins.
+    /// Where the bin of wall `wall` at `u` lies: the wall's first value,
+    /// its bins along it, the bin, and one over the bin's length; `None`
+    /// for a wall without bins.
     #[inline]
-    fn span(&self, wall: u32, u: f64) -> Option<(&BinLayout, &BinSpan)> {
+    fn locate(&self, wall: u32, u: f64) -> Option<(usize, usize, usize, f64)> {
         let layout = self.walls.get(wall as usize)?;
-        let spans = self
-            .spans
-            .get(layout.spans.0 as usize..layout.spans.1 as usize)?;
-        let k = match spans.len() {
-            0 => return None,
-            1 => 0,
-            n => spans[..n - 1].partition_point(|s| s.u1 <= u),
-        };
-        Some((layout, &spans[k]))
+        let (first, end) = (layout.spans.0 as usize, layout.spans.1 as usize);
+        match end.checked_sub(first)? {
+            0 => None,
+            1 => {
+                // The whole wall: u in [0, 1], the cast saturates.
+                let bin = ((u * layout.bins as f64) as usize).min(layout.bins - 1);
+                Some((layout.first, layout.bins, bin, layout.per_length))
+            }
+            n => {
+                let spans = self.spans.get(first..end)?;
+                let span = &spans[spans[..n - 1].partition_point(|s| s.u1 <= u)];
+                // u in the span: the cast saturates.
+                let within = ((u - span.u0) * span.scale) as usize;
+                let bin = span.offset + within.min(span.bins - 1);
+                Some((layout.first, layout.bins, bin, span.per_length))
+            }
+        }
     }
 
-    /// The index of the value of wall `wall`, side `side`, at `u`, level
-    /// `level`, and one over its bin's length; `None` for a wall without
-    /// bins.
+    /// The index of the value of side `side`, level `level`, of a bin that
+    /// [`WallBins::locate`] found.
     #[inline]
-    fn index(&self, wall: u32, side: Side, u: f64, level: usize) -> Option<(usize, f64)> {
-        if level >= self.levels {
-            return None;
-        }
-        let (layout, span) = self.span(wall, u)?;
-        // u in the span: the cast saturates. A span of the whole wall
-        // divides by 1, exactly.
-        let within = ((u - span.u0) / (span.u1 - span.u0) * span.bins as f64) as usize;
-        let bin = span.offset + within.min(span.bins - 1);
-        Some((
-            layout.first + (level * 2 + side.index()) * layout.bins + bin,
-            span.per_length,
-        ))
+    fn index((first, bins, bin, _): (usize, usize, usize, f64), side: Side, level: usize) -> usize {
+        first + (level * 2 + side.index()) * bins + bin
     }
 
     /// Adds `power`, arriving after `specular` events at the point `u` of
@@ -242,13 +252,15 @@ impl WallBins {
         specular: u32,
         power: Rgb,
     ) {
+        let Some(found) = self.locate(wall, u) else {
+            return;
+        };
+        let irradiance = power * found.3;
         let lowest = (specular as usize)
             .saturating_sub(1)
             .min(self.levels.saturating_sub(1));
         for level in lowest..self.levels {
-            if let Some((k, per_length)) = self.index(wall, side, u, level) {
-                values[k] += power * per_length;
-            }
+            values[Self::index(found, side, level)] += irradiance;
         }
     }
 }
@@ -287,14 +299,13 @@ impl Caustics {
         if allowed == 0 {
             return Rgb::ZERO;
         }
-        self.bins
-            .index(
-                wall,
-                side,
-                u,
-                (allowed - 1).min(self.bins.levels.saturating_sub(1)),
-            )
-            .map_or(Rgb::ZERO, |(k, _)| self.walls[k])
+        let level = (allowed - 1).min(self.bins.levels.saturating_sub(1));
+        match self.bins.locate(wall, u) {
+            Some(found) if level < self.bins.levels => {
+                self.walls[WallBins::index(found, side, level)]
+            }
+            _ => Rgb::ZERO,
+        }
     }
 }
 
