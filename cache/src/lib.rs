@@ -92,6 +92,23 @@ pub struct Key {
     pub u: f64,
 }
 
+/// The ends of a wall's spans between its `junctions` (positions along
+/// it, any order; those outside `(0, 1)` left out): 0, the junctions in
+/// increasing order without repeats, 1.
+pub fn span_bounds(junctions: &[f64]) -> Vec<f64> {
+    let mut cuts: Vec<f64> = junctions
+        .iter()
+        .copied()
+        .filter(|u| *u > 0.0 && *u < 1.0)
+        .collect();
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    std::iter::once(0.0)
+        .chain(cuts)
+        .chain(std::iter::once(1.0))
+        .collect()
+}
+
 impl WallMemo {
     /// Builds the memo for walls of the given lengths, each cut at the
     /// positions `junctions[wall]` (in `(0, 1)`, any order) into spans, and
@@ -110,17 +127,8 @@ impl WallMemo {
         let mut spans = Vec::new();
         let mut next = 0usize;
         for (wall, &length) in lengths.iter().enumerate() {
-            let mut cuts: Vec<f64> = junctions
-                .get(wall)
-                .map(|j| j.iter().copied().filter(|u| *u > 0.0 && *u < 1.0).collect())
-                .unwrap_or_default();
-            cuts.sort_by(f64::total_cmp);
-            cuts.dedup();
             let first = spans.len() as u32;
-            let bounds: Vec<f64> = std::iter::once(0.0)
-                .chain(cuts)
-                .chain(std::iter::once(1.0))
-                .collect();
+            let bounds = span_bounds(junctions.get(wall).map_or(&[], Vec::as_slice));
             for pair in bounds.windows(2) {
                 let n = ((pair[1] - pair[0]) * length / bin_length).ceil();
                 let bins = if n.is_finite() && n >= 1.0 {

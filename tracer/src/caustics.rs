@@ -170,16 +170,8 @@ impl WallBins {
             let first_span = bins.spans.len() as u32;
             let mut n = 0;
             if length > 0.0 {
-                let mut cuts: Vec<f64> = junctions
-                    .get(wall)
-                    .map(|j| j.iter().copied().filter(|u| *u > 0.0 && *u < 1.0).collect())
-                    .unwrap_or_default();
-                cuts.sort_by(f64::total_cmp);
-                cuts.dedup();
-                let bounds: Vec<f64> = std::iter::once(0.0)
-                    .chain(cuts)
-                    .chain(std::iter::once(1.0))
-                    .collect();
+                let bounds =
+                    flatray_cache::span_bounds(junctions.get(wall).map_or(&[], Vec::as_slice));
                 for pair in bounds.windows(2) {
                     let span_length = (pair[1] - pair[0]) * length;
                     let count = ((span_length / bin_length).ceil() as usize).clamp(1, most);
