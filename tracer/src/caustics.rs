@@ -479,7 +479,7 @@ pub(crate) fn trace_caustics(
     let rate = photon_rate(total / power);
     let photons = ((pass.count() as f64 * pixels as f64 * rate).ceil() as u64).max(1);
     let levels = bounces.saturating_sub(1) as usize;
-    let junctions = crate::memo::junctions(scene);
+    let junctions = scene.junctions();
     let bins = WallBins::new(
         scene,
         &junctions,

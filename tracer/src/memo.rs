@@ -107,7 +107,7 @@ pub(crate) fn build_wall_memo(
     stats: &mut Stats,
 ) -> WallMemo {
     let lengths = scene.diffuse_lengths();
-    let junctions = junctions(scene);
+    let junctions = scene.junctions();
     let bin_length = options.bin_length / scale;
     let rays = AtomicU64::new(0);
     let line_samples = options.line_samples.max(1);
@@ -167,31 +167,6 @@ pub(crate) fn build_wall_memo(
     stats.work.memo_bytes += memo.memory_bytes() as u64;
     stats.work.memo_fill_rays += rays.load(Ordering::Relaxed);
     memo
-}
-
-/// Where other walls meet or cross each diffuse wall, as positions along
-/// it: the memo's bins and its interpolation stop there.
-pub(crate) fn junctions(scene: &Scene) -> Vec<Vec<f64>> {
-    scene
-        .walls
-        .iter()
-        .enumerate()
-        .map(|(index, w)| {
-            let mut cuts = Vec::new();
-            if matches!(w.material, Material::Diffuse { .. }) {
-                let along = Ray::new(w.segment.a, w.segment.edge());
-                scene
-                    .segments
-                    .for_each_crossing(&along, 1.0, Skip::one(index as u32), |_, hit| {
-                        if hit.t > 0.0 {
-                            cuts.push(hit.t);
-                        }
-                        true
-                    });
-            }
-            cuts
-        })
-        .collect()
 }
 
 pub(crate) fn to_value(v: Rgb) -> Value {

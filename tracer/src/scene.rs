@@ -4,7 +4,7 @@
 //! directly. Every value here is assumed valid (finite, in range): the
 //! loader checks user input, [`Scene::new`] only builds derived tables.
 
-use flatray_geometry::{DVec2, Segment, SegmentSet, Side};
+use flatray_geometry::{DVec2, Ray, Segment, SegmentSet, Side, Skip};
 
 use crate::Rgb;
 
@@ -588,6 +588,33 @@ impl Scene {
         self.merged
     }
 
+    /// Where other walls meet or cross each diffuse wall, as positions
+    /// along it: the wall memo's bins and the caustic pass's stop there.
+    pub(crate) fn junctions(&self) -> Vec<Vec<f64>> {
+        self.walls
+            .iter()
+            .enumerate()
+            .map(|(index, w)| {
+                let mut cuts = Vec::new();
+                if matches!(w.material, Material::Diffuse { .. }) {
+                    let along = Ray::new(w.segment.a, w.segment.edge());
+                    self.segments.for_each_crossing(
+                        &along,
+                        1.0,
+                        Skip::one(index as u32),
+                        |_, hit| {
+                            if hit.t > 0.0 {
+                                cuts.push(hit.t);
+                            }
+                            true
+                        },
+                    );
+                }
+                cuts
+            })
+            .collect()
+    }
+
     /// The line light that wall `index` also is, if any.
     pub fn light_of_wall(&self, index: u32) -> Option<u32> {
         self.wall_light.get(index as usize).copied().flatten()
@@ -652,14 +679,7 @@ fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize
     // The groups' walls after every other, by their first piece's
     // coordinates: the same list wherever the members were listed.
     let first_point = |g: &Vec<Wall>| g.first().map_or([0.0; 4], coordinates);
-    resolved.sort_by(|x, y| {
-        first_point(x)
-            .iter()
-            .zip(first_point(y))
-            .map(|(p, q)| p.total_cmp(&q))
-            .find(|o| o.is_ne())
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
+    resolved.sort_by(|x, y| coordinate_order(first_point(x), first_point(y)));
     let mut new_index = vec![u32::MAX; walls.len()];
     let mut out = Vec::with_capacity(walls.len());
     for (i, wall) in walls.into_iter().enumerate() {
@@ -818,18 +838,22 @@ fn seen_order(x: &Wall, y: &Wall) -> std::cmp::Ordering {
         Material::Glass { .. } => (4, Rgb::ZERO),
     };
     let ((cx, tx), (cy, ty)) = (rank(x), rank(y));
-    cx.cmp(&cy).then(colour_order(tx, ty)).then_with(|| {
-        coordinates(x)
-            .iter()
-            .zip(coordinates(y))
-            .map(|(p, q)| p.total_cmp(&q))
-            .find(|o| o.is_ne())
-            .unwrap_or(std::cmp::Ordering::Equal)
-    })
+    cx.cmp(&cy)
+        .then(colour_order(tx, ty))
+        .then_with(|| coordinate_order(coordinates(x), coordinates(y)))
 }
 
 fn coordinates(w: &Wall) -> [f64; 4] {
     [w.segment.a.x, w.segment.a.y, w.segment.b.x, w.segment.b.y]
+}
+
+/// Two walls' coordinates in lexicographic order (a total order: NaN too).
+fn coordinate_order(x: [f64; 4], y: [f64; 4]) -> std::cmp::Ordering {
+    x.iter()
+        .zip(y)
+        .map(|(p, q)| p.total_cmp(&q))
+        .find(|o| o.is_ne())
+        .unwrap_or(std::cmp::Ordering::Equal)
 }
 
 fn colour_order(x: Rgb, y: Rgb) -> std::cmp::Ordering {
