@@ -82,9 +82,12 @@ pub(crate) struct ConvergeArgs {
     /// Pixels per world unit, as for `render`.
     #[arg(long, default_value_t = 1.0)]
     scale: f64,
-    /// Most wall reflections (overrides the scene).
+    /// Most diffuse reflections off walls (overrides the scene).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
     bounces: Option<u32>,
+    /// Most mirror and glass events in a row (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    specular: Option<u32>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -111,6 +114,7 @@ pub(crate) fn converge(
     let base = RenderOptions {
         scale: args.scale,
         bounces: args.bounces.unwrap_or(loaded.options.bounces),
+        specular: args.specular.unwrap_or(loaded.options.specular),
         ..loaded.options
     };
     let (width, height) = checked_size(&loaded, base.scale)?;

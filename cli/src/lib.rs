@@ -69,9 +69,12 @@ enum Command {
     Plan {
         /// The scene file (RON).
         scene: PathBuf,
-        /// Most wall reflections (overrides the scene).
+        /// Most diffuse reflections off walls (overrides the scene).
         #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
         bounces: Option<u32>,
+        /// Most mirror and glass events in a row (overrides the scene).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
+        specular: Option<u32>,
         /// The cache of light on walls (overrides the scene).
         #[arg(long, value_enum)]
         cache: Option<CacheArg>,
@@ -170,9 +173,15 @@ struct RenderArgs {
     /// Samples per pixel (overrides the scene).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)), conflicts_with_all = ["target_error", "time"])]
     spp: Option<u32>,
-    /// Most wall reflections between a light and the floor (overrides the scene).
+    /// Most diffuse reflections off walls between a light and the floor
+    /// (overrides the scene). Mirrors, glass and panes do not count.
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
     bounces: Option<u32>,
+    /// Most mirror and glass events in a row, between a light, a wall or
+    /// the floor and the next (overrides the scene; default 32, with
+    /// Russian roulette past 8).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    specular: Option<u32>,
     /// Seed of the random streams (overrides the scene).
     #[arg(long)]
     seed: Option<u64>,
@@ -392,6 +401,7 @@ where
         Command::Plan {
             scene,
             bounces,
+            specular,
             cache,
             caustics,
             lights,
@@ -399,7 +409,7 @@ where
             verbose,
         } => plan(
             &scene,
-            bounces,
+            (bounces, specular),
             (cache, caustics, lights),
             integrator,
             verbose,
@@ -593,7 +603,7 @@ fn check(scene: &Path, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), F
 
 fn plan(
     scene: &Path,
-    bounces: Option<u32>,
+    (bounces, specular): (Option<u32>, Option<u32>),
     (cache, caustics, lights): (Option<CacheArg>, Option<Switch>, LightsArg),
     integrator: Option<IntegratorArg>,
     verbose: bool,
@@ -603,6 +613,7 @@ fn plan(
     warn(scene, &loaded, err);
     let options = RenderOptions {
         bounces: bounces.unwrap_or(loaded.options.bounces),
+        specular: specular.unwrap_or(loaded.options.specular),
         integrator: integrator.map_or(loaded.options.integrator, IntegratorArg::integrator),
         memo: CacheArg::memo(cache, loaded.options.memo),
         caustics: !matches!(caustics, Some(Switch::Off)),
@@ -651,6 +662,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     let options = RenderOptions {
         samples: args.spp.unwrap_or(loaded.options.samples),
         bounces: args.bounces.unwrap_or(loaded.options.bounces),
+        specular: args.specular.unwrap_or(loaded.options.specular),
         seed: args.seed.unwrap_or(loaded.options.seed),
         exposure: args.exposure.unwrap_or(loaded.options.exposure),
         scale: args.scale,

@@ -502,6 +502,9 @@ pub struct RenderSpec {
     pub samples: Samples,
     #[serde(default = "default_bounces")]
     pub bounces: Bounces,
+    /// Most mirror and glass events in a row.
+    #[serde(default = "default_specular")]
+    pub specular: Bounces,
     #[serde(default)]
     pub seed: u64,
     #[serde(default = "one_exposure")]
@@ -534,6 +537,7 @@ impl Default for RenderSpec {
         RenderSpec {
             samples: default_samples(),
             bounces: default_bounces(),
+            specular: default_specular(),
             seed: 0,
             exposure: one_exposure(),
             integrator: IntegratorSpec::default(),
@@ -550,6 +554,9 @@ fn default_samples() -> Samples {
 }
 fn default_bounces() -> Bounces {
     Bounces(1)
+}
+fn default_specular() -> Bounces {
+    Bounces(flatray_tracer::DEFAULT_SPECULAR)
 }
 
 /// Samples per pixel, 1 to [`MAX_SAMPLES`].

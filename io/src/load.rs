@@ -386,6 +386,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
     let options = RenderOptions {
         samples: file.render.samples.0,
         bounces: file.render.bounces.0,
+        specular: file.render.specular.0,
         seed: file.render.seed,
         exposure: file.render.exposure.0,
         scale: 1.0,

@@ -15,18 +15,17 @@
 //! the light tracer's code (`light_tracer::follow_photon`): its flights
 //! after its first specular event add their exact track length to the
 //! floor's pixels, and at its first diffuse wall it stops, its power
-//! added to that wall's bins by the number of specular events it took.
-//! The path tracer's next-event estimation at a diffuse wall adds the
-//! bins that its remaining bounces allow ([`Caustics::wall`]).
+//! added to that wall's bins. The path tracer's next-event estimation at
+//! a diffuse wall adds them ([`Caustics::wall`]): a photon's run of
+//! specular events ends at that wall, as the path's diffuse reflection
+//! starts one, so every bin is within the limits (`run.rs`).
 //!
 //! The floor's part is unbiased, as the light tracer's is. The walls' part
 //! averages each bin (one pixel long at the wall memo's default): a bias
-//! like the wall memo's, where the caustic on a wall has an edge. The bins
-//! keep at most [`MAX_LEVELS`] counts of specular events apart: light that
-//! took more (nine mirrors in a row) is read as if it took that many, and
-//! their values stay within [`MAX_WALL_VALUES`] per chunk of work (coarser
-//! bins, then fewer levels; a scene of more diffuse walls than that holds
-//! leaves the caustic light on walls out).
+//! like the wall memo's, where the caustic on a wall has an edge. Their
+//! values stay within [`MAX_WALL_VALUES`] per chunk of work (coarser bins;
+//! a scene of more diffuse walls than that holds leaves the caustic light
+//! on walls out).
 
 use flatray_geometry::{DVec2, Ray, Side, Skip};
 
@@ -35,6 +34,7 @@ use crate::light_tracer::{Deposits, Grid, follow_photon};
 use crate::lights::{Aperture, Photon};
 use crate::passes::Pass;
 use crate::render::{RenderOptions, image_size};
+use crate::run::Limits;
 use crate::sampling::Stream;
 use crate::scene::{Material, Scene};
 use crate::{Rgb, Stats};
@@ -87,20 +87,15 @@ const MIN_CHUNK_PHOTONS: u64 = 1 << 15;
 /// Bytes the chunks' floor and wall buffers may take together (beyond the
 /// two chunks that every pass has).
 const CHUNK_BUDGET: usize = 32 << 20;
-/// At most this many values in the walls' bins, over every wall, side and
-/// level (24 bytes each, per chunk of work).
+/// At most this many values in the walls' bins, over every wall and side
+/// (24 bytes each, per chunk of work).
 pub const MAX_WALL_VALUES: usize = 1 << 20;
-/// At most this many levels of specular events: light that took more is
-/// binned with the last level's.
-const MAX_LEVELS: usize = 8;
 /// Stream sample index of caustic photons, apart from every other stream.
 const CAUSTIC_STREAM: u64 = 1 << 42;
 
 /// The layout of the diffuse walls' bins: per wall, its first value, its
-/// number of bins along it and its spans; per bin, two sides times
-/// `levels` values. Level `k - 1` holds the light that arrived after at
-/// most `k` specular events; the last level also holds what arrived after
-/// more. As the wall memo's, a wall's bins stop at every junction (where
+/// number of bins along it and its spans; per bin, a value per side. As
+/// the wall memo's, a wall's bins stop at every junction (where
 /// another wall meets or crosses it): the two sides of a junction can lie
 /// in different rooms, and a bin across it would carry light from one
 /// into the other.
@@ -108,7 +103,6 @@ const CAUSTIC_STREAM: u64 = 1 << 42;
 pub(crate) struct WallBins {
     walls: Vec<BinLayout>,
     spans: Vec<BinSpan>,
-    levels: usize,
     len: usize,
 }
 
@@ -139,19 +133,15 @@ struct BinSpan {
 
 impl WallBins {
     /// Bins of about `bin_length` world units on every diffuse wall, cut
-    /// at the `junctions` along each (positions in `(0, 1)`), for light
-    /// that took up to `levels` specular events (at most [`MAX_LEVELS`]);
-    /// coarser where the walls are long, within [`MAX_WALL_VALUES`] (and a
-    /// bin more per junction). With more diffuse walls than that allows
-    /// one bin each, fewer levels, and with none, no bins: the caustic
+    /// at the `junctions` along each (positions in `(0, 1)`), where
+    /// `wanted` (a path reads them); coarser where the walls are long,
+    /// within [`MAX_WALL_VALUES`] (and a bin more per junction). With more
+    /// diffuse walls than that allows one bin each, no bins: the caustic
     /// light on walls is then left out (`docs/robustness.md`).
-    fn new(scene: &Scene, junctions: &[Vec<f64>], bin_length: f64, levels: usize) -> WallBins {
+    fn new(scene: &Scene, junctions: &[Vec<f64>], bin_length: f64, wanted: bool) -> WallBins {
         let lengths = scene.diffuse_lengths();
         let walls = lengths.iter().filter(|&&l| l > 0.0).count();
-        let levels = levels
-            .min(MAX_LEVELS)
-            .min(MAX_WALL_VALUES / (4 * walls.max(1)));
-        if levels == 0 {
+        if !wanted || 4 * walls > MAX_WALL_VALUES {
             return WallBins {
                 walls: vec![BinLayout::default(); lengths.len()],
                 ..WallBins::default()
@@ -159,13 +149,10 @@ impl WallBins {
         }
         // Half the values for bins along the walls, the other half for
         // the one each wall has at least.
-        let most = MAX_WALL_VALUES / (4 * levels);
+        let most = MAX_WALL_VALUES / 4;
         let total: f64 = lengths.iter().sum();
         let bin_length = bin_length.max(total / most as f64);
-        let mut bins = WallBins {
-            levels,
-            ..WallBins::default()
-        };
+        let mut bins = WallBins::default();
         for (wall, length) in lengths.into_iter().enumerate() {
             let first_span = bins.spans.len() as u32;
             let mut n = 0;
@@ -197,7 +184,7 @@ impl WallBins {
                     0.0
                 },
             });
-            bins.len += n * 2 * levels;
+            bins.len += n * 2;
         }
         bins
     }
@@ -227,32 +214,20 @@ impl WallBins {
         }
     }
 
-    /// The index of the value of side `side`, level `level`, of a bin that
+    /// The index of the value of side `side` of a bin that
     /// [`WallBins::locate`] found.
     #[inline]
-    fn index((first, bins, bin, _): (usize, usize, usize, f64), side: Side, level: usize) -> usize {
-        first + (level * 2 + side.index()) * bins + bin
+    fn index((first, bins, bin, _): (usize, usize, usize, f64), side: Side) -> usize {
+        first + side.index() * bins + bin
     }
 
-    /// Adds `power`, arriving after `specular` events at the point `u` of
-    /// wall `wall` from `side`, to the levels that take it: as irradiance
-    /// over its bin.
-    pub fn add(
-        &self,
-        values: &mut [Rgb],
-        (wall, side, u): (u32, Side, f64),
-        specular: u32,
-        power: Rgb,
-    ) {
-        let Some(found) = self.locate(wall, u) else {
-            return;
-        };
-        let irradiance = power * found.3;
-        let lowest = (specular as usize)
-            .saturating_sub(1)
-            .min(self.levels.saturating_sub(1));
-        for level in lowest..self.levels {
-            values[Self::index(found, side, level)] += irradiance;
+    /// Adds `power`, arriving at the point `u` of wall `wall` from `side`:
+    /// as irradiance over its bin.
+    pub fn add(&self, values: &mut [Rgb], (wall, side, u): (u32, Side, f64), power: Rgb) {
+        if let Some(found) = self.locate(wall, u)
+            && let Some(value) = values.get_mut(Self::index(found, side))
+        {
+            *value += power * found.3;
         }
     }
 }
@@ -267,7 +242,6 @@ pub(crate) struct Caustics {
     photons: (u64, u64),
     bins: WallBins,
     walls: Vec<Rgb>,
-    bounces: u32,
 }
 
 impl Caustics {
@@ -283,21 +257,14 @@ impl Caustics {
     }
 
     /// The irradiance from caustic light on side `side` of wall `wall` at
-    /// `u`, for a path at its `bounce`-th reflection: light that took at
-    /// most `bounces - bounce` specular events to get there.
+    /// `u`.
     #[inline]
-    pub fn wall(&self, wall: u32, side: Side, u: f64, bounce: u32) -> Rgb {
-        let allowed = self.bounces.saturating_sub(bounce) as usize;
-        if allowed == 0 {
-            return Rgb::ZERO;
-        }
-        let level = (allowed - 1).min(self.bins.levels.saturating_sub(1));
-        match self.bins.locate(wall, u) {
-            Some(found) if level < self.bins.levels => {
-                self.walls[WallBins::index(found, side, level)]
-            }
-            _ => Rgb::ZERO,
-        }
+    pub fn wall(&self, wall: u32, side: Side, u: f64) -> Rgb {
+        self.bins
+            .locate(wall, u)
+            .and_then(|found| self.walls.get(WallBins::index(found, side)))
+            .copied()
+            .unwrap_or(Rgb::ZERO)
     }
 }
 
@@ -396,7 +363,7 @@ fn segments_meet(p0: DVec2, p1: DVec2, q0: DVec2, q1: DVec2) -> bool {
 struct CausticPass<'a> {
     scene: &'a Scene,
     size: (u32, u32),
-    bounces: u32,
+    limits: Limits,
     emitters: Vec<Emitter>,
     /// The emitters' cumulative shares: intensity times their apertures'
     /// measure.
@@ -418,7 +385,7 @@ struct CausticPass<'a> {
 pub(crate) fn trace_caustics(
     scene: &Scene,
     options: &RenderOptions,
-    (bounces, pass): (u32, &Pass),
+    (limits, pass): (Limits, &Pass),
     stats: &mut Stats,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Option<Caustics> {
@@ -458,7 +425,7 @@ pub(crate) fn trace_caustics(
             })
         })
         .collect();
-    if emitters.is_empty() || bounces == 0 {
+    if emitters.is_empty() || limits.specular == 0 {
         return None;
     }
     let mut total = 0.0;
@@ -478,13 +445,13 @@ pub(crate) fn trace_caustics(
         .sum();
     let rate = photon_rate(total / power);
     let photons = ((pass.count() as f64 * pixels as f64 * rate).ceil() as u64).max(1);
-    let levels = bounces.saturating_sub(1) as usize;
+    // A path reads the walls' bins at a diffuse reflection: none without.
     let junctions = scene.junctions();
     let bins = WallBins::new(
         scene,
         &junctions,
         options.memo.bin_length / options.scale,
-        levels,
+        limits.bounces > 0,
     );
     let chunk_bytes = (pixels + bins.len) * 24;
     // As many chunks as the budget holds, but not so many that a chunk's
@@ -496,7 +463,7 @@ pub(crate) fn trace_caustics(
     let pass = CausticPass {
         scene,
         size: (width, height),
-        bounces,
+        limits,
         emitters,
         shares,
         total,
@@ -575,7 +542,7 @@ impl Estimator for CausticPass<'_> {
                 scene,
                 photon,
                 power,
-                self.bounces,
+                self.limits,
                 &mut deposits,
                 &mut stream,
                 stats,
@@ -608,7 +575,6 @@ impl Estimator for CausticPass<'_> {
             photons: (self.photons, first_photons),
             bins: self.bins.clone(),
             walls,
-            bounces: self.bounces,
         }
     }
 }

@@ -40,6 +40,7 @@ mod passes;
 mod path;
 pub mod plan;
 mod render;
+mod run;
 pub mod sampling;
 pub mod scene;
 mod shortcut;
@@ -57,5 +58,6 @@ pub use render::{
     FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS, MAX_CULLED_WALLS,
     RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, image_size, pixel_sample, render,
 };
+pub use run::{DEFAULT_SPECULAR, ROULETTE_FROM};
 pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
 pub use stats::{Noise, Physics, Stats, Work};

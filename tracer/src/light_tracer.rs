@@ -11,8 +11,8 @@ use crate::film::{Estimator, Film, Part, run};
 use crate::glass::{GlassState, absorption, transmit};
 use crate::lights::Photon;
 use crate::passes::{Pass, PixelSums};
-use crate::plan::Plan;
 use crate::render::{RenderOptions, image_size};
+use crate::run::{Limits, Onward as RunOnward, Run};
 use crate::sampling::Stream;
 use crate::scene::{Falloff, Light, Scene};
 use crate::{Rgb, Stats};
@@ -37,8 +37,8 @@ pub(crate) fn light_pass(
 ) -> (Vec<PixelSums>, Stats, f64) {
     let (width, height) = image_size(scene, options.scale);
     let pixels = width as usize * height as usize;
-    let plan = Plan::new(scene, options);
-    let bounces = if plan.indirect { options.bounces } else { 0 };
+    // A photon at a black wall stops there: its power is zero.
+    let limits = crate::render::limits(options);
     let paths = pass.count() as u64 * pixels as u64;
 
     let powers: Vec<f64> = scene
@@ -64,7 +64,7 @@ pub(crate) fn light_pass(
         scene,
         pass,
         size: (width, height),
-        bounces,
+        limits,
         paths,
         weight: total / paths as f64,
         cumulative,
@@ -83,7 +83,7 @@ struct Photons<'a> {
     scene: &'a Scene,
     pass: &'a Pass,
     size: (u32, u32),
-    bounces: u32,
+    limits: Limits,
     /// Photon paths in all, and each one's share of the total power.
     paths: u64,
     weight: f64,
@@ -130,7 +130,7 @@ impl Estimator for Photons<'_> {
                 scene,
                 light,
                 self.weight,
-                self.bounces,
+                self.limits,
                 &self.grid,
                 &mut buffer,
                 &mut stream,
@@ -189,7 +189,7 @@ fn trace_photon(
     scene: &Scene,
     light: &Light,
     weight: f64,
-    bounces: u32,
+    limits: Limits,
     grid: &Grid,
     buffer: &mut [Rgb],
     stream: &mut Stream,
@@ -203,7 +203,7 @@ fn trace_photon(
         floor: buffer,
         walls: None,
     };
-    follow_photon(scene, photon, power, bounces, &mut deposits, stream, stats);
+    follow_photon(scene, photon, power, limits, &mut deposits, stream, stats);
 }
 
 /// Where a photon's light goes: the floor's pixels, and for the caustic
@@ -218,14 +218,15 @@ pub(crate) struct Deposits<'a> {
     pub walls: Option<(&'a WallBins, &'a mut [Rgb])>,
 }
 
-/// Follows `photon`, of `power`, through at most `bounces` scattering
-/// events, depositing each free flight's track length into the floor's
-/// pixels it crosses.
+/// Follows `photon`, of `power`, through at most `limits.bounces` diffuse
+/// reflections and `limits.specular` specular events in a row
+/// (`run.rs`), depositing each free flight's track length into the
+/// floor's pixels it crosses.
 pub(crate) fn follow_photon(
     scene: &Scene,
     photon: Photon,
     power: Rgb,
-    bounces: u32,
+    limits: Limits,
     deposits: &mut Deposits,
     stream: &mut Stream,
     stats: &mut Stats,
@@ -240,8 +241,8 @@ pub(crate) fn follow_photon(
     // and mirrors: the kernel applies until the first diffuse reflection,
     // as for a mirror image of the light.
     let mut travelled = 0.0;
-    let mut bounce = 0;
-    let mut specular = 0;
+    let mut diffuse = 0;
+    let mut run = Run::new(power);
     let caustic = deposits.walls.is_some();
     let mut glass = GlassState::default();
     loop {
@@ -259,7 +260,7 @@ pub(crate) fn follow_photon(
             None => glass.inside,
         };
         let absorb = absorption(scene, body);
-        if !caustic || specular > 0 {
+        if !caustic || run.specular() {
             deposits.grid.deposit(
                 &ray,
                 t_end,
@@ -292,25 +293,26 @@ pub(crate) fn follow_photon(
         let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), true, stats);
         if let Bsdf::Transparent { .. } = bsdf {
             stats.physics.transparent_passes += 1;
-        } else {
-            bounce += 1;
-            if bounce > bounces {
-                stats.physics.paths_bounce_limit += 1;
-                return;
-            }
         }
         if let Some((bins, values)) = &mut deposits.walls
             && !bsdf.is_specular()
         {
             // The caustic pass ends at the first diffuse wall: what
-            // arrives there after `specular` events is binned, for the
-            // path tracer's next-event estimation to read.
+            // arrives there after specular events is binned, for the path
+            // tracer's next-event estimation to read.
             stats.physics.paths_to_walls += 1;
-            if specular > 0 {
+            if run.specular() {
                 let arriving = power * kernel.factor(travelled, r0);
-                bins.add(values, (index, side, h.u), specular, arriving);
+                bins.add(values, (index, side, h.u), arriving);
             }
             return;
+        }
+        if !bsdf.is_specular() {
+            if diffuse == limits.bounces {
+                stats.physics.paths_bounce_limit += 1;
+                return;
+            }
+            diffuse += 1;
         }
         if let Bsdf::Mirror { .. } = bsdf {
             stats.physics.mirror_reflections += 1;
@@ -328,13 +330,24 @@ pub(crate) fn follow_photon(
         if bsdf.is_specular() {
             power *= scattered.weight;
             if !matches!(bsdf, Bsdf::Transparent { .. }) {
-                specular += 1;
+                match run.event(limits.specular, power, stream) {
+                    RunOnward::Go(weight) => power *= weight,
+                    RunOnward::Limit => {
+                        stats.physics.paths_bounce_limit += 1;
+                        return;
+                    }
+                    RunOnward::Roulette => {
+                        stats.physics.paths_roulette += 1;
+                        return;
+                    }
+                }
             }
         } else {
             // Power arriving at the wall, with the kernel's share: the
             // kernel applies up to the first diffuse reflection.
             power *= kernel.factor(travelled, r0) * scattered.weight;
             kernel = Kernel::None;
+            run = Run::new(power);
         }
         ray = Ray::new(x, scattered.dir);
         if power == Rgb::ZERO {

@@ -13,6 +13,7 @@ use crate::light::{Receiver, direct_light};
 use crate::lights::choice::LightTable;
 use crate::lights::line_emitted;
 use crate::onward::Onward;
+use crate::run::{Onward as RunOnward, Run};
 use crate::sampling::{Stream, circle_in_arc};
 use crate::scene::{Light, LightShape, Scene};
 use crate::{Integrator, Rgb, Stats};
@@ -89,7 +90,7 @@ pub(crate) fn path_begin(
     // The floor sees the whole circle: a direction uniform in the sample's
     // arc, the arc itself uniform (stratified over a pixel's samples), so
     // the direction is uniform on the circle: weight 2pi.
-    if trace.bounces == 0 {
+    if !trace.indirect {
         return Begun { fluence, ray: None };
     }
     let dir = circle_in_arc(arc, stream);
@@ -151,7 +152,8 @@ pub(crate) fn path_finish(
 }
 
 /// Where a path's loop takes over: the throughput so far (`2pi` from the
-/// floor), the reflections counted so far, and the wall the ray leaves.
+/// floor), the diffuse reflections counted so far, and the wall the ray
+/// leaves (a run of specular events starts there).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Leg {
     pub throughput: Rgb,
@@ -180,10 +182,12 @@ pub(crate) fn follow(
     let Trace {
         scene,
         bounces,
+        specular,
         integrator,
         memo,
         shadows,
         mirror_emission,
+        last_legs,
         force,
         light_table,
         ..
@@ -194,8 +198,14 @@ pub(crate) fn follow(
     let Leg {
         mut throughput,
         mut skip,
-        mut bounce,
+        bounce: mut diffuse,
     } = leg;
+    // The specular events since the floor or the last diffuse wall.
+    let mut run = Run::new(throughput);
+    // After the last diffuse reflection the model allows, the path goes
+    // on only to meet lights with an area after specular events (which
+    // no shadow ray finds); its next diffuse wall ends it.
+    let mut last_leg = diffuse >= bounces;
     // After a mirror the path can carry light from a line light that no
     // shadow ray found, so emission met by the ray then counts.
     let mut after_mirror = false;
@@ -255,16 +265,16 @@ pub(crate) fn follow(
 
         let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), trace.tables, stats);
         // A transparent wall is no scattering event: the path goes on
-        // straight, and no bounce is counted.
+        // straight, and nothing is counted.
         let straight = matches!(bsdf, Bsdf::Transparent { .. });
         if straight {
             stats.physics.transparent_passes += 1;
-        } else {
-            bounce += 1;
-            if bounce > bounces {
+        } else if !bsdf.is_specular() {
+            if last_leg {
                 stats.physics.paths_bounce_limit += 1;
                 break;
             }
+            diffuse += 1;
         }
         // Computed where a branch needs it: a memo read does not.
         let normal = || wall.segment.normal_on(side);
@@ -287,19 +297,24 @@ pub(crate) fn follow(
                 }
             };
             if let Some(caustics) = trace.caustics {
-                irradiance += caustics.wall(index, side, h.u, bounce);
+                irradiance += caustics.wall(index, side, h.u);
             }
             fluence += throughput * rho * 0.5 * irradiance;
-            if bounce == bounces {
-                stats.physics.paths_bounce_limit += 1;
-                break;
+            if diffuse == bounces {
+                if !last_legs {
+                    stats.physics.paths_bounce_limit += 1;
+                    break;
+                }
+                last_leg = true;
             }
             // The rest of the path, on average over its directions from
             // this wall: the onward memo, where it holds that many
             // reflections left.
-            if let Some(table) =
-                onward.and_then(|tables| tables.get((bounces - bounce - 1) as usize))
-            {
+            if let Some(table) = onward.and_then(|tables| {
+                bounces
+                    .checked_sub(diffuse + 1)
+                    .and_then(|m| tables.get(m as usize))
+            }) {
                 stats.work.onward_lookups += 1;
                 stats.physics.paths_onward += 1;
                 fluence += throughput * rho * memo_irradiance(table, index, side, h.u);
@@ -335,6 +350,17 @@ pub(crate) fn follow(
             continue;
         }
         if bsdf.is_specular() {
+            match run.event(specular, throughput, stream) {
+                RunOnward::Go(weight) => throughput *= weight,
+                RunOnward::Limit => {
+                    stats.physics.paths_bounce_limit += 1;
+                    break;
+                }
+                RunOnward::Roulette => {
+                    stats.physics.paths_roulette += 1;
+                    break;
+                }
+            }
             // After a specular event, light met by the ray counts: no
             // next-event estimation could have found it.
             after_mirror = true;
@@ -348,6 +374,7 @@ pub(crate) fn follow(
                 stats.work.culled_mirror_rays += 1;
             }
         } else {
+            run = Run::new(throughput);
             after_mirror = false;
             unfolded = 0.0;
             line_walls = None;
@@ -395,8 +422,13 @@ pub(crate) trait MirrorWalls: Sync {
 #[derive(Clone, Copy)]
 pub(crate) struct Trace<'a> {
     pub scene: &'a Scene,
-    /// Most reflections; 0 when the plan skips indirect light.
+    /// Most diffuse reflections.
     pub bounces: u32,
+    /// Most specular events in a row (`run.rs`).
+    pub specular: u32,
+    /// Whether a ray leaves the floor: false where the plan finds no
+    /// light that could come back along it.
+    pub indirect: bool,
     pub integrator: Integrator,
     /// Whether the sample includes the floor's own direct light.
     pub floor_direct: bool,
@@ -406,6 +438,9 @@ pub(crate) struct Trace<'a> {
     pub shadows: bool,
     /// Whether path rays look for line lights after a mirror.
     pub mirror_emission: bool,
+    /// Whether a path goes on past its last diffuse bounce, to meet such
+    /// lights after mirrors or glass (`Plan::last_legs`).
+    pub last_legs: bool,
     /// The reference model: look for them after every bounce (adding
     /// nothing).
     pub force: bool,

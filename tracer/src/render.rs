@@ -51,8 +51,15 @@ pub enum Integrator {
 pub struct RenderOptions {
     /// Samples per pixel.
     pub samples: u32,
-    /// Most wall reflections between a light and the floor.
+    /// Most diffuse reflections (off walls) between a light and the
+    /// floor. Mirrors, glass and panes do not count: see `specular`.
     pub bounces: u32,
+    /// Most specular events (mirror reflections, glass refractions and
+    /// reflections) in a row: between a light, a diffuse wall or the
+    /// floor and the next of them. Past [`ROULETTE_FROM`] events in a
+    /// row, a path goes on with the probability of its run's throughput
+    /// (Russian roulette, unbiased); at `specular` it stops.
+    pub specular: u32,
     pub seed: u64,
     /// Multiplies every pixel value.
     pub exposure: f64,
@@ -176,6 +183,7 @@ impl Default for RenderOptions {
         RenderOptions {
             samples: 16,
             bounces: 1,
+            specular: crate::run::DEFAULT_SPECULAR,
             seed: 0,
             exposure: 1.0,
             scale: 1.0,
@@ -503,7 +511,7 @@ impl Fills {
         // which no path from the floor can find: traced from the lights
         // first, so that next-event estimation at the walls can read it.
         let caustics = if plan.caustics {
-            crate::caustics::trace_caustics(scene, options, (options.bounces, pass), stats, &|_| {})
+            crate::caustics::trace_caustics(scene, options, (limits(options), pass), stats, &|_| {})
         } else {
             None
         };
@@ -571,7 +579,10 @@ fn path_passes(
                 ),
             ),
             one_bounce_memo: shared.memo.as_ref().filter(|_| {
-                plan.indirect && options.bounces == 1 && options.takes(FastPath::Shortcut)
+                plan.indirect
+                    && options.bounces == 1
+                    && !plan.last_legs
+                    && options.takes(FastPath::Shortcut)
             }),
             render_pixel: if options.takes(FastPath::Avx) {
                 pixel_fn()
@@ -820,6 +831,14 @@ fn trace_for<'a>(
     )
 }
 
+/// How far the paths of a render go.
+pub(crate) fn limits(options: &RenderOptions) -> crate::run::Limits {
+    crate::run::Limits {
+        bounces: options.bounces,
+        specular: options.specular,
+    }
+}
+
 /// The switches of a path sample, from the plan and what it reads.
 fn trace_with<'a>(
     scene: &'a Scene,
@@ -830,16 +849,18 @@ fn trace_with<'a>(
     light_table: Option<&'a LightTable>,
     onward: Option<Onward<'a>>,
 ) -> Trace<'a> {
-    let bounces = if plan.indirect { options.bounces } else { 0 };
     let force = options.reference;
     Trace {
         scene,
-        bounces,
+        bounces: options.bounces,
+        specular: options.specular,
+        indirect: plan.indirect,
         integrator: options.integrator,
         floor_direct: !plan.floor_memo,
         memo,
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
+        last_legs: plan.last_legs,
         force,
         tables: options.takes(FastPath::Tables),
         caustics,

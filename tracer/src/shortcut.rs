@@ -1,5 +1,6 @@
 //! A fast path beside the model: the one-bounce shortcut. Where a render
-//! has one bounce and the wall memo, most paths go from the floor to one
+//! has one bounce and the wall memo, and no light with an area could be
+//! seen in a mirror from a wall, most paths go from the floor to one
 //! diffuse wall and stop; this reads that case straight from the memo,
 //! with the same operations as the path loop, and leaves every other case
 //! to it (`path::path_finish`).
@@ -45,6 +46,9 @@ pub(crate) fn memo_bounce(
     stats.physics.paths_bounce_limit += 1;
     let x = wall.segment.point_at(u);
     let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
-    let irradiance = memo_irradiance(memo, index, side, u);
+    let mut irradiance = memo_irradiance(memo, index, side, u);
+    if let Some(caustics) = trace.caustics {
+        irradiance += caustics.wall(index, side, u);
+    }
     Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
 }

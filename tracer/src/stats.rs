@@ -30,8 +30,11 @@ pub struct Physics {
     pub paths_to_walls: u64,
     /// Paths whose last ray hit nothing.
     pub paths_escaped: u64,
-    /// Paths stopped by the bounce limit.
+    /// Paths stopped by a limit: the diffuse bounces, or the specular
+    /// events in a row.
     pub paths_bounce_limit: u64,
+    /// Paths ended by Russian roulette in a long run of specular events.
+    pub paths_roulette: u64,
     /// Paths that read the rest of their light from the onward memo at a
     /// diffuse wall, and stopped there.
     pub paths_onward: u64,
@@ -232,6 +235,7 @@ impl Physics {
         self.paths_to_walls += other.paths_to_walls;
         self.paths_escaped += other.paths_escaped;
         self.paths_bounce_limit += other.paths_bounce_limit;
+        self.paths_roulette += other.paths_roulette;
         self.paths_onward += other.paths_onward;
         self.paths_absorbed += other.paths_absorbed;
         self.mirror_reflections += other.mirror_reflections;
@@ -297,6 +301,9 @@ impl fmt::Display for Physics {
         writeln!(f, "  escaping         {:>14}", p.paths_escaped)?;
         writeln!(f, "  bounce limit     {:>14}", p.paths_bounce_limit)?;
         writeln!(f, "  absorption       {:>14}", p.paths_absorbed)?;
+        if p.paths_roulette > 0 {
+            writeln!(f, "  roulette         {:>14}", p.paths_roulette)?;
+        }
         if p.paths_to_walls > 0 {
             writeln!(f, "  at a diffuse wall {:>13}", p.paths_to_walls)?;
         }

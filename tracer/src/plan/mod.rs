@@ -37,6 +37,8 @@ pub struct Inventory {
     pub occluders: usize,
     /// Walls that send light on: not black, not panes.
     pub reflectors: usize,
+    /// Mirrors and glass edges that send light on: mirrors not black.
+    pub specular_reflectors: usize,
     /// How the walls' ray queries run, in words.
     pub queries: String,
 }
@@ -74,6 +76,11 @@ impl Inventory {
                 Material::Transparent { .. } => false,
                 Material::Glass { .. } => true,
             }),
+            specular_reflectors: walls(&|m| match *m {
+                Material::Mirror { tint } => tint != Rgb::ZERO,
+                Material::Glass { .. } => true,
+                _ => false,
+            }),
             queries: scene.segments().describe(),
         }
     }
@@ -86,6 +93,7 @@ pub struct Plan {
     pub inventory: Inventory,
     /// The settings, as the decisions read them.
     pub bounces: u32,
+    pub specular: u32,
     pub tracing_light: bool,
     pub reference: bool,
     pub memo_enabled: bool,
@@ -106,6 +114,9 @@ pub struct Plan {
     pub indirect: bool,
     /// Lights with an area met by a path ray after a mirror.
     pub mirror_emission: bool,
+    /// Paths go on past their last diffuse bounce, to meet lights with an
+    /// area after mirrors and glass.
+    pub last_legs: bool,
     /// The caustic pass: light from points, spots and suns through
     /// mirrors and glass, traced from the lights (`caustics.rs`).
     pub caustics: bool,
@@ -146,11 +157,11 @@ impl Plan {
             spots,
             suns,
             areas,
-            mirrors,
             glass_edges,
             diffuse,
             occluders,
             reflectors,
+            specular_reflectors,
             ..
         } = inventory;
         let force = options.reference;
@@ -159,19 +170,29 @@ impl Plan {
         // The light tracer casts no shadow ray and reads no memo.
         let tracing_light = options.integrator == Integrator::Light;
         let shadows = !tracing_light && (force || (occluders > 0 && !no_lights));
-        let indirect_possible = options.bounces > 0 && !no_lights;
-        let indirect = indirect_possible && (force || reflectors > 0);
-        let specular = mirrors + glass_edges;
-        let mirror_emission = indirect && (force || (specular > 0 && areas > 0));
+        // Light can come by mirrors and glass without a diffuse bounce.
+        let specular_paths = options.specular > 0 && specular_reflectors > 0;
+        let indirect_possible = (options.bounces > 0 || specular_paths) && !no_lights;
+        // Rays leave the floor where they can bring light back: off a
+        // wall that reflects, within the bounces, or from a light with an
+        // area seen in a mirror or through glass.
+        let indirect = indirect_possible
+            && ((options.bounces > 0 && (force || reflectors > 0))
+                || (specular_paths && areas > 0));
+        let mirror_emission = indirect && (force || (specular_paths && areas > 0));
+        // Past its last diffuse bounce a path goes on only where such a
+        // light could be met; not forced, as it would find none.
+        let last_legs = indirect && specular_paths && areas > 0;
         // Path tracing cannot find their light after a mirror or glass:
         // the caustic pass does, wherever both are in the scene.
         let caustics = options.caustics
             && !tracing_light
-            && indirect
-            && specular > 0
+            && specular_paths
+            && !no_lights
             && points + spots + suns > 0;
         let wall_memo_wanted = !tracing_light
             && indirect
+            && options.bounces > 0
             && options.memo.enabled
             && (force || (diffuse > 0 && reflectors > 0));
         // Counted before anything is allocated; over its budget the memo
@@ -233,6 +254,7 @@ impl Plan {
             light_table,
             inventory,
             bounces: options.bounces,
+            specular: options.specular,
             tracing_light,
             reference: options.reference,
             memo_enabled: options.memo.enabled,
@@ -245,6 +267,7 @@ impl Plan {
             shadows,
             indirect,
             mirror_emission,
+            last_legs,
             caustics,
             wall_memo,
             onward,

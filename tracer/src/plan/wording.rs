@@ -9,6 +9,7 @@ use crate::render::{
     CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE, TILE_SHADOW_TESTS,
 };
 use crate::render::{FastPath, LightChoice, MANY_LIGHTS};
+use crate::run::ROULETTE_FROM;
 use crate::sampling::ARCS;
 
 /// One effect: whether it runs, and a reason in plain words.
@@ -56,10 +57,12 @@ impl Plan {
             floor_albedo_walls,
             occluders,
             reflectors,
+            specular_reflectors,
             ref queries,
         } = self.inventory;
         let Plan {
             bounces,
+            specular: specular_limit,
             tracing_light,
             reference,
             memo_enabled,
@@ -163,33 +166,60 @@ impl Plan {
                 )
             },
         );
+        // Mirrors and glass pass light on: by paths from the floor, by
+        // the caustic pass, or by the light tracer's photons.
+        let specular_runs = specular_limit > 0 && (indirect || caustics || tracing_light);
+        let runs_of = |limit: u32| {
+            format!(
+                "up to {} in a row (Russian roulette past {ROULETTE_FROM})",
+                n(limit as usize, "mirror or glass event")
+            )
+        };
         add(
-            "indirect bounces",
+            "indirect light",
             indirect,
             if no_lights {
                 "no light in the scene".into()
-            } else if bounces == 0 {
-                "bounces = 0".into()
+            } else if bounces == 0 && !(specular > 0 && specular_limit > 0) {
+                "bounces = 0, and no mirror or glass passes light on".into()
+            } else if bounces == 0 && !indirect {
+                "bounces = 0: no path from the floor can bring light back (no line or circle light to see in a mirror)".into()
             } else if reflectors == 0 && !force {
                 "no wall reflects light (none, all transparent, or all black)".into()
+            } else if bounces == 0 {
+                format!(
+                    "bounces = 0: only lines and circles seen in mirrors or glass, {}",
+                    runs_of(specular_limit)
+                )
             } else {
                 format!(
-                    "up to {} bounce{}",
-                    bounces,
-                    if bounces == 1 { "" } else { "s" }
+                    "up to {} off walls, and {}",
+                    n(bounces as usize, "diffuse bounce"),
+                    runs_of(specular_limit)
                 )
             },
         );
-        add(
-            "mirrors",
-            indirect && mirrors > 0,
-            if mirrors == 0 {
-                "no mirror in the scene".into()
-            } else if !indirect {
+        // The limit is said once: with the indirect light where it runs.
+        let limit_said = if indirect {
+            String::new()
+        } else {
+            format!(", {}", runs_of(specular_limit))
+        };
+        let specular_why = |count: usize, what: &str| -> String {
+            if count == 0 {
+                format!("no {what} in the scene")
+            } else if specular_limit == 0 {
+                "specular = 0: light stops at mirrors and glass".into()
+            } else if !specular_runs {
                 "no indirect light is traced".into()
             } else {
-                n(mirrors, "mirror")
-            },
+                format!("{}{limit_said}", n(count, what))
+            }
+        };
+        add(
+            "mirrors",
+            specular_runs && mirrors > 0,
+            specular_why(mirrors, "mirror"),
         );
         add(
             "lines and circles seen in mirrors or glass",
@@ -326,13 +356,19 @@ impl Plan {
         );
         add(
             "points, spots and sun seen in mirrors or glass",
-            caustics || (tracing_light && indirect && specular > 0 && points + spots + suns > 0),
+            caustics
+                || (tracing_light
+                    && specular_limit > 0
+                    && specular > 0
+                    && points + spots + suns > 0),
             if specular == 0 {
                 "no mirror or glass in the scene".into()
             } else if points + spots + suns == 0 {
                 "no point, spot or directional light in the scene".into()
-            } else if !indirect {
-                "no indirect light is traced".into()
+            } else if specular_limit == 0 {
+                "specular = 0: light stops at mirrors and glass".into()
+            } else if specular_reflectors == 0 {
+                "every mirror is black: no light goes on from one".into()
             } else if tracing_light {
                 "light tracing follows their light through mirrors and glass".into()
             } else if !caustics_enabled {
@@ -347,22 +383,26 @@ impl Plan {
         );
         add(
             "glass",
-            indirect && glass_edges > 0,
+            specular_runs && glass_edges > 0,
             if glass_edges == 0 {
                 "no glass in the scene".into()
-            } else if !indirect {
-                "no indirect light is traced".into()
+            } else if !specular_runs {
+                specular_why(glass_edges, "glass edge")
             } else {
-                format!("{} in {} edges", n(glass_bodies, "glass body"), glass_edges)
+                format!(
+                    "{} in {} edges{limit_said}",
+                    n(glass_bodies, "glass body"),
+                    glass_edges,
+                )
             },
         );
         add(
             "dispersion (wavelength per path)",
-            indirect && glass_edges > 0 && dispersive > 0,
+            specular_runs && glass_edges > 0 && dispersive > 0,
             if dispersive == 0 {
                 "no dispersive glass in the scene".into()
-            } else if !indirect {
-                "no indirect light is traced".into()
+            } else if !specular_runs {
+                specular_why(glass_edges, "glass edge")
             } else {
                 n(dispersive, "dispersive glass body")
             },
