@@ -100,8 +100,12 @@ fn a_pixel_sample_can_be_rerendered_alone() {
     let (x, y) = (23, 17);
     let mut stats = flatray_tracer::Stats::default();
     let fluence = flatray_tracer::pixel_sample(&loaded.scene, &options, size, x, y, 0, &mut stats);
-    let centre = loaded.scene.canvas.origin + (glam::DVec2::new(x as f64, y as f64) + 0.5) * 10.0;
-    let albedo = loaded.scene.floor.albedo_at(&loaded.scene.canvas, centre);
+    // The pixel's square: 10 units at scale 0.1.
+    let lo = loaded.scene.canvas.origin + glam::DVec2::new(x as f64, y as f64) * 10.0;
+    let albedo = loaded
+        .scene
+        .floor
+        .mean_albedo(&loaded.scene.canvas, lo, lo + 10.0);
     let value = fluence * albedo;
     assert_eq!(
         whole.image.get(x, y),

@@ -132,8 +132,8 @@ pub(crate) fn split(
 }
 
 /// What the image's pixel `(x, y)` multiplies its mean fluence by: the
-/// floor's albedo at the pixel's centre times the exposure. For the
-/// estimators that deposit fluence (the light tracer, the caustic pass).
+/// floor's exact mean albedo over the pixel's square times the exposure,
+/// for every estimator.
 pub(crate) fn pixel_scale(
     scene: &crate::Scene,
     (width, height): (u32, u32),
@@ -144,9 +144,8 @@ pub(crate) fn pixel_scale(
         scene.canvas.width as f64 / width as f64,
         scene.canvas.height as f64 / height as f64,
     );
-    let centre =
-        scene.canvas.origin + (flatray_geometry::DVec2::new(x as f64, y as f64) + 0.5) * step;
-    scene.floor.albedo_at(&scene.canvas, centre) * exposure
+    let lo = scene.canvas.origin + flatray_geometry::DVec2::new(x as f64, y as f64) * step;
+    scene.floor.mean_albedo(&scene.canvas, lo, lo + step) * exposure
 }
 
 /// A way of estimating the image, unit of work by unit of work.

@@ -91,7 +91,132 @@ impl Floor {
             }
         }
     }
+
+    /// The exact mean albedo over the rectangle `[lo, hi]` of a floor laid
+    /// over `canvas`: a pixel's square, whose value is its mean albedo
+    /// times its mean fluence (`docs/model.md`). A rectangle over more than
+    /// [`MEAN_CELLS`] tiles or texels takes the mean of a grid of
+    /// [`MEAN_GRID`]² points instead (a pixel that wide shows no single
+    /// grout line or texel).
+    pub fn mean_albedo(&self, canvas: &Canvas, lo: DVec2, hi: DVec2) -> Rgb {
+        let area = (hi.x - lo.x) * (hi.y - lo.y);
+        if !(area > 0.0 && area.is_finite()) {
+            return self.albedo_at(canvas, (lo + hi) * 0.5);
+        }
+        let sampled = || {
+            let mut sum = Rgb::ZERO;
+            for j in 0..MEAN_GRID {
+                for i in 0..MEAN_GRID {
+                    let f = (DVec2::new(i as f64, j as f64) + 0.5) / MEAN_GRID as f64;
+                    sum += self.albedo_at(canvas, lo + (hi - lo) * f);
+                }
+            }
+            sum / (MEAN_GRID * MEAN_GRID) as f64
+        };
+        // The length of `[a0, a1]` within `[b0, b1]`.
+        let overlap = |a0: f64, a1: f64, b0: f64, b1: f64| (a1.min(b1) - a0.max(b0)).max(0.0);
+        match self {
+            Floor::Color(c) => *c,
+            Floor::Tiles {
+                size,
+                grout_width,
+                tile,
+                grout,
+                variation,
+            } => {
+                let (q0, q1) = ((lo - canvas.origin) / *size, (hi - canvas.origin) / *size);
+                let (c0, c1) = (
+                    DVec2::new(floor(q0.x), floor(q0.y)),
+                    DVec2::new(floor(q1.x), floor(q1.y)),
+                );
+                let cells = (c1 - c0 + 1.0).x * (c1 - c0 + 1.0).y;
+                if !(cells <= MEAN_CELLS as f64) {
+                    return sampled();
+                }
+                let half = grout_width * 0.5;
+                let (lo, hi) = (lo - canvas.origin, hi - canvas.origin);
+                let mut tiles = Rgb::ZERO;
+                let mut tile_area = 0.0;
+                for cy in c0.y as i64..=c1.y as i64 {
+                    for cx in c0.x as i64..=c1.x as i64 {
+                        let (x, y) = (cx as f64 * size, cy as f64 * size);
+                        // A tile is its cell less the grout bands along
+                        // its four sides: a rectangle.
+                        let inside = overlap(lo.x, hi.x, x + half, x + size - half)
+                            * overlap(lo.y, hi.y, y + half, y + size - half);
+                        if inside > 0.0 {
+                            let h = hash2(cx, cy);
+                            let shade = 1.0 - variation * (h as f64 / u64::MAX as f64);
+                            tiles += *tile * shade * inside;
+                            tile_area += inside;
+                        }
+                    }
+                }
+                (tiles + *grout * (area - tile_area).max(0.0)) / area
+            }
+            Floor::Image {
+                width,
+                height,
+                texels,
+            } => {
+                let sx = *width as f64 / canvas.width as f64;
+                let sy = *height as f64 / canvas.height as f64;
+                let (lo, hi) = (lo - canvas.origin, hi - canvas.origin);
+                // In texels, clamped to the image as `albedo_at` clamps.
+                let (tx0, tx1) = (lo.x * sx, hi.x * sx);
+                let (ty0, ty1) = (lo.y * sy, hi.y * sy);
+                let last = |n: u32| (n - 1) as f64;
+                let (i0, i1) = (
+                    floor(tx0).clamp(0.0, last(*width)),
+                    floor(tx1).clamp(0.0, last(*width)),
+                );
+                let (j0, j1) = (
+                    floor(ty0).clamp(0.0, last(*height)),
+                    floor(ty1).clamp(0.0, last(*height)),
+                );
+                if !((i1 - i0 + 1.0) * (j1 - j0 + 1.0) <= MEAN_CELLS as f64) {
+                    return sampled();
+                }
+                let (i0, i1, j0, j1) = (i0 as usize, i1 as usize, j0 as usize, j1 as usize);
+                // Texel `k` covers `[k, k + 1)`; the first and the last
+                // reach on past the image, as `albedo_at` clamps.
+                let reach = |k: usize, n: u32| {
+                    let a = if k == 0 { f64::NEG_INFINITY } else { k as f64 };
+                    let b = if k + 1 >= n as usize {
+                        f64::INFINITY
+                    } else {
+                        (k + 1) as f64
+                    };
+                    (a, b)
+                };
+                let mut sum = Rgb::ZERO;
+                let mut weights = 0.0;
+                for j in j0..=j1 {
+                    let (b0, b1) = reach(j, *height);
+                    let wy = overlap(ty0, ty1, b0, b1);
+                    for i in i0..=i1 {
+                        let (a0, a1) = reach(i, *width);
+                        let w = overlap(tx0, tx1, a0, a1) * wy;
+                        if w > 0.0 {
+                            sum += texels[j * *width as usize + i] * w;
+                            weights += w;
+                        }
+                    }
+                }
+                if weights > 0.0 {
+                    sum / weights
+                } else {
+                    self.albedo_at(canvas, (lo + hi) * 0.5 + canvas.origin)
+                }
+            }
+        }
+    }
 }
+
+/// Most tiles or texels that [`Floor::mean_albedo`] sums exactly.
+pub const MEAN_CELLS: usize = 4096;
+/// The side of the grid of points it averages beyond them.
+pub const MEAN_GRID: usize = 64;
 
 /// A convex part of the floor where the albedo is one colour, as
 /// [`Floor::regions`] names them.
@@ -897,6 +1022,70 @@ pub const EMITTING_SIDE: Side = Side::Positive;
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    /// An image floor's mean over a rectangle weighs each texel by its
+    /// area in it; its edge texels reach on past the canvas, as a point
+    /// read clamps; a rectangle over more texels than the budget takes
+    /// the grid of points, within a pixel's share of one texel.
+    #[test]
+    fn an_image_floor_is_averaged_by_texel_area() {
+        let canvas = Canvas {
+            width: 4,
+            height: 2,
+            origin: DVec2::new(10.0, 20.0),
+        };
+        let texels = vec![
+            Rgb::splat(0.0),
+            Rgb::splat(1.0),
+            Rgb::splat(2.0),
+            Rgb::splat(3.0),
+            Rgb::splat(4.0),
+            Rgb::splat(5.0),
+            Rgb::splat(6.0),
+            Rgb::splat(7.0),
+        ];
+        // One texel per unit: a 4 x 2 image on a 4 x 2 canvas.
+        let floor = Floor::Image {
+            width: 4,
+            height: 2,
+            texels,
+        };
+        let at = |x0: f64, y0: f64, x1: f64, y1: f64| {
+            floor
+                .mean_albedo(
+                    &canvas,
+                    DVec2::new(10.0 + x0, 20.0 + y0),
+                    DVec2::new(10.0 + x1, 20.0 + y1),
+                )
+                .x
+        };
+        assert_eq!(at(1.0, 0.0, 2.0, 1.0), 1.0);
+        // A quarter of each of texels 0, 1, 4, 5.
+        assert!((at(0.5, 0.5, 1.5, 1.5) - 2.5).abs() < 1e-12);
+        // Three quarters of texel 2, one of texel 3.
+        assert!((at(2.25, 0.0, 3.25, 1.0) - 2.25).abs() < 1e-12);
+        // Past the canvas: the edge texel.
+        assert!((at(-1.0, 0.0, 0.0, 1.0) - 0.0).abs() < 1e-12);
+        assert!((at(3.5, 1.0, 4.5, 2.0) - 7.0).abs() < 1e-12);
+
+        let big = Floor::Image {
+            width: 256,
+            height: 256,
+            texels: (0..256 * 256)
+                .map(|k| Rgb::splat((k % 256) as f64))
+                .collect(),
+        };
+        let canvas = Canvas {
+            width: 256,
+            height: 256,
+            origin: DVec2::ZERO,
+        };
+        // 128 x 128 texels: over the budget, the grid's mean.
+        let mean = big.mean_albedo(&canvas, DVec2::ZERO, DVec2::splat(128.0)).x;
+        assert!((mean - 63.5).abs() < 1.0, "{mean}");
+    }
+
     #[test]
     fn the_fast_floor_is_the_floor() {
         let mut values = vec![
