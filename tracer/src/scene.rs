@@ -130,7 +130,7 @@ impl Floor {
                     DVec2::new(floor(q1.x), floor(q1.y)),
                 );
                 let cells = (c1 - c0 + 1.0).x * (c1 - c0 + 1.0).y;
-                if !(cells <= MEAN_CELLS as f64) {
+                if !cells.is_finite() || cells > MEAN_CELLS as f64 {
                     return sampled();
                 }
                 let half = grout_width * 0.5;
@@ -174,7 +174,7 @@ impl Floor {
                     floor(ty0).clamp(0.0, last(*height)),
                     floor(ty1).clamp(0.0, last(*height)),
                 );
-                if !((i1 - i0 + 1.0) * (j1 - j0 + 1.0) <= MEAN_CELLS as f64) {
+                if (i1 - i0 + 1.0) * (j1 - j0 + 1.0) > MEAN_CELLS as f64 {
                     return sampled();
                 }
                 let (i0, i1, j0, j1) = (i0 as usize, i1 as usize, j0 as usize, j1 as usize);
@@ -1119,8 +1119,6 @@ mod tests {
         }
         assert!(super::floor(f64::NAN).is_nan());
     }
-
-    use super::*;
 
     /// A tiny generator for test inputs: SplitMix64 over a counter.
     fn numbers(seed: u64) -> impl FnMut() -> f64 {
