@@ -106,9 +106,9 @@ fn lamp_mirror_diffuse_wall_floor() {
 }
 
 /// Sunlight through a window (a clear pane) onto a mirror that throws it
-/// across a rotated room; and a spot aimed at the mirror. Without the wall
-/// memo, whose bins smooth the sharp edges that the sun and the spot cast
-/// on walls (a bias of its own, apart from what is tested here).
+/// across a rotated room; and a spot aimed at the mirror. With the wall
+/// memo and without: the memo's bins smooth the sharp edges that the sun
+/// and the spot cast on walls, and its checked reads take that bias out.
 #[test]
 fn sunlight_and_a_spot_through_a_window_onto_a_mirror() {
     let loaded = scene(
@@ -122,12 +122,14 @@ fn sunlight_and_a_spot_through_a_window_onto_a_mirror() {
             lights: [Directional(direction: (1.0, 0.7), intensity: 0.8),
                      Spot(at: (20, 40), direction: (1, 0), cone: 40, softness: 10, intensity: 20.0)])",
     );
-    assert_agree(
-        "sun and spot",
-        &loaded.scene,
-        options(8, 3, 1.0, false),
-        0.05,
-    );
+    for memo in [true, false] {
+        assert_agree(
+            &format!("sun and spot, memo {memo}"),
+            &loaded.scene,
+            options(8, 3, 1.0, memo),
+            0.05,
+        );
+    }
 }
 
 /// A lamp behind a glass lens: its focus on the far side.

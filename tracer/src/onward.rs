@@ -138,6 +138,7 @@ pub(crate) fn build_onward(
                     half: 0,
                 }),
                 floor_direct: false,
+                memo_checks: false,
                 ..*trace
             };
             let counted = std::sync::atomic::AtomicU64::new(0);

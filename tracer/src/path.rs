@@ -285,7 +285,23 @@ pub(crate) fn follow(
             let mut irradiance = match memo {
                 Some(memo) => {
                     stats.work.memo_lookups += 1;
-                    memo_irradiance(memo, index, side, h.u)
+                    let read = memo_irradiance(memo, index, side, h.u);
+                    if trace.memo_checks && memo_checked(index, h.u) {
+                        // The memo's error, estimated where a hash of the
+                        // hit picks it: unbiased, so the memo's bias (its
+                        // bins, its fixed line-light points) falls out.
+                        stats.work.memo_checks += 1;
+                        let receiver = Receiver {
+                            normal: Some(normal()),
+                            wall: Some(index),
+                            shadow_walls: None,
+                        };
+                        let direct =
+                            direct_light(scene, x, receiver, shadows, light_table, stream, stats);
+                        read + (direct - read) * MEMO_CHECK_RATE as f64
+                    } else {
+                        read
+                    }
                 }
                 None => {
                     let receiver = Receiver {
@@ -434,6 +450,10 @@ pub(crate) struct Trace<'a> {
     pub floor_direct: bool,
     /// The wall memo, read instead of shadow rays at diffuse walls.
     pub memo: Option<&'a WallMemo>,
+    /// Whether one memo read in [`MEMO_CHECK_RATE`] is checked by
+    /// next-event estimation: for paths from the floor, not for the onward
+    /// memo's gathers, whose tables every pixel shares.
+    pub memo_checks: bool,
     /// Whether shadow rays are cast (otherwise every light is visible).
     pub shadows: bool,
     /// Whether path rays look for line lights after a mirror.
@@ -461,6 +481,22 @@ pub(crate) struct Trace<'a> {
     /// The onward memo: what the rest of a path brings from a diffuse
     /// wall, read instead of following it (`onward.rs`).
     pub onward: Option<Onward<'a>>,
+}
+
+/// One wall-memo read in this many is checked: next-event estimation
+/// runs there too, and the difference, times this, is added.
+pub const MEMO_CHECK_RATE: u64 = 16;
+
+/// Whether the memo read at `u` on wall `index` is checked: one in
+/// [`MEMO_CHECK_RATE`], by a hash of the hit (a random number keyed by
+/// the path's own state, as its stream is), so that every fast path that
+/// reads the memo decides alike without drawing from the stream.
+#[inline(always)]
+pub(crate) fn memo_checked(index: u32, u: f64) -> bool {
+    let mut z = u.to_bits() ^ ((index as u64) << 32).rotate_left(17);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)).is_multiple_of(MEMO_CHECK_RATE)
 }
 
 /// The memo's irradiance on side `side` of wall `index` at `u`.

@@ -858,6 +858,7 @@ fn trace_with<'a>(
         integrator: options.integrator,
         floor_direct: !plan.floor_memo,
         memo,
+        memo_checks: true,
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
         last_legs: plan.last_legs,

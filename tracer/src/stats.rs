@@ -83,6 +83,9 @@ pub struct Work {
     pub memo_fill_rays: u64,
     /// Wall-memo reads, each replacing one shadow ray per light.
     pub memo_lookups: u64,
+    /// Wall-memo reads checked by next-event estimation (one in
+    /// `MEMO_CHECK_RATE`), a part of `memo_lookups`.
+    pub memo_checks: u64,
     /// Path samples that reused their pixel's memoised direct light.
     pub floor_memo_reuses: u64,
     /// (pixel, light) pairs of the floor memo whose strata shared one
@@ -261,6 +264,7 @@ impl Work {
         self.memo_bytes += other.memo_bytes;
         self.memo_fill_rays += other.memo_fill_rays;
         self.memo_lookups += other.memo_lookups;
+        self.memo_checks += other.memo_checks;
         self.floor_memo_reuses += other.floor_memo_reuses;
         self.floor_shared_visibility += other.floor_shared_visibility;
         self.floor_albedo_reads += other.floor_albedo_reads;
@@ -358,6 +362,7 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f)?;
             writeln!(f, "  wall fill rays   {:>14}", w.memo_fill_rays)?;
             writeln!(f, "  wall cache hits  {:>14}", w.memo_lookups)?;
+            writeln!(f, "  wall cache checks{:>14}", w.memo_checks)?;
             writeln!(f, "  floor reuses     {:>14}", w.floor_memo_reuses)?;
             writeln!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
             writeln!(f, "  chosen lights    {:>14}", w.chosen_lights)?;

@@ -276,9 +276,10 @@ impl Plan {
                 )
             } else {
                 format!(
-                    "{} binned every {} pixel",
+                    "{} binned every {} pixel; one read in {} checked by shadow rays, so that the bins' bias falls out",
                     n(diffuse, "diffuse wall"),
-                    bin_length
+                    bin_length,
+                    crate::path::MEMO_CHECK_RATE
                 )
             },
         );
