@@ -187,7 +187,7 @@ pub(crate) fn follow(
         memo,
         shadows,
         mirror_emission,
-        last_legs,
+        last_leg_sides,
         force,
         light_table,
         ..
@@ -317,7 +317,9 @@ pub(crate) fn follow(
             }
             fluence += throughput * rho * 0.5 * irradiance;
             if diffuse == bounces {
-                if !last_legs {
+                if !last_leg_sides.is_some_and(|sides| {
+                    sides.get(2 * index as usize + side.index()) == Some(&true)
+                }) {
                     stats.physics.paths_bounce_limit += 1;
                     break;
                 }
@@ -458,9 +460,10 @@ pub(crate) struct Trace<'a> {
     pub shadows: bool,
     /// Whether path rays look for line lights after a mirror.
     pub mirror_emission: bool,
-    /// Whether a path goes on past its last diffuse bounce, to meet such
-    /// lights after mirrors or glass (`Plan::last_legs`).
-    pub last_legs: bool,
+    /// Per wall side, whether a path goes on past its last diffuse bounce
+    /// there, to meet such lights after mirrors or glass
+    /// (`run::last_leg_sides`); `None`: it never does.
+    pub last_leg_sides: Option<&'a [bool]>,
     /// The reference model: look for them after every bounce (adding
     /// nothing).
     pub force: bool,

@@ -284,6 +284,9 @@ struct Shared {
     mirror_arcs: Option<MirrorArcs>,
     light_table: Option<LightTable>,
     coherence: Option<FloorCoherence>,
+    /// Per wall side, whether a path's last leg from there can meet a
+    /// light (`run::last_leg_sides`), where the plan has last legs.
+    last_leg_sides: Option<Vec<bool>>,
     tiles: Vec<(u32, u32)>,
 }
 
@@ -364,12 +367,14 @@ impl<'a> Passes<'a> {
             let tiles = (0..height.div_ceil(TILE))
                 .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx, ty)))
                 .collect();
+            let last_leg_sides = plan.last_legs.then(|| crate::run::last_leg_sides(scene));
             Shared {
                 plan,
                 memo,
                 mirror_arcs,
                 light_table,
                 coherence,
+                last_leg_sides,
                 tiles,
             }
         });
@@ -579,10 +584,7 @@ fn path_passes(
                 ),
             ),
             one_bounce_memo: shared.memo.as_ref().filter(|_| {
-                plan.indirect
-                    && options.bounces == 1
-                    && !plan.last_legs
-                    && options.takes(FastPath::Shortcut)
+                plan.indirect && options.bounces == 1 && options.takes(FastPath::Shortcut)
             }),
             render_pixel: if options.takes(FastPath::Avx) {
                 pixel_fn()
@@ -822,10 +824,13 @@ fn trace_for<'a>(
         options,
         &shared.plan,
         (shared.memo.as_ref(), caustics),
-        shared
-            .mirror_arcs
-            .as_ref()
-            .map(|arcs| arcs as &dyn MirrorWalls),
+        (
+            shared
+                .mirror_arcs
+                .as_ref()
+                .map(|arcs| arcs as &dyn MirrorWalls),
+            shared.last_leg_sides.as_deref(),
+        ),
         shared.light_table.as_ref(),
         onward,
     )
@@ -845,7 +850,7 @@ fn trace_with<'a>(
     options: &RenderOptions,
     plan: &Plan,
     (memo, caustics): (Option<&'a WallMemo>, Option<&'a Caustics>),
-    mirror_arcs: Option<&'a dyn MirrorWalls>,
+    (mirror_arcs, last_leg_sides): (Option<&'a dyn MirrorWalls>, Option<&'a [bool]>),
     light_table: Option<&'a LightTable>,
     onward: Option<Onward<'a>>,
 ) -> Trace<'a> {
@@ -861,7 +866,7 @@ fn trace_with<'a>(
         memo_checks: true,
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
-        last_legs: plan.last_legs,
+        last_leg_sides: last_leg_sides.filter(|_| plan.last_legs),
         force,
         tables: options.takes(FastPath::Tables),
         caustics,
@@ -1745,6 +1750,7 @@ pub fn pixel_sample(
     let plan = Plan::new(scene, &options);
     // The render's own table, built again: the same from the same seed.
     let light_table = light_table_for(scene, &options, &plan);
+    let last_leg_sides = plan.last_legs.then(|| crate::run::last_leg_sides(scene));
     let pass = Pass::new(0, sample..sample.saturating_add(1), (0, 0), options.seed);
     let context = Context {
         options: &options,
@@ -1758,7 +1764,7 @@ pub fn pixel_sample(
             &options,
             &plan,
             (None, None),
-            None,
+            (None, last_leg_sides.as_deref()),
             light_table.as_ref(),
             None,
         ),

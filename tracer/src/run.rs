@@ -7,8 +7,11 @@
 //! It never decides what a material does: it only counts the events the
 //! integrators report.
 
+use flatray_geometry::{Segment, Side};
+
 use crate::Rgb;
 use crate::sampling::Stream;
+use crate::scene::{Material, Scene};
 
 /// The default of `RenderOptions::specular`: light crosses glass bodies
 /// (two events each), prisms and lenses, and goes to and fro between
@@ -93,9 +96,173 @@ impl Run {
     }
 }
 
+/// Most (diffuse wall, specular wall) pairs [`last_leg_sides`] tests:
+/// past them every side takes its last leg.
+const LAST_LEG_PAIRS: usize = 1 << 22;
+
+/// Per wall and side (`2 * wall + side`), whether a path's last leg from
+/// there (past its last diffuse bounce) can meet a light: whether a ray
+/// leaving that side can reach a mirror or glass edge from which light of
+/// a line or circle light can come back. A leg from a side this says
+/// `false` of adds exactly nothing, so the path ends there instead; the
+/// answer is conservative (a `true` may find nothing). Tolerances of
+/// `1e-9` of the coordinates' magnitude keep lines grazing a wall's line
+/// on the side of `true`.
+///
+/// A ray leaving side `s` of wall `W` travels in `W`'s half-plane on `s`,
+/// so it meets a specular wall `M` only if `M` reaches into it, and
+/// arrives on a side of `M` whose half-plane holds a point of `W`. After a
+/// mirror it travels in that side's half-plane: it can meet a light, or
+/// go on by another specular wall, only if one reaches into it. Glass
+/// bends rays, so a glass edge passes light on whenever a light is in the
+/// scene.
+pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
+    let walls = &scene.walls;
+    let specular: Vec<usize> = (0..walls.len())
+        .filter(|&i| {
+            matches!(
+                walls[i].material,
+                Material::Mirror { .. } | Material::Glass { .. }
+            )
+        })
+        .collect();
+    let diffuse = walls.len() - specular.len();
+    let areas = scene.lights.iter().any(|l| l.shape.has_area());
+    if !areas || specular.is_empty() {
+        return vec![false; 2 * walls.len()];
+    }
+    if diffuse.saturating_mul(specular.len()) > LAST_LEG_PAIRS
+        || specular
+            .len()
+            .saturating_mul(specular.len() + scene.lights.len())
+            > LAST_LEG_PAIRS
+    {
+        return vec![true; 2 * walls.len()];
+    }
+    let tolerance = |s: &Segment| 1e-9 * s.a.abs().max(s.b.abs()).max_element().max(1.0);
+    // Whether segment `t` reaches into the half-plane of side `side` of
+    // segment `s`.
+    let in_front = |s: &Segment, side: Side, t: &Segment| {
+        let n = s.normal_on(side);
+        let tol = tolerance(s).max(tolerance(t));
+        (t.a - s.a).dot(n).max((t.b - s.a).dot(n)) > -tol
+    };
+    // Per specular wall and side: whether light can come back from it.
+    let lit: Vec<[bool; 2]> = specular
+        .iter()
+        .map(|&m| {
+            let ms = &walls[m].segment;
+            if matches!(walls[m].material, Material::Glass { .. }) {
+                return [true; 2];
+            }
+            [Side::Positive, Side::Negative].map(|side| {
+                let n = ms.normal_on(side);
+                scene
+                    .lights
+                    .iter()
+                    .any(|l| l.shape.reaches_in_front(ms.a, n, tolerance(ms)))
+                    || specular
+                        .iter()
+                        .any(|&o| o != m && in_front(ms, side, &walls[o].segment))
+            })
+        })
+        .collect();
+    let mut sides = vec![false; 2 * walls.len()];
+    for (w, wall) in walls.iter().enumerate() {
+        if !matches!(wall.material, Material::Diffuse { .. }) {
+            continue;
+        }
+        let ws = &wall.segment;
+        for side in [Side::Positive, Side::Negative] {
+            sides[2 * w + side.index()] = specular.iter().zip(&lit).any(|(&m, lit)| {
+                let ms = &walls[m].segment;
+                in_front(ws, side, ms)
+                    && [Side::Positive, Side::Negative]
+                        .iter()
+                        .any(|&ms_side| lit[ms_side.index()] && in_front(ms, ms_side, ws))
+            });
+        }
+    }
+    sides
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::{Canvas, Falloff, Floor, Light, LightShape, Wall};
+    use flatray_geometry::DVec2;
+
+    /// A mirror along x = 10 with a line light on its right: walls on the
+    /// right that face it take last legs; walls on its left (whose rays
+    /// meet its unlit side) and a wall facing away take none; with a
+    /// second mirror on the left, light can come round, and they do.
+    #[test]
+    fn last_legs_only_where_a_mirror_can_send_a_light_back() {
+        let wall = |a: (f64, f64), b: (f64, f64), material| Wall {
+            segment: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)),
+            material,
+        };
+        let diffuse = Material::Diffuse { albedo: None };
+        let mirror = Material::Mirror { tint: Rgb::ONE };
+        let light = Light {
+            shape: LightShape::Line {
+                segment: Segment::new(DVec2::new(14.0, 1.0), DVec2::new(16.0, 1.0)),
+                one_sided: false,
+                wall: None,
+            },
+            color: Rgb::ONE,
+            intensity: 1.0,
+            falloff: Falloff::Flatland,
+        };
+        let canvas = Canvas {
+            width: 30,
+            height: 20,
+            origin: DVec2::ZERO,
+        };
+        let mut walls = vec![
+            wall((10.0, 5.0), (10.0, 15.0), mirror),
+            // Right of the mirror, vertical: faces it from its Negative
+            // side (normal (-1, 0) for a wall from (20, 15) to (20, 5)).
+            wall((20.0, 15.0), (20.0, 5.0), diffuse),
+            // Left of the mirror.
+            wall((2.0, 5.0), (2.0, 15.0), diffuse),
+        ];
+        let scene = Scene::new(
+            canvas,
+            Floor::Color(Rgb::ONE),
+            0.5,
+            walls.clone(),
+            vec![light],
+        );
+        let sides = last_leg_sides(&scene);
+        let facing = |w: usize, towards: DVec2| {
+            let s = &scene.walls[w].segment;
+            let side = if s.normal().dot(towards) > 0.0 {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            sides[2 * w + side.index()]
+        };
+        let (left, right) = (DVec2::new(-1.0, 0.0), DVec2::new(1.0, 0.0));
+        // The right wall's side towards the mirror: yes; away from it: no.
+        assert!(facing(1, left));
+        assert!(!facing(1, right));
+        // The left wall sees only the mirror's unlit side.
+        assert!(!facing(2, right));
+        assert!(!facing(2, left));
+        // A mirror on the far left lights the first mirror's left side.
+        walls.push(wall((0.5, 0.0), (0.5, 20.0), mirror));
+        let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, vec![light]);
+        let sides = last_leg_sides(&scene);
+        let s = &scene.walls[2].segment;
+        let towards_mirror = if s.normal().dot(right) > 0.0 {
+            Side::Positive
+        } else {
+            Side::Negative
+        };
+        assert!(sides[2 * 2 + towards_mirror.index()]);
+    }
 
     /// Short runs go on untouched and long ones stop at the limit; past
     /// the roulette's start, the expected weight of a survivor is the

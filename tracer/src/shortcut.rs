@@ -1,7 +1,7 @@
 //! A fast path beside the model: the one-bounce shortcut. Where a render
-//! has one bounce and the wall memo, and no light with an area could be
-//! seen in a mirror from a wall, most paths go from the floor to one
-//! diffuse wall and stop; this reads that case straight from the memo,
+//! has one bounce and the wall memo, most paths go from the floor to one
+//! diffuse wall and stop there (no line or circle light can come back to
+//! that side of it by a mirror: `run::last_leg_sides`); this reads that case straight from the memo,
 //! with the same operations as the path loop, and leaves every other case
 //! to it (`path::path_finish`).
 
@@ -41,6 +41,13 @@ pub(crate) fn memo_bounce(
         return None;
     }
     let side = wall.segment.arrival_side(dir)?;
+    if trace
+        .last_leg_sides
+        .is_some_and(|sides| sides.get(2 * index as usize + side.index()) != Some(&false))
+    {
+        // The path goes on past this wall: the loop follows it.
+        return None;
+    }
     stats.work.bounce_rays += 1;
     stats.work.memo_lookups += 1;
     stats.physics.paths_bounce_limit += 1;

@@ -196,6 +196,25 @@ impl LightShape {
 
     /// Whether a path ray can meet the light (it has an area): what the
     /// plan's "lights seen in mirrors" needs.
+    /// Whether a light with an area reaches into the half-plane in front
+    /// of the line through `origin` with normal `normal` (unit), counting
+    /// points within `tolerance` of the line: where a ray in that
+    /// half-plane could meet it. False for the lights a ray never meets.
+    pub(crate) fn reaches_in_front(&self, origin: DVec2, normal: DVec2, tolerance: f64) -> bool {
+        match self {
+            LightShape::Line { segment, .. } => {
+                (segment.a - origin)
+                    .dot(normal)
+                    .max((segment.b - origin).dot(normal))
+                    > -tolerance
+            }
+            LightShape::Circle { at, radius } => (*at - origin).dot(normal) + radius > -tolerance,
+            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
+                false
+            }
+        }
+    }
+
     pub(crate) fn has_area(&self) -> bool {
         match self {
             LightShape::Line { .. } | LightShape::Circle { .. } => true,
