@@ -19,7 +19,8 @@ use crate::scene::{Light, LightShape, Scene};
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
-/// wall reflections between a light and the floor.
+/// diffuse reflections between a light and the floor, and at most
+/// `specular` mirror and glass events in a row (`run.rs`).
 ///
 /// With `floor_direct` false the floor's own direct light is left out (the
 /// render loop has it from the memo). With a `memo`, next-event estimation
@@ -48,8 +49,8 @@ pub(crate) fn path_sample(
 }
 
 /// A path sample up to its first ray: the floor's direct light (when the
-/// sample includes it) and the ray that leaves the floor, if any bounce is
-/// allowed.
+/// sample includes it) and the ray that leaves the floor, where the plan
+/// traces indirect light.
 #[derive(Clone, Copy)]
 pub(crate) struct Begun {
     pub fluence: Rgb,
