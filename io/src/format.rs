@@ -504,7 +504,7 @@ pub struct RenderSpec {
     pub bounces: Bounces,
     /// Most mirror and glass events in a row.
     #[serde(default = "default_specular")]
-    pub specular: Bounces,
+    pub specular: Specular,
     #[serde(default)]
     pub seed: u64,
     #[serde(default = "one_exposure")]
@@ -555,8 +555,8 @@ fn default_samples() -> Samples {
 fn default_bounces() -> Bounces {
     Bounces(1)
 }
-fn default_specular() -> Bounces {
-    Bounces(flatray_tracer::DEFAULT_SPECULAR)
+fn default_specular() -> Specular {
+    Specular(flatray_tracer::DEFAULT_SPECULAR)
 }
 
 /// Samples per pixel, 1 to [`MAX_SAMPLES`].
@@ -571,6 +571,24 @@ impl TryFrom<u32> for Samples {
             Ok(Samples(v))
         } else {
             Err(format!("expected 1 to {MAX_SAMPLES} samples, found {v}"))
+        }
+    }
+}
+
+/// Mirror and glass events in a row, 0 to [`MAX_BOUNCES`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(try_from = "u32")]
+pub struct Specular(pub u32);
+
+impl TryFrom<u32> for Specular {
+    type Error = String;
+    fn try_from(v: u32) -> Result<Specular, String> {
+        if v <= MAX_BOUNCES {
+            Ok(Specular(v))
+        } else {
+            Err(format!(
+                "expected 0 to {MAX_BOUNCES} mirror and glass events in a row, found {v}"
+            ))
         }
     }
 }

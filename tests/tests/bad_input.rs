@@ -339,6 +339,10 @@ fn values_that_would_overflow_are_refused() {
             "Scene(canvas: (10, 10), floor: Color((1, 1, 1)),\n  small_radius: 1e-300)",
             "small radius",
         ),
+        (
+            "Scene(canvas: (10, 10), floor: Color((1, 1, 1)),\n  render: (specular: 5000))",
+            "mirror and glass events in a row",
+        ),
     ] {
         let scene = dir.write("s.ron", text);
         let run = flatray(&["check", s(&scene)]);
