@@ -13,6 +13,10 @@
 //! every stored value is a pure function of its key, the table is the same
 //! whatever the number of threads that filled it.
 //!
+//! It also marks one read in [`CHECK_RATE`] (by a hash of its position)
+//! for its caller to check against an exact estimate, so that the memo's
+//! bias can be taken out by whoever knows the physics.
+//!
 //! What it never does: decide physics. It does not know what irradiance
 //! is; the tracer hands it a fill function and reads numbers back. It reads
 //! no files and keeps no state that depends on scheduling.
@@ -90,6 +94,23 @@ pub struct Key {
     pub wall: u32,
     pub side: usize,
     pub u: f64,
+}
+
+/// One read in this many is marked for checking ([`checked`]).
+pub const CHECK_RATE: u64 = 16;
+
+/// Whether the read at `u` on wall `wall` is one the caller checks: one in
+/// [`CHECK_RATE`], by a hash of the two (a random number keyed by the
+/// read's own position, so every caller decides alike without a random
+/// stream). A caller that estimates the exact value `e` there and reads
+/// `m + CHECK_RATE (e - m)` instead of the memo's `m` has, on average, the
+/// exact value, whatever the memo holds.
+#[inline(always)]
+pub fn checked(wall: u32, u: f64) -> bool {
+    let mut z = u.to_bits() ^ ((wall as u64) << 32).rotate_left(17);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)).is_multiple_of(CHECK_RATE)
 }
 
 /// The ends of a wall's spans between its `junctions` (positions along

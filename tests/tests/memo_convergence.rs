@@ -2,7 +2,7 @@
 //! over a pixel of wall and take a line light at 64 fixed points, a bias
 //! where the light on a wall has an edge (at corners, under sun and spot)
 //! that more samples alone would not take away. One read in 16 is
-//! checked by next-event estimation (`path::memo_checked`), unbiased, so
+//! checked by next-event estimation (`flatray_cache::checked`), unbiased, so
 //! the default's error at the corners keeps falling with the samples.
 
 use flatray_tests::{block_stats, scene};

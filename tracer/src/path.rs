@@ -287,7 +287,7 @@ pub(crate) fn follow(
                 Some(memo) => {
                     stats.work.memo_lookups += 1;
                     let read = memo_irradiance(memo, index, side, h.u);
-                    if trace.memo_checks && memo_checked(index, h.u) {
+                    if trace.memo_checks && flatray_cache::checked(index, h.u) {
                         // The memo's error, estimated where a hash of the
                         // hit picks it: unbiased, so the memo's bias (its
                         // bins, its fixed line-light points) falls out.
@@ -299,7 +299,7 @@ pub(crate) fn follow(
                         };
                         let direct =
                             direct_light(scene, x, receiver, shadows, light_table, stream, stats);
-                        read + (direct - read) * MEMO_CHECK_RATE as f64
+                        read + (direct - read) * flatray_cache::CHECK_RATE as f64
                     } else {
                         read
                     }
@@ -453,7 +453,7 @@ pub(crate) struct Trace<'a> {
     pub floor_direct: bool,
     /// The wall memo, read instead of shadow rays at diffuse walls.
     pub memo: Option<&'a WallMemo>,
-    /// Whether one memo read in [`MEMO_CHECK_RATE`] is checked by
+    /// Whether one memo read in `flatray_cache::CHECK_RATE` is checked by
     /// next-event estimation: for paths from the floor, not for the onward
     /// memo's gathers, whose tables every pixel shares.
     pub memo_checks: bool,
@@ -485,22 +485,6 @@ pub(crate) struct Trace<'a> {
     /// The onward memo: what the rest of a path brings from a diffuse
     /// wall, read instead of following it (`onward.rs`).
     pub onward: Option<Onward<'a>>,
-}
-
-/// One wall-memo read in this many is checked: next-event estimation
-/// runs there too, and the difference, times this, is added.
-pub const MEMO_CHECK_RATE: u64 = 16;
-
-/// Whether the memo read at `u` on wall `index` is checked: one in
-/// [`MEMO_CHECK_RATE`], by a hash of the hit (a random number keyed by
-/// the path's own state, as its stream is), so that every fast path that
-/// reads the memo decides alike without drawing from the stream.
-#[inline(always)]
-pub(crate) fn memo_checked(index: u32, u: f64) -> bool {
-    let mut z = u.to_bits() ^ ((index as u64) << 32).rotate_left(17);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    (z ^ (z >> 31)).is_multiple_of(MEMO_CHECK_RATE)
 }
 
 /// The memo's irradiance on side `side` of wall `index` at `u`.

@@ -10,7 +10,7 @@ use std::f64::consts::TAU;
 use flatray_cache::WallMemo;
 use flatray_geometry::DVec2;
 
-use crate::path::{Trace, diffuse_albedo, memo_checked, memo_irradiance};
+use crate::path::{Trace, diffuse_albedo, memo_irradiance};
 use crate::scene::Material;
 use crate::{Rgb, Stats};
 
@@ -21,7 +21,7 @@ use crate::{Rgb, Stats};
 /// knows of, so its transmittance is exactly 1). The caller takes it only
 /// for one bounce with the memo, not in the reference. `None` where the
 /// path takes the loop: another material, a wall's end, and an `index` of
-/// no wall, and a read the path loop checks (`path::memo_checked`).
+/// no wall, and a read the path loop checks (`flatray_cache::checked`).
 #[inline(always)]
 pub(crate) fn memo_bounce(
     trace: &Trace,
@@ -37,7 +37,7 @@ pub(crate) fn memo_bounce(
     let Material::Diffuse { albedo } = wall.material else {
         return None;
     };
-    if u == 0.0 || u == 1.0 || (trace.memo_checks && memo_checked(index, u)) {
+    if u == 0.0 || u == 1.0 || (trace.memo_checks && flatray_cache::checked(index, u)) {
         return None;
     }
     let side = wall.segment.arrival_side(dir)?;

@@ -84,7 +84,7 @@ pub struct Work {
     /// Wall-memo reads, each replacing one shadow ray per light.
     pub memo_lookups: u64,
     /// Wall-memo reads checked by next-event estimation (one in
-    /// `MEMO_CHECK_RATE`), a part of `memo_lookups`.
+    /// `flatray_cache::CHECK_RATE`), a part of `memo_lookups`.
     pub memo_checks: u64,
     /// Path samples that reused their pixel's memoised direct light.
     pub floor_memo_reuses: u64,

@@ -279,7 +279,7 @@ impl Plan {
                     "{} binned every {} pixel; one read in {} checked by shadow rays, so that the bins' bias falls out",
                     n(diffuse, "diffuse wall"),
                     bin_length,
-                    crate::path::MEMO_CHECK_RATE
+                    flatray_cache::CHECK_RATE
                 )
             },
         );
