@@ -12,7 +12,7 @@ use crate::glass::{GlassState, absorption, transmit};
 use crate::lights::Photon;
 use crate::passes::{Pass, PixelSums};
 use crate::render::{RenderOptions, image_size};
-use crate::run::{Limits, Onward as RunOnward, Run};
+use crate::run::{Limits, Run};
 use crate::sampling::Stream;
 use crate::scene::{Falloff, Light, Scene};
 use crate::{Rgb, Stats};
@@ -330,17 +330,10 @@ pub(crate) fn follow_photon(
         if bsdf.is_specular() {
             power *= scattered.weight;
             if !matches!(bsdf, Bsdf::Transparent { .. }) {
-                match run.event(limits.specular, power, stream) {
-                    RunOnward::Go(weight) => power *= weight,
-                    RunOnward::Limit => {
-                        stats.physics.paths_bounce_limit += 1;
-                        return;
-                    }
-                    RunOnward::Roulette => {
-                        stats.physics.paths_roulette += 1;
-                        return;
-                    }
-                }
+                let Some(weight) = run.next(limits.specular, power, stream, stats) else {
+                    return;
+                };
+                power *= weight;
             }
         } else {
             // Power arriving at the wall, with the kernel's share: the

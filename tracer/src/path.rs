@@ -13,7 +13,7 @@ use crate::light::{Receiver, direct_light};
 use crate::lights::choice::LightTable;
 use crate::lights::line_emitted;
 use crate::onward::Onward;
-use crate::run::{Onward as RunOnward, Run};
+use crate::run::Run;
 use crate::sampling::{Stream, circle_in_arc};
 use crate::scene::{Light, LightShape, Scene};
 use crate::{Integrator, Rgb, Stats};
@@ -369,17 +369,10 @@ pub(crate) fn follow(
             continue;
         }
         if bsdf.is_specular() {
-            match run.event(specular, throughput, stream) {
-                RunOnward::Go(weight) => throughput *= weight,
-                RunOnward::Limit => {
-                    stats.physics.paths_bounce_limit += 1;
-                    break;
-                }
-                RunOnward::Roulette => {
-                    stats.physics.paths_roulette += 1;
-                    break;
-                }
-            }
+            let Some(weight) = run.next(specular, throughput, stream, stats) else {
+                break;
+            };
+            throughput *= weight;
             // After a specular event, light met by the ray counts: no
             // next-event estimation could have found it.
             after_mirror = true;

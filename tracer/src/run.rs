@@ -9,9 +9,9 @@
 
 use flatray_geometry::{Segment, Side};
 
-use crate::Rgb;
 use crate::sampling::Stream;
 use crate::scene::{Material, Scene};
+use crate::{Rgb, Stats};
 
 /// The default of `RenderOptions::specular`: light crosses glass bodies
 /// (two events each), prisms and lenses, and goes to and fro between
@@ -67,13 +67,38 @@ impl Run {
     }
 
     /// One more specular event, after which the path's throughput is
+    /// `throughput`: the factor its throughput takes if it goes on, or
+    /// `None` where it stops (counted in `stats`: the limit, or the
+    /// roulette).
+    #[inline]
+    pub fn next(
+        &mut self,
+        limit: u32,
+        throughput: Rgb,
+        stream: &mut Stream,
+        stats: &mut Stats,
+    ) -> Option<f64> {
+        match self.event(limit, throughput, stream) {
+            Onward::Go(weight) => Some(weight),
+            Onward::Limit => {
+                stats.physics.paths_bounce_limit += 1;
+                None
+            }
+            Onward::Roulette => {
+                stats.physics.paths_roulette += 1;
+                None
+            }
+        }
+    }
+
+    /// One more specular event, after which the path's throughput is
     /// `throughput`: whether it goes on, at most `limit` events in a row.
     /// Past [`ROULETTE_FROM`] events it survives with probability
     /// `q = min(1, max(throughput) / max(throughput at the run's start))`
     /// and is then weighted by `1 / q`: the expectation is unchanged. A
     /// draw is taken from `stream` only where `q < 1`.
     #[inline]
-    pub fn event(&mut self, limit: u32, throughput: Rgb, stream: &mut Stream) -> Onward {
+    fn event(&mut self, limit: u32, throughput: Rgb, stream: &mut Stream) -> Onward {
         self.events += 1;
         if self.events > limit {
             return Onward::Limit;

@@ -72,9 +72,7 @@ impl Floor {
                 if in_grout {
                     *grout
                 } else {
-                    let h = hash2(cell.x as i64, cell.y as i64);
-                    let shade = 1.0 - variation * (h as f64 / u64::MAX as f64);
-                    *tile * shade
+                    *tile * tile_shade(cell.x as i64, cell.y as i64, *variation)
                 }
             }
             Floor::Image {
@@ -145,9 +143,7 @@ impl Floor {
                         let inside = overlap(lo.x, hi.x, x + half, x + size - half)
                             * overlap(lo.y, hi.y, y + half, y + size - half);
                         if inside > 0.0 {
-                            let h = hash2(cx, cy);
-                            let shade = 1.0 - variation * (h as f64 / u64::MAX as f64);
-                            tiles += *tile * shade * inside;
+                            tiles += *tile * tile_shade(cx, cy, *variation) * inside;
                             tile_area += inside;
                         }
                     }
@@ -408,6 +404,12 @@ fn floor(x: f64) -> f64 {
         // Integral already, infinite or NaN.
         x.floor()
     }
+}
+
+/// The shade of the tile in cell `(x, y)`: 1 less up to `variation`,
+/// reproducibly per cell.
+fn tile_shade(x: i64, y: i64, variation: f64) -> f64 {
+    1.0 - variation * (hash2(x, y) as f64 / u64::MAX as f64)
 }
 
 fn hash2(x: i64, y: i64) -> u64 {
