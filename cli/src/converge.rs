@@ -74,13 +74,13 @@ pub(crate) struct ConvergeArgs {
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)))]
     max_spp: u32,
     /// Seconds per configuration after which its ladder stops.
-    #[arg(long, default_value_t = 120.0)]
+    #[arg(long, default_value_t = 120.0, allow_negative_numbers = true)]
     budget: f64,
     /// The configurations to compare (comma-separated).
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathMemo, Config::Path, Config::Original, Config::Light])]
     configs: Vec<Config>,
     /// Pixels per world unit, as for `render`.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     scale: f64,
     /// Most diffuse reflections off walls (overrides the scene).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]

@@ -59,10 +59,19 @@ struct Cli {
 enum Command {
     /// Render a scene to a PNG (tone-mapped) or EXR (linear) image.
     Render(RenderArgs),
-    /// Validate a scene file; exit 0, or print the error and exit 2.
+    /// Validate scene files and warn about what would make a render wrong
+    /// or wasteful; exit 0, or print the errors and exit 2.
+    #[command(after_help = "Examples:
+  flatray check scenes/room.ron                 ok, or the error with its line and column
+  flatray check scenes/*.ron                    every scene in a folder
+  flatray check plan.ron --json                 one JSON object (docs/cli.md)")]
     Check {
-        /// The scene file (RON).
-        scene: PathBuf,
+        /// The scene files (RON).
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Print the render plan: which effects the scene calls for, which are
     /// skipped and why.
@@ -82,9 +91,10 @@ enum Command {
         /// glass (on by default).
         #[arg(long, value_enum)]
         caustics: Option<Switch>,
-        /// Which lights each point's shadow rays go to.
-        #[arg(long, value_enum, default_value_t = LightsArg::Auto)]
-        lights: LightsArg,
+        /// Which lights each point's shadow rays go to (overrides the
+        /// scene; default: auto).
+        #[arg(long, value_enum)]
+        lights: Option<LightsArg>,
         /// The estimator (overrides the scene).
         #[arg(long, value_enum)]
         integrator: Option<IntegratorArg>,
@@ -92,6 +102,9 @@ enum Command {
         /// the kind of ray queries).
         #[arg(long, short)]
         verbose: bool,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Measure error against seconds and samples for each way of rendering.
     Converge(converge::ConvergeArgs),
@@ -122,11 +135,11 @@ struct ImportArgs {
     output: Option<PathBuf>,
     /// Canvas pixels per unit of the plan (an SVG user unit of 1/96 inch,
     /// a Tiled or mask pixel).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     scale: f64,
     /// Curves are flattened, and mask outlines simplified, to within this
     /// distance in the plan's units (as for --scale).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     tolerance: f64,
     /// The Tiled object layer whose objects become walls.
     #[arg(long, default_value = "walls")]
@@ -137,6 +150,9 @@ struct ImportArgs {
     /// Use the SVG's first bitmap as the floor (written beside the scene).
     #[arg(long)]
     floor_image: bool,
+    /// Replace the scene file (and floor image) if it exists.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -151,7 +167,7 @@ struct GenerateArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=64))]
     lamps: u32,
     /// The share of rooms with a mirror, 0 to 1.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
     mirrors: f64,
     /// No sunlight through the windows.
     #[arg(long)]
@@ -159,6 +175,9 @@ struct GenerateArgs {
     /// Which plan of this size: the same seed makes the same plan.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Replace the scene file if it exists.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -186,7 +205,7 @@ struct RenderArgs {
     #[arg(long)]
     seed: Option<u64>,
     /// Multiplies every pixel value (overrides the scene).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     exposure: Option<f64>,
     /// The estimator (overrides the scene).
     #[arg(long, value_enum)]
@@ -199,12 +218,13 @@ struct RenderArgs {
     /// missing).
     #[arg(long, value_enum)]
     caustics: Option<Switch>,
-    /// Which lights each point's shadow rays go to.
-    #[arg(long, value_enum, default_value_t = LightsArg::Auto)]
-    lights: LightsArg,
+    /// Which lights each point's shadow rays go to (overrides the scene;
+    /// default: auto).
+    #[arg(long, value_enum)]
+    lights: Option<LightsArg>,
     /// Render the canvas at this many pixels per world unit (0.25 for a
     /// preview, 2 for a sharper image); the geometry is unchanged.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     scale: f64,
     /// Worker threads (default: one per core).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -216,21 +236,25 @@ struct RenderArgs {
     /// this many percent, in passes that add samples to the image (16
     /// spp, then doubling). The image is exactly the single render with
     /// the samples reached.
-    #[arg(long, value_name = "PERCENT")]
+    #[arg(long, value_name = "PERCENT", allow_negative_numbers = true)]
     target_error: Option<f64>,
     /// Render with as many samples as fit in this many seconds, in passes
     /// that add samples to the image (with --target-error: stop at
     /// whichever comes first). At least the first pass is taken.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time: Option<f64>,
     /// With --target-error or --time: write the image after each pass, so
     /// that a long render can be looked at as it goes.
     #[arg(long, requires = "passes")]
     write_passes: bool,
-    /// With --stats: also how the work was done (the full plan, culling,
-    /// cache hits, shared shadow rays).
+    /// Print the statistics as --stats does, and also how the work was
+    /// done (the full plan, culling, cache hits, shared shadow rays).
     #[arg(long, short)]
     verbose: bool,
+    /// Print one JSON object (what was written, the plan, the
+    /// statistics and the seconds) instead of text: docs/cli.md.
+    #[arg(long)]
+    json: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -253,6 +277,12 @@ struct RenderArgs {
 enum Switch {
     On,
     Off,
+}
+
+impl Switch {
+    fn on(self) -> bool {
+        matches!(self, Switch::On)
+    }
 }
 
 /// What the cache holds.
@@ -283,6 +313,7 @@ impl CacheArg {
             },
             Some(CacheArg::Off) => MemoOptions {
                 enabled: false,
+                onward: true,
                 ..base
             },
             Some(CacheArg::Direct) => MemoOptions {
@@ -397,7 +428,7 @@ where
     let mut out = Checked::new(out);
     let result = match cli.command {
         Command::Render(args) => render(args, &mut out, err),
-        Command::Check { scene } => check(&scene, &mut out, err),
+        Command::Check { scenes, json } => check(&scenes, json, &mut out, err),
         Command::Plan {
             scene,
             bounces,
@@ -407,12 +438,13 @@ where
             lights,
             integrator,
             verbose,
+            json,
         } => plan(
             &scene,
             (bounces, specular),
             (cache, caustics, lights),
             integrator,
-            verbose,
+            (verbose, json),
             (&mut out, err),
         ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
@@ -488,6 +520,7 @@ impl Write for Checked<'_> {
 }
 
 mod converge;
+mod json;
 
 /// A failure with its exit code.
 pub(crate) struct Failure {
@@ -579,49 +612,99 @@ fn warn(scene: &Path, loaded: &Loaded, err: &mut dyn Write) {
     }
 }
 
-fn check(scene: &Path, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {
-    let loaded = load(scene)?;
-    warn(scene, &loaded, err);
-    let counts = loaded.counts;
-    let emitting = if counts.emitting_walls > 0 {
-        format!(" ({} emitting)", counts.emitting_walls)
-    } else {
-        String::new()
-    };
-    let _ = writeln!(
-        out,
-        "{}: ok ({} walls{emitting}, {} lights, {} glass bodies, canvas {} x {})",
-        scene.display(),
-        counts.walls,
-        counts.lights,
-        counts.glass,
-        loaded.scene.canvas.width,
-        loaded.scene.canvas.height
-    );
-    Ok(())
+fn check(
+    scenes: &[PathBuf],
+    json: bool,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), Failure> {
+    let mut refused = 0;
+    let mut objects = Vec::new();
+    for scene in scenes {
+        if json {
+            match flatray_io::load(scene) {
+                Ok(loaded) => objects.push(json::checked(scene, &loaded)),
+                Err(e) => {
+                    refused += 1;
+                    objects.push(json::refused(scene, &e));
+                }
+            }
+            continue;
+        }
+        let loaded = match load(scene) {
+            Ok(loaded) => loaded,
+            Err(failure) => {
+                refused += 1;
+                let _ = writeln!(err, "error: {}", failure.message);
+                continue;
+            }
+        };
+        warn(scene, &loaded, err);
+        let counts = loaded.counts;
+        let emitting = if counts.emitting_walls > 0 {
+            format!(" ({} emitting)", counts.emitting_walls)
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            out,
+            "{}: ok ({}{emitting}, {}, {}, canvas {} x {})",
+            scene.display(),
+            flatray_io::counted(counts.walls, "wall", "walls"),
+            flatray_io::counted(counts.lights, "light", "lights"),
+            flatray_io::counted(counts.glass, "glass body", "glass bodies"),
+            loaded.scene.canvas.width,
+            loaded.scene.canvas.height
+        );
+    }
+    if json {
+        let object = serde_json::json!({"format": json::FORMAT, "scenes": objects});
+        let _ = writeln!(out, "{object:#}");
+    }
+    match refused {
+        0 => Ok(()),
+        // Each error is printed already: exit 2 with a count.
+        n if json => Err(Failure::usage(format!(
+            "{} refused",
+            flatray_io::counted(n, "scene", "scenes")
+        ))),
+        n => Err(Failure::usage(format!(
+            "{} of {} refused",
+            n,
+            flatray_io::counted(scenes.len(), "scene", "scenes")
+        ))),
+    }
 }
 
 fn plan(
     scene: &Path,
     (bounces, specular): (Option<u32>, Option<u32>),
-    (cache, caustics, lights): (Option<CacheArg>, Option<Switch>, LightsArg),
+    (cache, caustics, lights): (Option<CacheArg>, Option<Switch>, Option<LightsArg>),
     integrator: Option<IntegratorArg>,
-    verbose: bool,
+    (verbose, as_json): (bool, bool),
     (out, err): (&mut dyn Write, &mut dyn Write),
 ) -> Result<(), Failure> {
     let loaded = load(scene)?;
-    warn(scene, &loaded, err);
+    if !as_json {
+        warn(scene, &loaded, err);
+    }
     let options = RenderOptions {
         bounces: bounces.unwrap_or(loaded.options.bounces),
         specular: specular.unwrap_or(loaded.options.specular),
         integrator: integrator.map_or(loaded.options.integrator, IntegratorArg::integrator),
         memo: CacheArg::memo(cache, loaded.options.memo),
-        caustics: !matches!(caustics, Some(Switch::Off)),
-        light_choice: lights.choice(),
+        caustics: caustics.map_or(loaded.options.caustics, Switch::on),
+        light_choice: lights.map_or(loaded.options.light_choice, LightsArg::choice),
         ..loaded.options
     };
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
-    if verbose {
+    if as_json {
+        let mut object = json::plan(&plan, &options);
+        object["format"] = json::FORMAT.into();
+        object["scene"] = scene.display().to_string().into();
+        object["warnings"] = json::warnings(&loaded.warnings);
+        let _ = writeln!(out, "{object:#}");
+    } else if verbose {
         let _ = writeln!(out, "{}", plan.verbose());
     } else {
         let _ = writeln!(out, "{}", plan.summary());
@@ -658,7 +741,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
 
     let loaded = load(&args.scene)?;
     warn(&args.scene, &loaded, err);
-    check_output(&output, &loaded.inputs)?;
+    check_output(&output, &loaded.inputs, "render")?;
     let options = RenderOptions {
         samples: args.spp.unwrap_or(loaded.options.samples),
         bounces: args.bounces.unwrap_or(loaded.options.bounces),
@@ -670,18 +753,30 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             .integrator
             .map_or(loaded.options.integrator, IntegratorArg::integrator),
         memo: CacheArg::memo(args.cache, loaded.options.memo),
-        caustics: !matches!(args.caustics, Some(Switch::Off)),
+        caustics: args.caustics.map_or(loaded.options.caustics, Switch::on),
         reference: args.reference,
         fast_paths: args
             .without
             .iter()
             .fold(FastPaths::ALL, |paths, p| paths.without(p.path())),
-        light_choice: args.lights.choice(),
+        light_choice: args
+            .lights
+            .map_or(loaded.options.light_choice, LightsArg::choice),
     };
     let (width, height) = checked_size(&loaded, options.scale)?;
     let pixels = width as u64 * height as u64;
     let loaded_at = Instant::now();
 
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if let Some(n) = args.threads
+        && n as usize > cores
+    {
+        let _ = writeln!(
+            err,
+            "warning: --threads {n} on {}: more threads than cores only add switching, and the render is slower",
+            flatray_io::counted(cores, "core", "cores")
+        );
+    }
     let pool = match args.threads {
         None => None,
         Some(n) => Some(
@@ -746,6 +841,11 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
                 passes += 1;
                 if args.write_passes {
                     write(&progressive.rendered())?;
+                    kept(Some(format!(
+                        "{} holds the last finished pass: {} spp",
+                        output.display(),
+                        progressive.samples()
+                    )));
                 }
             };
             let samples = progressive.samples();
@@ -754,8 +854,29 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     };
     let rendered_at = Instant::now();
     write(&rendered)?;
+    kept(None);
     let written_at = Instant::now();
 
+    if args.json {
+        let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
+        let mut object = json::stats(&rendered.stats);
+        object["format"] = json::FORMAT.into();
+        object["output"] = output.display().to_string().into();
+        object["width"] = width.into();
+        object["height"] = height.into();
+        object["samples"] = options.samples.into();
+        object["passes"] = passes.into();
+        object["plan"] = json::plan(&plan, &options);
+        object["warnings"] = json::warnings(&loaded.warnings);
+        object["seconds"] = serde_json::json!({
+            "load": (loaded_at - started).as_secs_f64(),
+            "render": (rendered_at - loaded_at).as_secs_f64(),
+            "write": (written_at - rendered_at).as_secs_f64(),
+            "total": (written_at - started).as_secs_f64(),
+        });
+        let _ = writeln!(out, "{object:#}");
+        return Ok(());
+    }
     let _ = writeln!(
         out,
         "wrote {} ({width} x {height}, {} spp, {} bounce{}{}) in {:.2} s; noise {}",
@@ -778,7 +899,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             rendered.stats.physics.nonfinite_samples
         );
     }
-    if args.stats {
+    if args.stats || args.verbose {
         let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
         if args.verbose {
             let _ = writeln!(out, "plan\n{}", plan.verbose());
@@ -821,7 +942,8 @@ fn generate(args: GenerateArgs, out: &mut dyn Write) -> Result<(), Failure> {
         sun: !args.no_sun,
         seed: args.seed,
     };
-    check_output(&args.output, &[])?;
+    check_output(&args.output, &[], "generate")?;
+    keep_scene(&args.output, args.force)?;
     flatray_io::write_text(&args.output, &plan.to_ron()).map_err(Failure::other)?;
     let _ = writeln!(out, "wrote {}", args.output.display());
     Ok(())
@@ -847,11 +969,13 @@ fn import(args: ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     };
     // A plan that cannot be read or understood is bad input (exit 2).
     let imported = flatray_io::import::import(&args.plan, &options).map_err(Failure::usage)?;
-    check_output(&output, std::slice::from_ref(&args.plan))?;
+    check_output(&output, std::slice::from_ref(&args.plan), "import")?;
+    keep_scene(&output, args.force)?;
     if let Some((name, bytes)) = &imported.floor_file {
         let folder = output.parent().unwrap_or(Path::new(""));
         let floor = folder.join(name);
-        check_output(&floor, std::slice::from_ref(&args.plan))?;
+        check_output(&floor, std::slice::from_ref(&args.plan), "import")?;
+        keep_scene(&floor, args.force)?;
         flatray_io::write_bytes(&floor, bytes).map_err(Failure::other)?;
     }
     flatray_io::write_text(&output, &imported.to_ron()).map_err(Failure::other)?;
@@ -959,14 +1083,14 @@ pub(crate) fn checked_size(loaded: &Loaded, scale: f64) -> Result<(u32, u32), Fa
 /// Refuses, before any work, an output that cannot be written or must not
 /// be: in a folder that does not exist, a folder itself, a read-only file,
 /// or one of the render's own inputs (the scene, its floor image).
-fn check_output(output: &Path, inputs: &[PathBuf]) -> Result<(), Failure> {
+fn check_output(output: &Path, inputs: &[PathBuf], command: &str) -> Result<(), Failure> {
     let folder = match output.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if !folder.is_dir() {
         return Err(Failure::usage(format!(
-            "{}: cannot write the image: the folder {} does not exist",
+            "{}: cannot write it: the folder {} does not exist",
             output.display(),
             folder.display()
         )));
@@ -974,7 +1098,7 @@ fn check_output(output: &Path, inputs: &[PathBuf]) -> Result<(), Failure> {
     if let Ok(metadata) = std::fs::metadata(output) {
         if metadata.is_dir() {
             return Err(Failure::usage(format!(
-                "{}: cannot write the image: it is a folder",
+                "{}: cannot write it: it is a folder",
                 output.display()
             )));
         }
@@ -988,11 +1112,23 @@ fn check_output(output: &Path, inputs: &[PathBuf]) -> Result<(), Failure> {
     for input in inputs {
         if same_file(output, input) {
             return Err(Failure::usage(format!(
-                "{}: the output is an input of this render ({}); choose another name with -o",
+                "{}: the output is an input of this {command} ({}); choose another name with -o",
                 output.display(),
                 input.display()
             )));
         }
+    }
+    Ok(())
+}
+
+/// Refuses to replace an existing file that a command writes as the
+/// user's work (a scene, its floor image) unless `force`.
+fn keep_scene(path: &Path, force: bool) -> Result<(), Failure> {
+    if !force && std::fs::symlink_metadata(path).is_ok() {
+        return Err(Failure::usage(format!(
+            "{}: the file exists; flatray will not replace it without --force (or choose another name with -o)",
+            path.display()
+        )));
     }
     Ok(())
 }
@@ -1028,9 +1164,24 @@ fn same_file(a: &Path, b: &Path) -> bool {
 pub fn exit_cleanly_on_interrupt() {
     let _ = ctrlc::set_handler(|| {
         flatray_io::remove_pending_files();
-        let _ = writeln!(std::io::stderr(), "\ninterrupted");
+        let note = KEPT
+            .try_lock()
+            .ok()
+            .and_then(|k| k.clone())
+            .map_or(String::new(), |k| format!("; {k}"));
+        let _ = writeln!(std::io::stderr(), "\ninterrupted{note}");
         std::process::exit(130);
     });
+}
+
+/// What an interrupt leaves behind, said when it comes: the image of the
+/// last finished pass that `--write-passes` wrote.
+static KEPT: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+fn kept(what: Option<String>) {
+    if let Ok(mut k) = KEPT.lock() {
+        *k = what;
+    }
 }
 
 /// A progress bar with an ETA on stderr, hidden with `--quiet` or when

@@ -13,6 +13,13 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
+    /// The file is a plan for `flatray import` (an SVG drawing, a Tiled
+    /// map, an image), not a scene.
+    #[error(
+        "{}: this is {what}, not a scene file; `flatray import` turns it into one: flatray import {} -o {}.ron",
+        path.display(), path.display(), path.file_stem().map_or("plan".into(), |s| s.to_string_lossy())
+    )]
+    NotAScene { path: PathBuf, what: &'static str },
     /// The text is not a valid scene: syntax, unknown field, wrong type,
     /// or a value out of range.
     #[error("{}:{line}:{column}: {message}", path.display())]
@@ -28,7 +35,7 @@ impl SceneError {
     /// The (line, column) the error points at, when it points anywhere.
     pub fn location(&self) -> Option<(usize, usize)> {
         match self {
-            SceneError::Read { .. } => None,
+            SceneError::Read { .. } | SceneError::NotAScene { .. } => None,
             SceneError::Invalid { line, column, .. } => Some((*line, *column)),
         }
     }

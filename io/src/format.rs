@@ -289,7 +289,7 @@ fn half() -> SmallRadius {
 }
 
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Floor")]
 pub enum FloorSpec {
     /// An image file, relative to the scene file's folder.
     Image(String),
@@ -343,7 +343,7 @@ impl TryFrom<f64> for Fraction {
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Falloff")]
 pub enum FalloffSpec {
     #[default]
     Flatland,
@@ -396,7 +396,7 @@ impl TryFrom<RawWall> for WallSpec {
 
 /// Light that a wall emits: it is then also a solid line light.
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Emit")]
 pub struct EmitSpec {
     #[serde(default = "white")]
     pub color: Color,
@@ -410,7 +410,7 @@ pub struct EmitSpec {
 }
 
 #[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Material")]
 pub enum MaterialSpec {
     Diffuse {
         #[serde(default)]
@@ -431,7 +431,7 @@ pub enum MaterialSpec {
 }
 
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Light")]
 pub enum LightSpec {
     Point {
         at: Point,
@@ -496,7 +496,7 @@ pub enum LightSpec {
 }
 
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Render")]
 pub struct RenderSpec {
     #[serde(default = "default_samples")]
     pub samples: Samples,
@@ -513,9 +513,16 @@ pub struct RenderSpec {
     pub integrator: IntegratorSpec,
     #[serde(default)]
     pub tonemap: ToneMap,
-    /// Whether the direct-light memo is used.
+    /// The cache of light on walls: `true` or `On`, `false` or `Off`, or
+    /// `Direct` (direct light only), as `--cache` takes.
+    #[serde(default)]
+    pub cache: CacheSpec,
+    /// The caustic pass, as `--caustics on/off` takes.
     #[serde(default = "yes")]
-    pub cache: bool,
+    pub caustics: bool,
+    /// Which lights each point's shadow rays go to, as `--lights`.
+    #[serde(default)]
+    pub lights: LightsSpec,
     /// The memo's wall bin length, in pixels.
     #[serde(default = "one_positive")]
     pub cache_bin: Positive,
@@ -542,7 +549,9 @@ impl Default for RenderSpec {
             exposure: one_exposure(),
             integrator: IntegratorSpec::default(),
             tonemap: ToneMap::default(),
-            cache: yes(),
+            cache: CacheSpec::default(),
+            caustics: yes(),
+            lights: LightsSpec::default(),
             cache_bin: one_positive(),
             cache_floor_samples: default_floor_samples(),
         }
@@ -616,7 +625,53 @@ fn one_positive() -> Positive {
     Positive(1.0)
 }
 
+/// The cache's setting: a switch, or how much is cached.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(untagged, expecting = "`On`, `Off`, `Direct`, `true` or `false`")]
+pub enum CacheSpec {
+    Switch(bool),
+    Mode(CacheMode),
+}
+
+impl Default for CacheSpec {
+    fn default() -> CacheSpec {
+        CacheSpec::Mode(CacheMode::On)
+    }
+}
+
+impl CacheSpec {
+    /// `(enabled, onward)`: whether the memo runs, and whether it holds
+    /// what light goes on from walls.
+    pub fn memo(self) -> (bool, bool) {
+        match self {
+            CacheSpec::Switch(true) | CacheSpec::Mode(CacheMode::On) => (true, true),
+            CacheSpec::Switch(false) | CacheSpec::Mode(CacheMode::Off) => (false, true),
+            CacheSpec::Mode(CacheMode::Direct) => (true, false),
+        }
+    }
+}
+
+/// How much the cache holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename = "Cache")]
+pub enum CacheMode {
+    On,
+    Off,
+    Direct,
+}
+
+/// Which lights each point's shadow rays go to.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename = "Lights")]
+pub enum LightsSpec {
+    #[default]
+    Auto,
+    Every,
+    Table,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename = "Integrator")]
 pub enum IntegratorSpec {
     #[default]
     Path,

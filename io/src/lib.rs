@@ -11,9 +11,12 @@
 //! says what was expected; no input makes it panic.
 
 mod error;
+mod explain;
 pub mod format;
 pub mod generate;
 pub mod import;
+mod input;
+mod lint;
 mod load;
 mod locate;
 mod output;
@@ -22,8 +25,19 @@ pub mod report;
 
 pub use error::{SceneError, WriteError};
 pub use format::ToneMap;
+pub use input::{MAX_INPUT_BYTES, read_within};
 pub use load::{Counts, Loaded, Warning, load, parse};
 pub use output::{
     Format, linear_to_srgb, png_bytes, read_exr, remove_pending_files, srgb_to_linear, to_srgb8,
     tone_map, write_bytes, write_exr, write_image, write_png, write_png_with_walls, write_text,
 };
+
+/// `n` and the noun, singular for one: "1 wall", "2 walls", "0 glass
+/// bodies".
+pub fn counted(n: usize, one: &str, many: &str) -> String {
+    if n == 1 {
+        format!("1 {one}")
+    } else {
+        format!("{n} {many}")
+    }
+}

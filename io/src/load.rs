@@ -12,8 +12,8 @@ use ron::extensions::Extensions;
 use crate::error::SceneError;
 use crate::format::MAX_COORDINATE;
 use crate::format::{
-    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LightSpec, MAX_CANVAS_PIXELS,
-    MAX_CANVAS_SIDE, MaterialSpec, SceneFile, ToneMap,
+    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LightSpec, LightsSpec,
+    MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MaterialSpec, SceneFile, ToneMap,
 };
 use crate::locate;
 
@@ -59,7 +59,13 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
         path: path.to_path_buf(),
         source,
     };
-    let bytes = std::fs::read(path).map_err(read_error)?;
+    let bytes = crate::read_within(path, crate::MAX_INPUT_BYTES).map_err(read_error)?;
+    if let Some(what) = foreign(path, &bytes) {
+        return Err(SceneError::NotAScene {
+            path: path.to_path_buf(),
+            what,
+        });
+    }
     let text = String::from_utf8(bytes).map_err(|e| {
         let valid = e.utf8_error().valid_up_to();
         read_error(std::io::Error::new(
@@ -76,17 +82,49 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
     Ok(loaded)
 }
 
+/// What the file at `path` is, when it is one of the plans that `flatray
+/// import` reads rather than a scene: by its first bytes, or by its
+/// name when those say nothing.
+fn foreign(path: &Path, bytes: &[u8]) -> Option<&'static str> {
+    let start = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]);
+    let start = start.trim_start_matches('\u{feff}').trim_start();
+    if start.starts_with("<svg") || (start.starts_with("<?xml") && start.contains("<svg")) {
+        return Some("an SVG drawing");
+    }
+    if start.starts_with("<?xml") && start.contains("<map") || start.starts_with("<map") {
+        return Some("a Tiled map (TMX)");
+    }
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        return Some("a PNG image");
+    }
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match extension.as_deref() {
+        Some("svg") => Some("an SVG drawing"),
+        Some("tmx") => Some("a Tiled map (TMX)"),
+        Some("tmj") => Some("a Tiled map (JSON)"),
+        Some("json") if start.starts_with('{') => Some("a JSON file (a Tiled map?)"),
+        Some("png") => Some("a PNG image"),
+        _ => None,
+    }
+}
+
 /// Parses and validates scene `text`; `path` names it in messages and
 /// `base` is the folder that relative paths resolve against.
 pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError> {
     // A UTF-8 byte-order mark is no part of the scene.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
-    let file: SceneFile = options.from_str(text).map_err(|e| SceneError::Invalid {
-        path: path.to_path_buf(),
-        line: e.span.start.line,
-        column: e.span.start.col,
-        message: e.code.to_string(),
+    let file: SceneFile = options.from_str(text).map_err(|e| {
+        let (at, message) = crate::explain::explain(&e, text);
+        let (line, column) = locate::position(text, at);
+        SceneError::Invalid {
+            path: path.to_path_buf(),
+            line,
+            column,
+            message,
+        }
     })?;
     // A validation error at byte `offset` of the text.
     let error_at = |offset: usize, message: String| {
@@ -381,7 +419,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         polygons.push(points);
     }
 
-    let warnings = overlap_warnings(text, &walls, file.walls.len());
+    let mut warnings = overlap_warnings(text, &walls, file.walls.len());
+    warnings.extend(crate::lint::lint(text, &file, &canvas));
     let scene = Scene::with_glass(canvas, floor, file.small_radius.0, walls, lights, bodies);
     let options = RenderOptions {
         samples: file.render.samples.0,
@@ -396,15 +435,20 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             IntegratorSpec::Light => Integrator::Light,
         },
         memo: MemoOptions {
-            enabled: file.render.cache,
+            enabled: file.render.cache.memo().0,
+            onward: file.render.cache.memo().1,
             bin_length: file.render.cache_bin.0,
             floor_samples: file.render.cache_floor_samples.0,
             ..MemoOptions::default()
         },
-        caustics: true,
+        caustics: file.render.caustics,
         reference: false,
         fast_paths: FastPaths::ALL,
-        light_choice: LightChoice::Auto,
+        light_choice: match file.render.lights {
+            LightsSpec::Auto => LightChoice::Auto,
+            LightsSpec::Every => LightChoice::Every,
+            LightsSpec::Table => LightChoice::Table,
+        },
     };
     Ok(Loaded {
         scene,
@@ -544,7 +588,7 @@ fn segments_meet(a: &Segment, b: &Segment) -> bool {
 }
 
 /// Whether `p` lies inside the polygon `v` (even-odd rule).
-fn inside_polygon(p: DVec2, v: &[DVec2]) -> bool {
+pub(crate) fn inside_polygon(p: DVec2, v: &[DVec2]) -> bool {
     let mut inside = false;
     for i in 0..v.len() {
         let (a, b) = (v[i], v[(i + 1) % v.len()]);
@@ -621,7 +665,7 @@ pub(crate) fn decode_within(
 fn load_floor_image(path: &PathBuf) -> Result<Floor, String> {
     let cannot =
         |e: &dyn std::fmt::Display| format!("cannot load the floor image {}: {e}", path.display());
-    let bytes = std::fs::read(path).map_err(|e| cannot(&e))?;
+    let bytes = crate::read_within(path, crate::MAX_INPUT_BYTES).map_err(|e| cannot(&e))?;
     let decoded = decode_within(&bytes, MAX_FLOOR_TEXELS).map_err(|failure| match failure {
         ImageFailure::TooLarge(width, height) => format!(
             "the floor image {} is {width} x {height} pixels, more than the {MAX_FLOOR_TEXELS} flatray reads: scale it down (one texel per pixel of the canvas is plenty)",

@@ -82,6 +82,80 @@ pub(crate) fn position(text: &str, offset: usize) -> (usize, usize) {
     (line, column)
 }
 
+/// The byte offset of 1-based `line` and `column` (in characters), as
+/// the RON parser reports them; the end of the text past its last line.
+pub(crate) fn offset(text: &str, line: usize, column: usize) -> usize {
+    let mut at = 0;
+    for (k, l) in text.split_inclusive('\n').enumerate() {
+        if k + 1 == line {
+            let within = l
+                .char_indices()
+                .nth(column.saturating_sub(1))
+                .map_or(l.len(), |(i, _)| i);
+            return at + within;
+        }
+        at += l.len();
+    }
+    text.len()
+}
+
+/// What surrounds byte `offset` of a scene's text, for messages that say
+/// what was meant: the token before it, the field whose value it is in,
+/// and the constructor it stands in.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Context {
+    /// The last token that ends at or before `offset`: its start, its
+    /// end, and its text.
+    pub previous: Option<(usize, usize, String)>,
+    /// The nearest field name (`name:`) whose value holds `offset`.
+    pub field: Option<String>,
+    /// The name before the innermost `(` that holds `offset`
+    /// (`Reinhard` in `Reinhard(4)`), if it has one.
+    pub enclosing: Option<String>,
+}
+
+/// The [`Context`] of byte `offset`.
+pub(crate) fn context(text: &str, offset: usize) -> Context {
+    // One frame per open bracket: the name before it, and the field whose
+    // value is being read inside it.
+    let mut frames: Vec<(Option<String>, Option<String>)> = vec![(None, None)];
+    let mut previous: Option<Token> = None;
+    let mut tokens = Tokens::new(text, 0).peekable();
+    while let Some(token) = tokens.next() {
+        if token.at >= offset {
+            break;
+        }
+        let word = |t: &Token| text[t.at..t.end].to_string();
+        match token.kind {
+            Kind::Open => {
+                let name = previous
+                    .filter(|p| p.kind == Kind::Word && p.end == token.at)
+                    .map(|p| word(&p));
+                frames.push((name, None));
+            }
+            Kind::Close => {
+                if frames.len() > 1 {
+                    frames.pop();
+                }
+            }
+            Kind::Word if tokens.peek().is_some_and(|t| t.kind == Kind::Colon) => {
+                if let Some(top) = frames.last_mut() {
+                    top.1 = Some(word(&token));
+                }
+            }
+            _ => {}
+        }
+        if token.end <= offset {
+            previous = Some(token);
+        }
+    }
+    Context {
+        previous: previous.map(|t| (t.at, t.end, text[t.at..t.end].to_string())),
+        field: frames.iter().rev().find_map(|f| f.1.clone()),
+        enclosing: frames.last().and_then(|f| f.0.clone()),
+    }
+}
+
 fn floor_char_boundary(text: &str, mut offset: usize) -> usize {
     while offset > 0 && !text.is_char_boundary(offset) {
         offset -= 1;
@@ -273,5 +347,25 @@ mod tests {
         assert!(list_items(text, "walls").is_empty());
         // A trailing comma adds no item.
         assert_eq!(list_items("(walls: [A, B,])", "walls").len(), 2);
+    }
+
+    #[test]
+    fn context_names_the_field_the_constructor_and_the_token_before() {
+        let text =
+            "Scene(\n  canvas: (360.5, 240), // a comment\n  render: (tonemap: Reinhard(4)),\n)";
+        let at = text.find(".5").unwrap();
+        let c = context(text, at);
+        assert_eq!(c.field.as_deref(), Some("canvas"));
+        assert_eq!(c.enclosing, None);
+        // `360.5` holds the offset: the token before it is the bracket.
+        assert_eq!(c.previous.map(|p| p.2), Some("(".to_string()));
+        let c = context(text, text.find("4)").unwrap());
+        assert_eq!(c.field.as_deref(), Some("tonemap"));
+        assert_eq!(c.enclosing.as_deref(), Some("Reinhard"));
+        // The comment is skipped: the token before `render` is the comma.
+        let c = context(text, text.find("render").unwrap());
+        assert_eq!(c.previous.map(|p| p.2), Some(",".to_string()));
+        let (line, column) = position(text, at);
+        assert_eq!(offset(text, line, column), at);
     }
 }

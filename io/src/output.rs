@@ -195,9 +195,19 @@ pub(crate) fn write_atomically(
     remove_stale_files(&folder);
     let temp = temp_path(&folder);
     let permissions = std::fs::metadata(path).ok().map(|m| m.permissions());
-    pending(|list| list.push(temp.clone()));
+    // Where the system offers a file with no name, the bytes go there
+    // and it is named only once whole: a write killed before that leaves
+    // nothing in the folder.
+    let unnamed = unnamed_file(&folder);
+    if unnamed.is_none() {
+        pending(|list| list.push(temp.clone()));
+    }
     let result = (|| {
-        let file = File::create(&temp).map_err(|e| e.to_string())?;
+        let named = unnamed.is_none();
+        let file = match unnamed {
+            Some(file) => file,
+            None => File::create(&temp).map_err(|e| e.to_string())?,
+        };
         let mut writer = BufWriter::new(file);
         write(&mut writer)?;
         let file = writer.into_inner().map_err(|e| e.to_string())?;
@@ -206,6 +216,10 @@ pub(crate) fn write_atomically(
             file.set_permissions(permissions)
                 .map_err(|e| e.to_string())?;
         }
+        if !named {
+            pending(|list| list.push(temp.clone()));
+            give_name(&file, &temp).map_err(|e| e.to_string())?;
+        }
         std::fs::rename(&temp, path).map_err(|e| e.to_string())
     })();
     if result.is_err() {
@@ -213,6 +227,42 @@ pub(crate) fn write_atomically(
     }
     pending(|list| list.retain(|p| *p != temp));
     result.map_err(fail)
+}
+
+/// A file with no name in `folder` (Linux's `O_TMPFILE`), where the
+/// system and the folder's file system offer one.
+#[cfg(target_os = "linux")]
+fn unnamed_file(folder: &Path) -> Option<File> {
+    use rustix::fs::{Mode, OFlags};
+    let flags = OFlags::TMPFILE | OFlags::WRONLY | OFlags::CLOEXEC;
+    let fd = rustix::fs::open(folder, flags, Mode::from_raw_mode(0o666)).ok()?;
+    Some(File::from(fd))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn unnamed_file(_folder: &Path) -> Option<File> {
+    None
+}
+
+/// Gives the unnamed `file` the name `name` (`linkat` through its
+/// `/proc/self/fd` entry, which needs no privilege).
+#[cfg(target_os = "linux")]
+fn give_name(file: &File, name: &Path) -> std::io::Result<()> {
+    use std::os::fd::AsRawFd;
+    let entry = format!("/proc/self/fd/{}", file.as_raw_fd());
+    rustix::fs::linkat(
+        rustix::fs::CWD,
+        entry.as_str(),
+        rustix::fs::CWD,
+        name,
+        rustix::fs::AtFlags::SYMLINK_FOLLOW,
+    )
+    .map_err(std::io::Error::from)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn give_name(_file: &File, _name: &Path) -> std::io::Result<()> {
+    Err(std::io::Error::other("no unnamed files here"))
 }
 
 /// The prefix of every temporary file flatray writes.
@@ -273,5 +323,33 @@ fn remove_stale_files(folder: &Path) {
         {
             let _ = std::fs::remove_file(entry.path());
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// While an image is being written, the folder holds no new name
+    /// (Linux: the bytes go to an unnamed file), so a killed write leaves
+    /// nothing; once written, the file holds the bytes.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_write_in_progress_has_no_name_in_the_folder() {
+        let dir = std::env::temp_dir().join(format!("flatray-unnamed-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("out.txt");
+        let seen = std::cell::Cell::new(usize::MAX);
+        write_atomically(&target, |w| {
+            std::io::Write::write_all(w, b"whole").map_err(|e| e.to_string())?;
+            seen.set(std::fs::read_dir(&dir).unwrap().count());
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(seen.get(), 0);
+        assert_eq!(std::fs::read(&target).unwrap(), b"whole");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

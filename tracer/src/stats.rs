@@ -192,6 +192,7 @@ impl fmt::Display for Noise {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.relative() {
             Some(r) => write!(f, "about {:.2} % relative RMS error", r * 100.0),
+            None if self.pixels > 0 => write!(f, "none: the image is black"),
             None => write!(f, "not estimated (it takes at least 2 samples per pixel)"),
         }
     }

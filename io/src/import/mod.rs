@@ -150,10 +150,11 @@ pub const LINE_INTENSITY: f64 = 1.0;
 /// Reads the plan at `path`, its kind told by its extension, else by its
 /// first bytes.
 pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportError> {
-    let bytes = std::fs::read(path).map_err(|e| ImportError::Read {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+    let bytes =
+        crate::read_within(path, crate::MAX_INPUT_BYTES).map_err(|e| ImportError::Read {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
     if !(options.scale.is_finite() && options.scale > 0.0 && options.scale <= 1e6) {
         return Err(invalid(
             path,
@@ -490,10 +491,10 @@ impl Imported {
             comment(&self.source)
         ));
         out.push_str(&format!(
-            "// {} walls, {} lights, {} glass bodies. Edit freely: every field is in\n// docs/scene-format.md.\n",
-            self.walls.len(),
-            self.lights.len(),
-            self.glass.len()
+            "// {}, {}, {}. Edit freely: every field is in\n// docs/scene-format.md.\n",
+            crate::counted(self.walls.len(), "wall", "walls"),
+            crate::counted(self.lights.len(), "light", "lights"),
+            crate::counted(self.glass.len(), "glass body", "glass bodies"),
         ));
         for note in &self.notes {
             out.push_str(&format!("// Cut: {}\n", comment(note)));
@@ -588,10 +589,10 @@ impl fmt::Display for Imported {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} walls, {} lights, {} glass bodies on a {} x {} canvas",
-            self.walls.len(),
-            self.lights.len(),
-            self.glass.len(),
+            "{}, {}, {} on a {} x {} canvas",
+            crate::counted(self.walls.len(), "wall", "walls"),
+            crate::counted(self.lights.len(), "light", "lights"),
+            crate::counted(self.glass.len(), "glass body", "glass bodies"),
             self.canvas.0,
             self.canvas.1
         )

@@ -1,0 +1,130 @@
+//! `--json`: what `check`, `plan` and `render --stats` print, as one JSON
+//! object each, for scripts. The fields are listed in `docs/cli.md`
+//! ("Machine-readable output"); a field once there keeps its name and
+//! meaning, and new ones may be added.
+
+use std::path::Path;
+
+use flatray_io::{Loaded, Warning};
+use flatray_tracer::{Plan, RenderOptions, Stats};
+use serde_json::{Value, json};
+
+/// The version of these objects' layout: raised when a field changes
+/// name or meaning (never when one is added).
+pub(crate) const FORMAT: u32 = 1;
+
+/// A scene's warnings: `[{line, column, message}]`.
+pub(crate) fn warnings(warnings: &[Warning]) -> Value {
+    Value::Array(
+        warnings
+            .iter()
+            .map(|w| json!({"line": w.line, "column": w.column, "message": w.message}))
+            .collect(),
+    )
+}
+
+/// One scene as `check` found it.
+pub(crate) fn checked(path: &Path, loaded: &Loaded) -> Value {
+    let c = loaded.counts;
+    json!({
+        "path": path.display().to_string(),
+        "ok": true,
+        "walls": c.walls,
+        "emitting_walls": c.emitting_walls,
+        "lights": c.lights,
+        "glass": c.glass,
+        "canvas": [loaded.scene.canvas.width, loaded.scene.canvas.height],
+        "warnings": warnings(&loaded.warnings),
+    })
+}
+
+/// One scene that `check` refused: its error, located where it points.
+pub(crate) fn refused(path: &Path, error: &flatray_io::SceneError) -> Value {
+    let (line, column) = match error.location() {
+        Some((l, c)) => (json!(l), json!(c)),
+        None => (Value::Null, Value::Null),
+    };
+    json!({
+        "path": path.display().to_string(),
+        "ok": false,
+        "error": {"line": line, "column": column, "message": match error {
+            flatray_io::SceneError::Invalid { message, .. } => message.clone(),
+            other => other.to_string(),
+        }},
+    })
+}
+
+/// The plan: the settings it read, and every effect with whether it runs
+/// and why.
+pub(crate) fn plan(plan: &Plan, options: &RenderOptions) -> Value {
+    let effects: Vec<Value> = plan
+        .effects()
+        .iter()
+        .map(|e| json!({"name": e.name, "runs": e.runs, "why": e.why, "internal": e.is_internal()}))
+        .collect();
+    json!({
+        "settings": {
+            "integrator": match options.integrator {
+                flatray_tracer::Integrator::Path => "path",
+                flatray_tracer::Integrator::Original => "original",
+                flatray_tracer::Integrator::Light => "light",
+            },
+            "bounces": options.bounces,
+            "specular": options.specular,
+            "cache": match (options.memo.enabled, options.memo.onward) {
+                (false, _) => "off",
+                (true, true) => "on",
+                (true, false) => "direct",
+            },
+            "caustics": options.caustics,
+        },
+        "effects": effects,
+    })
+}
+
+/// A render's counts: what was simulated (`physics`), the work it took
+/// (`work`), and the estimated noise.
+pub(crate) fn stats(stats: &Stats) -> Value {
+    let p = &stats.physics;
+    let w = &stats.work;
+    json!({
+        "noise": {
+            "relative": stats.noise.relative(),
+            "relative_per_channel": stats.noise.relative_per_channel(),
+            "pixels": stats.noise.pixels,
+        },
+        "physics": {
+            "camera_samples": p.camera_samples,
+            "light_paths": p.light_paths,
+            "caustic_photons": p.caustic_photons,
+            "paths_to_walls": p.paths_to_walls,
+            "paths_escaped": p.paths_escaped,
+            "paths_bounce_limit": p.paths_bounce_limit,
+            "paths_roulette": p.paths_roulette,
+            "paths_onward": p.paths_onward,
+            "paths_absorbed": p.paths_absorbed,
+            "mirror_reflections": p.mirror_reflections,
+            "transparent_passes": p.transparent_passes,
+            "glass_events": p.glass_events,
+            "nonfinite_samples": p.nonfinite_samples,
+        },
+        "work": {
+            "rays": stats.rays(),
+            "shadow_rays": w.shadow_rays,
+            "bounce_rays": w.bounce_rays,
+            "culled_rays": w.culled_rays,
+            "memo_entries": w.memo_entries,
+            "memo_bytes": w.memo_bytes,
+            "memo_fill_rays": w.memo_fill_rays,
+            "memo_lookups": w.memo_lookups,
+            "memo_checks": w.memo_checks,
+            "floor_memo_reuses": w.floor_memo_reuses,
+            "floor_shared_visibility": w.floor_shared_visibility,
+            "chosen_lights": w.chosen_lights,
+            "light_table_bytes": w.light_table_bytes,
+            "onward_lookups": w.onward_lookups,
+            "onward_rays": w.onward_rays,
+            "onward_bytes": w.onward_bytes,
+        },
+    })
+}
