@@ -15,9 +15,11 @@ use crate::{Failure, checked_size, load, progress_bar};
 /// The ways of rendering a study can compare.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum Config {
-    /// Path tracing with the direct-light memo.
-    PathMemo,
-    /// Path tracing, every shadow ray cast.
+    /// Path tracing with the cache of light on walls (`--cache on`).
+    #[value(alias = "path-memo")]
+    PathCache,
+    /// Path tracing without the cache (`--cache off`): every shadow ray
+    /// cast.
     Path,
     /// The original project's estimator: uniform bounces aimed at the lights.
     Original,
@@ -28,7 +30,7 @@ pub(crate) enum Config {
 impl Config {
     fn name(self) -> &'static str {
         match self {
-            Config::PathMemo => "path+memo",
+            Config::PathCache => "path-cache",
             Config::Path => "path",
             Config::Original => "original",
             Config::Light => "light",
@@ -37,7 +39,7 @@ impl Config {
 
     fn options(self, base: &RenderOptions) -> RenderOptions {
         let (integrator, memo) = match self {
-            Config::PathMemo => (Integrator::Path, true),
+            Config::PathCache => (Integrator::Path, true),
             Config::Path => (Integrator::Path, false),
             Config::Original => (Integrator::Original, false),
             Config::Light => (Integrator::Light, false),
@@ -77,15 +79,16 @@ pub(crate) struct ConvergeArgs {
     #[arg(long, default_value_t = 120.0, allow_negative_numbers = true)]
     budget: f64,
     /// The configurations to compare (comma-separated).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathMemo, Config::Path, Config::Original, Config::Light])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathCache, Config::Path, Config::Original, Config::Light])]
     configs: Vec<Config>,
     /// Pixels per world unit, as for `render`.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     scale: f64,
-    /// Most diffuse reflections off walls (overrides the scene).
+    /// Most diffuse reflections off walls (overrides the scene; default 1).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
     bounces: Option<u32>,
-    /// Most mirror and glass events in a row (overrides the scene).
+    /// Most mirror and glass events in a row (overrides the scene;
+    /// default 32).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
     specular: Option<u32>,
     /// No progress bar.

@@ -58,6 +58,11 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Render a scene to a PNG (tone-mapped) or EXR (linear) image.
+    #[command(after_help = "Examples:
+  flatray render scenes/room.ron -o room.png                render with the scene's settings
+  flatray render scenes/room.ron --scale 0.25 --spp 8       a quick preview
+  flatray render scenes/room.ron --target-error 1 -o r.exr  until the noise is about 1 %
+  flatray render scenes/room.ron --stats --json             what was done, for a script")]
     Render(RenderArgs),
     /// Validate scene files and warn about what would make a render wrong
     /// or wasteful; exit 0, or print the errors and exit 2.
@@ -75,27 +80,34 @@ enum Command {
     },
     /// Print the render plan: which effects the scene calls for, which are
     /// skipped and why.
+    #[command(after_help = "Examples:
+  flatray plan scenes/room.ron                  the effects simulated and skipped
+  flatray plan scenes/room.ron --bounces 3      the same with more bounces
+  flatray plan scenes/room.ron --verbose        how the work is done too
+  flatray plan scenes/room.ron --json           one JSON object (docs/cli.md)")]
     Plan {
         /// The scene file (RON).
         scene: PathBuf,
-        /// Most diffuse reflections off walls (overrides the scene).
+        /// Most diffuse reflections off walls (overrides the scene; default
+        /// 1).
         #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
         bounces: Option<u32>,
-        /// Most mirror and glass events in a row (overrides the scene).
+        /// Most mirror and glass events in a row (overrides the scene;
+        /// default 32).
         #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
         specular: Option<u32>,
-        /// The cache of light on walls (overrides the scene).
+        /// The cache of light on walls (overrides the scene; default on).
         #[arg(long, value_enum)]
         cache: Option<CacheArg>,
         /// The caustic pass: points, spots and sun seen in mirrors and
-        /// glass (on by default).
+        /// glass (overrides the scene; default on).
         #[arg(long, value_enum)]
         caustics: Option<Switch>,
         /// Which lights each point's shadow rays go to (overrides the
         /// scene; default: auto).
         #[arg(long, value_enum)]
         lights: Option<LightsArg>,
-        /// The estimator (overrides the scene).
+        /// The estimator (overrides the scene; default path).
         #[arg(long, value_enum)]
         integrator: Option<IntegratorArg>,
         /// Also say how the work is done (shared shadow rays, culling,
@@ -107,22 +119,45 @@ enum Command {
         json: bool,
     },
     /// Measure error against seconds and samples for each way of rendering.
+    #[command(after_help = "Examples:
+  flatray converge scenes/room.ron --scale 0.5                 every way of rendering, a reference first
+  flatray converge scenes/room.ron --configs path-cache,light  two of them
+  flatray converge scenes/room.ron --reference ref.exr         against a reference of your own")]
     Converge(converge::ConvergeArgs),
     /// Turn a floor plan from another tool (an SVG drawing, a Tiled map in
     /// TMX or JSON, a wall-mask image) into a commented scene file.
+    #[command(after_help = "Examples:
+  flatray import plan.svg -o plan.ron                 an Inkscape drawing (docs/import.md)
+  flatray import plan.svg --scale 3.78 -o plan.ron    millimetres to canvas pixels
+  flatray import level.tmx -o level.ron               a Tiled map
+  flatray import walls.png --tolerance 2 -o w.ron     a wall mask, outlines simplified")]
     Import(ImportArgs),
     /// Make up an apartment's floor plan (rooms with doors and windows,
     /// furniture, coloured walls, mirrors, lamps) as a scene file: for
     /// trying flatray, and benchmarking it, on a plan of any size.
+    #[command(after_help = "Examples:
+  flatray generate -o apartment.ron                     16 rooms
+  flatray generate --rooms 400 --lamps 2 -o big.ron     a large plan, for benchmarks
+  flatray generate --seed 7 --no-sun -o night.ron       another plan, at night")]
     Generate(GenerateArgs),
     /// Print a shell completion script (for example:
     /// `flatray completions bash > ~/.local/share/bash-completion/completions/flatray`).
+    #[command(after_help = "Examples:
+  flatray completions bash > ~/.local/share/bash-completion/completions/flatray
+  flatray completions zsh > ~/.zfunc/_flatray")]
     Completions {
         /// The shell.
         shell: clap_complete::Shell,
     },
-    /// Print the manual page in roff (for example: `flatray man | man -l -`).
-    Man,
+    /// Print a manual page in roff (for example: `flatray man | man -l -`).
+    #[command(after_help = "Examples:
+  flatray man | man -l -                 the page of flatray(1)
+  flatray man render | man -l -          the page of flatray-render(1)
+  flatray man render > flatray-render.1  to install")]
+    Man {
+        /// The subcommand whose page to print (default: flatray's own).
+        subcommand: Option<String>,
+    },
 }
 
 #[derive(Debug, clap::Args)]
@@ -163,7 +198,8 @@ struct GenerateArgs {
     /// Rooms, on a grid about as wide as it is tall.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     rooms: u32,
-    /// Lamps per room (every fourth a spot).
+    /// Lamps per room: points, and from 4 lamps a room on, every fourth
+    /// of a room's lamps a spot (so 1 to 3 make points only).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=64))]
     lamps: u32,
     /// The share of rooms with a mirror, 0 to 1.
@@ -189,11 +225,12 @@ struct RenderArgs {
     /// Default: the scene's name with .png, in the current folder.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Samples per pixel (overrides the scene).
+    /// Samples per pixel (overrides the scene; default 16).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)), conflicts_with_all = ["target_error", "time"])]
     spp: Option<u32>,
     /// Most diffuse reflections off walls between a light and the floor
-    /// (overrides the scene). Mirrors, glass and panes do not count.
+    /// (overrides the scene; default 1). Mirrors, glass and panes do not
+    /// count.
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
     bounces: Option<u32>,
     /// Most mirror and glass events in a row, between a light, a wall or
@@ -201,21 +238,21 @@ struct RenderArgs {
     /// Russian roulette past 8).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
     specular: Option<u32>,
-    /// Seed of the random streams (overrides the scene).
+    /// Seed of the random streams (overrides the scene; default 0).
     #[arg(long)]
     seed: Option<u64>,
-    /// Multiplies every pixel value (overrides the scene).
+    /// Multiplies every pixel value (overrides the scene; default 1).
     #[arg(long, allow_negative_numbers = true)]
     exposure: Option<f64>,
-    /// The estimator (overrides the scene).
+    /// The estimator (overrides the scene; default path).
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
-    /// The cache of light on walls (overrides the scene).
+    /// The cache of light on walls (overrides the scene; default on).
     #[arg(long, value_enum)]
     cache: Option<CacheArg>,
     /// The caustic pass: points, spots and sun seen in mirrors and glass
-    /// (on by default; off, their light through mirrors and glass is
-    /// missing).
+    /// (overrides the scene; default on; off, their light through mirrors
+    /// and glass is missing).
     #[arg(long, value_enum)]
     caustics: Option<Switch>,
     /// Which lights each point's shadow rays go to (overrides the scene;
@@ -455,9 +492,7 @@ where
             clap_complete::generate(shell, &mut command, "flatray", &mut out);
             Ok(())
         }
-        Command::Man => clap_mangen::Man::new(<Cli as clap::CommandFactory>::command())
-            .render(&mut out)
-            .map_err(|e| Failure::other(format!("cannot write the manual: {e}"))),
+        Command::Man { subcommand } => manual(subcommand.as_deref(), &mut out),
     };
     let result = result.and_then(|()| out.finish());
     match result {
@@ -466,6 +501,36 @@ where
             let _ = writeln!(err, "error: {}", failure.message);
             failure.code
         }
+    }
+}
+
+/// Prints the manual page of flatray, or of one of its subcommands
+/// (`flatray-render(1)` and so on, as flatray's own page names them).
+fn manual(subcommand: Option<&str>, out: &mut dyn Write) -> Result<(), Failure> {
+    let command = <Cli as clap::CommandFactory>::command();
+    let page = match subcommand {
+        None => command,
+        Some(name) => {
+            let names: Vec<&str> = command.get_subcommands().map(|c| c.get_name()).collect();
+            let Some(found) = command.find_subcommand(name) else {
+                let near = flatray_io::did_you_mean(name, &names)
+                    .map_or(String::new(), |n| format!(" (did you mean `{n}`?)"));
+                return Err(Failure::usage(format!(
+                    "man: no subcommand `{name}`{near}; the subcommands are {}",
+                    names.join(", ")
+                )));
+            };
+            found
+                .clone()
+                .name(format!("flatray-{name}"))
+                .version(env!("CARGO_PKG_VERSION"))
+        }
+    };
+    match clap_mangen::Man::new(page).render(out) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Failure::other(format!("cannot write the manual: {e}")))
+        }
+        _ => Ok(()),
     }
 }
 

@@ -187,7 +187,7 @@ fn unknown(what: &str, found: &str, expected: &[&str]) -> String {
 
 /// The name among `expected` nearest `found`, when one is near enough to
 /// be a slip.
-pub(crate) fn did_you_mean<'a>(found: &str, expected: &[&'a str]) -> Option<&'a str> {
+pub fn did_you_mean<'a>(found: &str, expected: &[&'a str]) -> Option<&'a str> {
     let near = expected
         .iter()
         .map(|e| {

@@ -15,7 +15,8 @@ pub struct Apartment {
     /// Rooms, laid out on a grid about as wide as it is tall (at least 1,
     /// at most 10,000).
     pub rooms: u32,
-    /// Lamps per room (at most 64): points, and one in four a spot.
+    /// Lamps per room (at most 64): points, and the fourth, eighth and so
+    /// on of each room's lamps a spot (1 to 3 a room make points only).
     pub lamps_per_room: u32,
     /// The share of rooms with a mirror on a wall (0 to 1).
     pub mirrors: f64,

@@ -12,6 +12,7 @@
 
 mod error;
 mod explain;
+pub use explain::did_you_mean;
 pub mod format;
 pub mod generate;
 pub mod import;

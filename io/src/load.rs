@@ -60,11 +60,15 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
         source,
     };
     let bytes = crate::read_within(path, crate::MAX_INPUT_BYTES).map_err(read_error)?;
-    if let Some(what) = foreign(path, &bytes) {
-        return Err(SceneError::NotAScene {
-            path: path.to_path_buf(),
-            what,
-        });
+    let foreign = foreign(path, &bytes);
+    let not_a_scene = |what| SceneError::NotAScene {
+        path: path.to_path_buf(),
+        what,
+    };
+    // What a file's first bytes say it is comes first; its name counts
+    // only when its text is no scene either.
+    if let Some((what, true)) = foreign {
+        return Err(not_a_scene(what));
     }
     let text = String::from_utf8(bytes).map_err(|e| {
         let valid = e.utf8_error().valid_up_to();
@@ -77,37 +81,41 @@ pub fn load(path: &Path) -> Result<Loaded, SceneError> {
         ))
     })?;
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let mut loaded = parse(&text, path, &base)?;
+    let mut loaded = match (parse(&text, path, &base), foreign) {
+        (Err(_), Some((what, _))) => return Err(not_a_scene(what)),
+        (result, _) => result?,
+    };
     loaded.inputs.insert(0, path.to_path_buf());
     Ok(loaded)
 }
 
 /// What the file at `path` is, when it is one of the plans that `flatray
-/// import` reads rather than a scene: by its first bytes, or by its
-/// name when those say nothing.
-fn foreign(path: &Path, bytes: &[u8]) -> Option<&'static str> {
+/// import` reads rather than a scene, and whether its first bytes say so
+/// (otherwise only its name does).
+fn foreign(path: &Path, bytes: &[u8]) -> Option<(&'static str, bool)> {
     let start = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]);
     let start = start.trim_start_matches('\u{feff}').trim_start();
     if start.starts_with("<svg") || (start.starts_with("<?xml") && start.contains("<svg")) {
-        return Some("an SVG drawing");
+        return Some(("an SVG drawing", true));
     }
     if start.starts_with("<?xml") && start.contains("<map") || start.starts_with("<map") {
-        return Some("a Tiled map (TMX)");
+        return Some(("a Tiled map (TMX)", true));
     }
     if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-        return Some("a PNG image");
+        return Some(("a PNG image", true));
     }
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match extension.as_deref() {
-        Some("svg") => Some("an SVG drawing"),
-        Some("tmx") => Some("a Tiled map (TMX)"),
-        Some("tmj") => Some("a Tiled map (JSON)"),
-        Some("json") if start.starts_with('{') => Some("a JSON file (a Tiled map?)"),
-        Some("png") => Some("a PNG image"),
-        _ => None,
-    }
+    let what = match extension.as_deref() {
+        Some("svg") => "an SVG drawing",
+        Some("tmx") => "a Tiled map (TMX)",
+        Some("tmj") => "a Tiled map (JSON)",
+        Some("json") => "a JSON file (a Tiled map?)",
+        Some("png") => "a PNG image",
+        _ => return None,
+    };
+    Some((what, false))
 }
 
 /// Parses and validates scene `text`; `path` names it in messages and

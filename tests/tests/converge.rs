@@ -52,7 +52,7 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
     assert_eq!(rows.len(), 4 * 7, "{csv}");
-    for config in ["path+memo", "path", "original", "light"] {
+    for config in ["path-cache", "path", "original", "light"] {
         let points: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r[0] == config)
@@ -86,7 +86,7 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
             // The memo's bias may flatten it a little; its onward part
             // gathers more stratified directions per wall bin as the
             // samples grow, which steepens it over this ladder.
-            "path+memo" => assert!((-1.0..=-0.35).contains(&slope), "{config}: slope {slope}"),
+            "path-cache" => assert!((-1.0..=-0.35).contains(&slope), "{config}: slope {slope}"),
             // Independent photons: samples^(-1/2); the light tracer's
             // different estimate of the pixel holding the point light may
             // flatten it a little.

@@ -182,20 +182,39 @@ pub(crate) fn run<E: Estimator>(
     // One unit at a time: rayon would otherwise hand a thread a run of
     // units that no other thread can take from, leaving the others idle
     // at the end while it finishes them.
-    let parts: Vec<(Part, Stats)> = (0..estimator.units())
+    //
+    // A tile's values go into the film as soon as they are made (tiles
+    // cover disjoint pixels, so the order of their copies changes no
+    // bit), so that the image's sums are held once, not once in the parts
+    // and again in the film. Splats are summed, so they wait and are
+    // added in unit order, as are the statistics.
+    let (width, height) = estimator.size();
+    let film = std::sync::Mutex::new(Film::new(width, height));
+    let parts: Vec<(Option<Part>, Stats)> = (0..estimator.units())
         .into_par_iter()
         .with_max_len(1)
         .map(|unit| {
             let mut stats = Stats::default();
-            let part = estimator.render_unit(unit, &mut stats, progress);
+            let part = match estimator.render_unit(unit, &mut stats, progress) {
+                tile @ Part::Tile { .. } => {
+                    film.lock()
+                        .unwrap_or_else(|poisoned| poisoned.into_inner())
+                        .add(tile);
+                    None
+                }
+                splats => Some(splats),
+            };
             (part, stats)
         })
         .collect();
-    let (width, height) = estimator.size();
-    let mut film = Film::new(width, height);
+    let mut film = film
+        .into_inner()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     for (part, unit_stats) in parts {
         stats.merge(&unit_stats);
-        film.add(part);
+        if let Some(part) = part {
+            film.add(part);
+        }
     }
     let output = estimator.finish(film, &mut stats);
     Outcome { output, stats }

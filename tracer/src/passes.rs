@@ -242,41 +242,35 @@ impl Totals {
         let n = self.samples as f64;
         let (n1, n2) = (self.first, n - self.first);
         let weight = n1 * n2 / (n * n);
-        let rows: Vec<(Vec<[f32; 3]>, Stats)> = self
-            .sums
-            .par_chunks(width as usize)
+        // Each row is written in place: the image is held once, beside
+        // the sums.
+        let mut image = Image::new(width, height);
+        let rows: Vec<Stats> = image
+            .pixels
+            .par_chunks_mut(width as usize)
+            .zip(self.sums.par_chunks(width as usize))
             .enumerate()
-            .map(|(y, row)| {
+            .map(|(y, (out, row))| {
                 let mut stats = Stats::default();
-                let pixels = row
-                    .iter()
-                    .enumerate()
-                    .map(|(x, sums)| {
-                        let (x, y) = (x as u32, y as u32);
-                        let scale = pixel_scale(scene, self.size, (x, y), exposure);
-                        let value = sums.all / n * scale;
-                        if n1 > 0.0 && n2 > 0.0 {
-                            let difference = sums.first / n1 - (sums.all - sums.first) / n2;
-                            stats.noise.add(difference * scale, value, weight);
-                        }
-                        if value.is_finite() {
-                            [value.x as f32, value.y as f32, value.z as f32]
-                        } else {
-                            stats.record_nonfinite(x, y, u32::MAX);
-                            [0.0; 3]
-                        }
-                    })
-                    .collect();
-                (pixels, stats)
+                for (x, (pixel, sums)) in out.iter_mut().zip(row).enumerate() {
+                    let (x, y) = (x as u32, y as u32);
+                    let scale = pixel_scale(scene, self.size, (x, y), exposure);
+                    let value = sums.all / n * scale;
+                    if n1 > 0.0 && n2 > 0.0 {
+                        let difference = sums.first / n1 - (sums.all - sums.first) / n2;
+                        stats.noise.add(difference * scale, value, weight);
+                    }
+                    *pixel = if value.is_finite() {
+                        [value.x as f32, value.y as f32, value.z as f32]
+                    } else {
+                        stats.record_nonfinite(x, y, u32::MAX);
+                        [0.0; 3]
+                    };
+                }
+                stats
             })
             .collect();
-        let mut image = Image {
-            width,
-            height,
-            pixels: Vec::with_capacity(self.sums.len()),
-        };
-        for (pixels, row_stats) in rows {
-            image.pixels.extend(pixels);
+        for row_stats in rows {
             stats.merge(&row_stats);
         }
         Rendered { image, stats }

@@ -60,7 +60,12 @@ pub(super) fn read(
     let tolerance = options.tolerance;
     let mut walls = Vec::new();
     for (k, outline) in loops.iter().enumerate() {
-        let simple = simplify_loop(outline, tolerance);
+        // A loop too small to simplify (a pixel, a one-pixel line) keeps
+        // its traced corners: a wall never vanishes.
+        let simple = match simplify_loop(outline, tolerance) {
+            simple if simple.len() >= 3 => simple,
+            _ => outline.clone(),
+        };
         if simple.len() < 3 {
             continue;
         }

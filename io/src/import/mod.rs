@@ -393,8 +393,9 @@ pub(crate) fn edges(points: &[DVec2], closed: bool) -> Vec<(DVec2, DVec2)> {
     out
 }
 
-/// Points `(x, y)`, in order, simplified by Douglas-Peucker to within
-/// `tolerance`: the first and last are kept.
+/// Points `(x, y)`, in order, simplified by Douglas-Peucker: the first
+/// and last are kept, and a run of points becomes one edge when the
+/// middles of its edges lie within `tolerance` of it.
 pub(crate) fn simplify(points: &[DVec2], tolerance: f64) -> Vec<DVec2> {
     if points.len() < 3 {
         return points.to_vec();
@@ -407,18 +408,28 @@ pub(crate) fn simplify(points: &[DVec2], tolerance: f64) -> Vec<DVec2> {
         let (a, b) = (points[first], points[last]);
         let edge = b - a;
         let length = edge.length();
-        let mut farthest = (0.0, first);
-        for (k, &p) in points.iter().enumerate().take(last).skip(first + 1) {
-            let d = if length > 0.0 {
+        let off = |p: DVec2| {
+            if length > 0.0 {
                 edge.perp_dot(p - a).abs() / length
             } else {
                 p.distance(a)
-            };
+            }
+        };
+        let mut farthest = (0.0, first);
+        for (k, &p) in points.iter().enumerate().take(last).skip(first + 1) {
+            let d = off(p);
             if d > farthest.0 {
                 farthest = (d, k);
             }
         }
-        if farthest.0 > tolerance {
+        // The chord stands for the points between when the middles of
+        // their edges lie within the tolerance: a staircase of pixels, of
+        // any slope, is the straight line it draws, not a zigzag of its
+        // corners (which lie up to half a step further out).
+        let stray = (first..last)
+            .map(|j| off((points[j] + points[j + 1]) * 0.5))
+            .fold(0.0, f64::max);
+        if stray > tolerance && farthest.1 != first {
             keep[farthest.1] = true;
             stack.push((first, farthest.1));
             stack.push((farthest.1, last));

@@ -223,7 +223,7 @@ impl Reader<'_> {
         let world = |pt: usvg::tiny_skia_path::Point| {
             let mut q = [pt];
             transform.map_points(&mut q);
-            DVec2::new(q[0].x as f64 * scale, q[0].y as f64 * scale)
+            DVec2::new(single(q[0].x as f64 * scale), single(q[0].y as f64 * scale))
         };
         // Pieces per curve, from how far its control points stray from
         // its chord (a bound on the curve's own distance from it).
@@ -397,4 +397,15 @@ impl Reader<'_> {
             Mark::Skip => {}
         }
     }
+}
+
+/// `v` to the precision of the drawing's own numbers (usvg's are 32-bit):
+/// the shortest decimal that reads back as the same 32-bit number, so that
+/// 5 mm is written `18.897638`, not `18.89763832092285`.
+fn single(v: f64) -> f64 {
+    let narrow = v as f32;
+    if !narrow.is_finite() {
+        return v;
+    }
+    format!("{narrow}").parse().unwrap_or(v)
 }
