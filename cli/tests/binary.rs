@@ -525,17 +525,38 @@ fn written_passes_survive_an_interrupt() {
         .output()
         .unwrap();
     assert_eq!(alone.status.code(), Some(2), "{alone:?}");
-    let args = [room.to_str().unwrap(), "--scale", "0.4"];
-    let child = spawn_render(
-        &[&args[..], &["--target-error", "0.001", "--write-passes"]].concat(),
-        &out,
-    );
+    let child = flatray()
+        .args(["render", room.to_str().unwrap(), "--scale", "0.4"])
+        .args(["--target-error", "0.001", "--write-passes", "-q", "-o"])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
     // The first passes take well under a second at this size.
     let started = std::time::Instant::now();
     while !out.exists() && started.elapsed().as_secs() < 60 {
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    assert_eq!(interrupt(child, "-INT").code(), Some(130));
+    // Let a pass or two more finish after the first file appears.
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(output.status.code(), Some(130));
+    // The message says what the kept file holds.
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let said = format!("{} holds the last finished pass: ", out.display());
+    let spp: u32 = stderr
+        .split(&said)
+        .nth(1)
+        .and_then(|rest| rest.split(" spp").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stderr}"));
+    assert!(spp >= 16 && spp.is_power_of_two(), "{stderr}");
     let image = std::fs::read(&out).unwrap();
     // A whole PNG: its signature, and its end chunk last.
     assert!(image.starts_with(b"\x89PNG\r\n\x1a\n"));
@@ -543,4 +564,190 @@ fn written_passes_survive_an_interrupt() {
     // Nothing else is left in the folder.
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A floor image that is not a regular file (a device that never ends, a
+/// pipe that nobody writes) is refused before a byte is read, under a
+/// 100 MiB limit on the process's data (which a read of `/dev/zero` would
+/// exhaust in a fraction of a second): exit 2 with a message, no hang.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_floor_image_that_is_not_a_file_is_refused_within_100_mib() {
+    let dir = scratch("not-a-file");
+    let fifo = dir.join("floor.png");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let scene = |floor: &str| {
+        let path = dir.join(format!("s{}.ron", floor.len()));
+        std::fs::write(
+            &path,
+            format!(
+                "Scene(canvas: (20, 20), floor: Image({floor:?}), lights: [Point(at: (10, 10))])"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let plain = dir.join("plain.ron");
+    std::fs::write(&plain, SMALL).unwrap();
+    let limited = |args: &[&str]| {
+        let mut child = Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -d 102400 && exec \"$0\" \"$@\"")
+            .arg(env!("CARGO_BIN_EXE_flatray"))
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let started = std::time::Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            if started.elapsed().as_secs() > 60 {
+                let _ = child.kill();
+                panic!("{args:?}: still running after 60 s");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        child.wait_with_output().unwrap()
+    };
+    // The limit leaves room for a render of its own.
+    let out = dir.join("o.png");
+    let ok = limited(&[
+        "render",
+        plain.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(ok.status.code(), Some(0), "{ok:?}");
+    for floor in ["/dev/zero", fifo.to_str().unwrap()] {
+        let path = scene(floor);
+        for command in ["check", "render"] {
+            let args = match command {
+                "check" => vec![command, path.to_str().unwrap()],
+                _ => vec![command, path.to_str().unwrap(), "-q"],
+            };
+            let run = limited(&args);
+            let stderr = String::from_utf8_lossy(&run.stderr);
+            assert_eq!(run.status.code(), Some(2), "{floor} {command}: {stderr}");
+            assert!(stderr.contains("not a regular file"), "{floor}: {stderr}");
+            assert!(!stderr.contains("memory"), "{floor}: {stderr}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `generate` and `import` never replace a file without `--force`.
+#[test]
+fn generate_and_import_keep_an_existing_scene() {
+    let dir = scratch("force");
+    let target = dir.join("mine.ron");
+    std::fs::write(&target, "// my own work\n").unwrap();
+    let mask =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/import/house-mask.png");
+    for args in [
+        vec!["generate", "--rooms", "2", "-o"],
+        vec!["import", mask.to_str().unwrap(), "-o"],
+    ] {
+        let run = flatray().args(&args).arg(&target).output().unwrap();
+        assert_eq!(run.status.code(), Some(2), "{args:?} {run:?}");
+        assert!(String::from_utf8_lossy(&run.stderr).contains("without --force"));
+        assert_eq!(
+            std::fs::read_to_string(&target).unwrap(),
+            "// my own work\n"
+        );
+        let run = flatray()
+            .args(&args)
+            .arg(&target)
+            .arg("--force")
+            .output()
+            .unwrap();
+        assert_eq!(run.status.code(), Some(0), "{args:?} {run:?}");
+        assert!(std::fs::read_to_string(&target).unwrap().contains("Scene("));
+        std::fs::write(&target, "// my own work\n").unwrap();
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Negative numbers are values, given the range message; more threads
+/// than cores are warned of; `--verbose` alone prints the statistics; the
+/// summary's plurals are right.
+#[test]
+fn flags_say_what_is_wrong_with_their_values() {
+    let dir = scratch("flags");
+    let scene = dir.join("s.ron");
+    std::fs::write(&scene, SMALL).unwrap();
+    let out = dir.join("o.png");
+    let run = |extra: &[&str]| {
+        flatray()
+            .args([
+                "render",
+                scene.to_str().unwrap(),
+                "-q",
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    for (flag, value, expected) in [
+        (
+            "--scale",
+            "-1",
+            "--scale: expected a finite number > 0, found -1",
+        ),
+        ("--exposure", "-2", "--exposure: expected a number > 0"),
+        ("--time", "-3", "--time: expected seconds > 0, found -3"),
+    ] {
+        let r = run(&[flag, value]);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(expected), "{flag}: {stderr}");
+        assert!(!stderr.contains("'-- "), "{flag}: {stderr}");
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let r = run(&["--threads", &(cores * 4).to_string()]);
+    assert_eq!(r.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("more threads than cores"));
+    let r = run(&["--threads", "1"]);
+    assert!(!String::from_utf8_lossy(&r.stderr).contains("warning"));
+    let r = run(&["--verbose"]);
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        stdout.contains("\nplan\n") && stdout.contains("seconds"),
+        "{stdout}"
+    );
+    let r = run(&["--bounces", "1"]);
+    assert!(String::from_utf8_lossy(&r.stdout).contains(", 1 bounce)"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every subcommand's help shows examples, and each has a manual page.
+#[test]
+fn every_subcommand_has_examples_and_a_manual_page() {
+    for sub in [
+        "render",
+        "check",
+        "plan",
+        "converge",
+        "import",
+        "generate",
+        "completions",
+        "man",
+    ] {
+        let help = flatray().args([sub, "--help"]).output().unwrap();
+        let text = String::from_utf8_lossy(&help.stdout);
+        assert!(text.contains("Examples:"), "{sub}: {text}");
+        let page = flatray().args(["man", sub]).output().unwrap();
+        assert_eq!(page.status.code(), Some(0), "{sub}");
+        let page = String::from_utf8_lossy(&page.stdout);
+        assert!(
+            page.contains(&format!(".TH flatray-{sub} 1")),
+            "{sub}: {page}"
+        );
+    }
+    let wrong = flatray().args(["man", "rendr"]).output().unwrap();
+    assert_eq!(wrong.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&wrong.stderr).contains("did you mean `render`?"));
 }

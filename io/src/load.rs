@@ -670,7 +670,7 @@ pub(crate) fn decode_within(
     reader.decode().map_err(unreadable)
 }
 
-fn load_floor_image(path: &PathBuf) -> Result<Floor, String> {
+fn load_floor_image(path: &Path) -> Result<Floor, String> {
     let cannot =
         |e: &dyn std::fmt::Display| format!("cannot load the floor image {}: {e}", path.display());
     let bytes = crate::read_within(path, crate::MAX_INPUT_BYTES).map_err(|e| cannot(&e))?;

@@ -133,10 +133,8 @@ pub(crate) fn context(text: &str, offset: usize) -> Context {
                     .map(|p| word(&p));
                 frames.push((name, None));
             }
-            Kind::Close => {
-                if frames.len() > 1 {
-                    frames.pop();
-                }
+            Kind::Close if frames.len() > 1 => {
+                frames.pop();
             }
             Kind::Word if tokens.peek().is_some_and(|t| t.kind == Kind::Colon) => {
                 if let Some(top) = frames.last_mut() {

@@ -204,3 +204,224 @@ fn garbage_never_panics() {
         );
     }
 }
+
+/// The message for `text` (one line of `check`'s standard error) and the
+/// line and column it points at.
+fn message(text: &str) -> (usize, usize, String) {
+    let dir = TempDir::new("message");
+    let path = dir.write("m.ron", text);
+    let run = flatray(&["check", path.to_str().unwrap_or_default()]);
+    assert_eq!(run.code, 2, "{run:?}");
+    let first = run.stderr.lines().next().unwrap_or_default().to_string();
+    let rest = first
+        .strip_prefix(&format!("error: {}:", path.display()))
+        .unwrap_or_else(|| panic!("{first}"));
+    let mut parts = rest.splitn(3, ':');
+    let line = parts.next().and_then(|l| l.parse().ok()).unwrap_or(0);
+    let column = parts.next().and_then(|c| c.parse().ok()).unwrap_or(0);
+    (
+        line,
+        column,
+        parts.next().unwrap_or_default().trim().to_string(),
+    )
+}
+
+const HEAD: &str = "Scene(\n    canvas: (100, 100),\n    floor: Color((0.5, 0.5, 0.5)),\n";
+
+/// A missing comma is reported at the end of the value it should follow,
+/// not at the start of the next line.
+#[test]
+fn a_missing_comma_points_where_the_comma_belongs() {
+    let (line, column, m) =
+        message("Scene(\n    canvas: (100, 100)\n    floor: Color((0.5, 0.5, 0.5)),\n)");
+    assert_eq!((line, column), (2, 23), "{m}");
+    assert!(m.starts_with("expected a comma after this value"), "{m}");
+    // After a comment that ends the line, still at the value.
+    let (line, column, _) = message(
+        "Scene(\n    canvas: (100, 100) // the size\n    floor: Color((0.5, 0.5, 0.5)),\n)",
+    );
+    assert_eq!((line, column), (2, 23));
+}
+
+/// A `Wall(` left open reads the next wall as one of its fields: the
+/// message says a `)` is missing, where it is missing.
+#[test]
+fn a_missing_parenthesis_says_so() {
+    let (line, _, m) = message(&format!(
+        "{HEAD}    walls: [\n        Wall(a: (1, 1), b: (50, 50),\n        Wall(a: (1, 1), b: (50, 60)),\n    ],\n)"
+    ));
+    assert_eq!(line, 5, "{m}");
+    assert!(m.contains("expected `)` here to close `Wall(...)`"), "{m}");
+}
+
+/// Canvas sides, samples and bounces are whole numbers, and a fraction
+/// says so (the parser alone says "Expected comma").
+#[test]
+fn a_fraction_where_a_whole_number_belongs_says_so() {
+    let (line, column, m) =
+        message("Scene(\n    canvas: (360.5, 240),\n    floor: Color((0.5, 0.5, 0.5)),\n)");
+    assert_eq!((line, column), (2, 14));
+    assert!(
+        m.contains("expected a whole number for `canvas`, found `360.5`"),
+        "{m}"
+    );
+    let (_, _, m) = message(&format!("{HEAD}    render: (samples: 2.5),\n)"));
+    assert!(m.contains("whole number for `samples`"), "{m}");
+}
+
+/// `#` is no comment in RON: the message says comments are `//`.
+#[test]
+fn a_hash_comment_is_explained() {
+    let (line, column, m) = message(&format!("# my room\n{HEAD})"));
+    assert_eq!((line, column), (1, 1));
+    assert!(m.contains("comments start with `//`"), "{m}");
+}
+
+/// A positional value inside a variant that takes named fields.
+#[test]
+fn a_value_without_its_name_asks_for_the_name() {
+    let (_, _, m) = message(&format!("{HEAD}    render: (tonemap: Reinhard(4)),\n)"));
+    assert!(
+        m.contains("expected a named field inside `Reinhard(...)`"),
+        "{m}"
+    );
+    assert!(!m.contains("raw identifier"), "{m}");
+}
+
+/// A variant without its parentheses, and a colour given by name.
+#[test]
+fn a_variant_without_parentheses_and_a_colour_by_name() {
+    let (_, _, m) = message(&format!(
+        "{HEAD}    walls: [Wall(a: (1, 1), b: (50, 50), material: Mirror)],\n)"
+    ));
+    assert!(m.contains("as `Mirror()`"), "{m}");
+    let (_, column, m) = message(&format!(
+        "{HEAD}    lights: [Point(at: (5, 5), color: \"orange\")],\n)"
+    ));
+    assert!(m.contains("expected a colour `(r, g, b)`"), "{m}");
+    assert!(m.contains("\"orange\""), "{m}");
+    assert_eq!(column, 39, "at the string, not the space before it");
+}
+
+/// Misspelt fields and variants get a suggestion, and no internal type
+/// name reaches the user.
+#[test]
+fn misspellings_get_a_suggestion_in_the_formats_words() {
+    for (text, expected) in [
+        (
+            "    lights: [Point(at: (5, 5), intensty: 2)],\n",
+            "unknown field `intensty` in `Point`: did you mean `intensity`?",
+        ),
+        (
+            "    walls: [Wall(a: (1, 1), b: (5, 5), material: Miror())],\n",
+            "unknown material `Miror`: did you mean `Mirror`?",
+        ),
+        (
+            "    lights: [Pont(at: (5, 5))],\n",
+            "unknown light `Pont`: did you mean `Point`?",
+        ),
+        (
+            "    render: (integrator: Paths),\n",
+            "unknown integrator `Paths`: did you mean `Path`?",
+        ),
+        (
+            "    render: (sample: 2),\n",
+            "unknown field `sample` in `Render`: did you mean `samples`?",
+        ),
+    ] {
+        let (_, _, m) = message(&format!("{HEAD}{text})"));
+        assert!(m.contains(expected), "{m}");
+        assert!(!m.contains("Spec"), "an internal name: {m}");
+    }
+    let (_, _, m) = message("Scene(canvas: (10, 10), floor: Colour((0.5, 0.5, 0.5)))");
+    assert!(
+        m.contains("unknown floor `Colour`: did you mean `Color`?"),
+        "{m}"
+    );
+    // Nothing near: no suggestion, the list of what is expected.
+    let (_, _, m) = message(&format!("{HEAD}    lights: [Lamp(at: (5, 5))],\n)"));
+    assert!(!m.contains("did you mean"), "{m}");
+    assert!(m.contains("expected one of `Point`"), "{m}");
+}
+
+/// A plan for `flatray import` given to `render` or `check` says what it
+/// is and how to import it, by its content or, when that says nothing,
+/// by its name; a file that is a scene is one whatever its name.
+#[test]
+fn a_plan_given_as_a_scene_points_to_import() {
+    let dir = TempDir::new("plan-as-scene");
+    let svg = dir.write(
+        "plan.svg",
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10\" height=\"10\"/>",
+    );
+    let tmx = dir.write("level.tmx", "{}");
+    let scene = dir.write(
+        "scene.svg",
+        "Scene(canvas: (10, 10), floor: Color((0.5, 0.5, 0.5)), lights: [Point(at: (5, 5))])",
+    );
+    for (path, what) in [(&svg, "an SVG drawing"), (&tmx, "a Tiled map (TMX)")] {
+        let run = flatray(&["render", path.to_str().unwrap_or_default(), "-q"]);
+        assert_eq!(run.code, 2, "{run:?}");
+        assert!(
+            run.stderr
+                .contains(&format!("this is {what}, not a scene file")),
+            "{run:?}"
+        );
+        assert!(run.stderr.contains("flatray import"), "{run:?}");
+    }
+    let run = flatray(&["check", scene.to_str().unwrap_or_default()]);
+    assert_eq!(run.code, 0, "{run:?}");
+}
+
+/// The render block sets what the command line sets: the caustic pass,
+/// the light choice and the cache's three modes.
+#[test]
+fn the_render_block_takes_caustics_lights_and_the_cache_modes() {
+    let dir = TempDir::new("render-block");
+    let plan = |render: &str| {
+        let path = dir.write(
+            "s.ron",
+            &format!(
+                "Scene(canvas: (40, 40), floor: Color((0.5, 0.5, 0.5)), walls: [Wall(a: (5, 5), b: (35, 5), material: Mirror()), Wall(a: (5, 30), b: (35, 30))], lights: [Point(at: (20, 20))], render: ({render}))"
+            ),
+        );
+        let run = flatray(&["plan", path.to_str().unwrap_or_default(), "--json"]);
+        assert_eq!(run.code, 0, "{render}: {run:?}");
+        serde_json::from_str::<serde_json::Value>(&run.stdout).unwrap_or_default()
+    };
+    let settings = |render: &str| plan(render)["settings"].clone();
+    assert_eq!(settings("")["cache"], "on");
+    assert_eq!(settings("cache: Direct")["cache"], "direct");
+    assert_eq!(settings("cache: Off")["cache"], "off");
+    assert_eq!(settings("cache: false")["cache"], "off");
+    assert_eq!(settings("cache: true")["cache"], "on");
+    assert_eq!(settings("")["caustics"], true);
+    assert_eq!(settings("caustics: false")["caustics"], false);
+    let chosen = |render: &str| {
+        plan(render)["effects"]
+            .as_array()
+            .and_then(|e| {
+                e.iter()
+                    .find(|e| e["name"] == "shadow rays to chosen lights")
+                    .map(|e| e["runs"].clone())
+            })
+            .unwrap_or_default()
+    };
+    assert_eq!(chosen(""), false);
+    assert_eq!(chosen("lights: Table"), true);
+    let run = flatray(&[
+        "check",
+        dir.write(
+            "bad.ron",
+            "Scene(canvas: (4, 4), floor: Color((0.5, 0.5, 0.5)), render: (cache: Sometimes))",
+        )
+        .to_str()
+        .unwrap_or_default(),
+    ]);
+    assert_eq!(run.code, 2);
+    assert!(
+        run.stderr
+            .contains("`On`, `Off`, `Direct`, `true` or `false`"),
+        "{run:?}"
+    );
+}

@@ -548,7 +548,9 @@ fn windows_and_doors_drawn_on_a_wall_cut_it() {
     // The written scene has nothing lying on anything.
     let warnings = scene_of(&plan).warnings;
     assert!(
-        !warnings.iter().any(|w| w.message.contains("lies on top of")),
+        !warnings
+            .iter()
+            .any(|w| w.message.contains("lies on top of")),
         "{warnings:?}"
     );
 }

@@ -66,7 +66,7 @@ pub const LEAST_RATE: f64 = 1.0 / 16.0;
 /// and was the best on five. Any photon count gives an unbiased caustic
 /// estimate; the rate only moves noise between the pass and the path
 /// samples (`docs/performance.md`, "Caustic photons by the mirrors'
-/// share", measures what it buys).
+/// share").
 pub fn photon_rate(share: f64) -> f64 {
     let ratio = share / FULL_RATE_SHARE;
     let factor = ratio * ratio;

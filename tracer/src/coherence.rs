@@ -41,10 +41,8 @@ use crate::{Rgb, Stats};
 
 /// Above this many (wall, light) pairs every pixel traces its strata.
 /// Drawing the boundaries costs about a line across the canvas per pair;
-/// on a generated plan of 289 walls and 73 lights (21,097 pairs, 760 x
-/// 760 pixels, 16 samples) the masks still halve the render's time with
-/// a shadow ray to every light, and save an eighth with the light table
-/// (`docs/performance.md`).
+/// on a generated plan of 289 walls and 73 lights (21,097 pairs) the
+/// masks still pay (`docs/performance.md`, "What each fast path buys").
 pub const MAX_PAIRS: usize = 1 << 16;
 
 /// Above this many (pixel, light) cells (a byte each) the masks are not

@@ -637,6 +637,32 @@ mod tests {
         );
     }
 
+    /// A staircase of 3 across and 2 down, as a mask traces a line of
+    /// that slope: its corners stray up to 1.66 from the chord through
+    /// its outer corners, its edges' middles 0.83, so at tolerance 1 it is
+    /// one edge, not a zigzag; real steps of 3 by 3 stay.
+    #[test]
+    fn a_staircase_of_any_slope_is_its_line() {
+        let stairs = |run: f64, rise: f64| -> Vec<DVec2> {
+            (0..10)
+                .flat_map(|k| {
+                    let k = k as f64;
+                    [
+                        DVec2::new(k * run, k * rise),
+                        DVec2::new((k + 1.0) * run, k * rise),
+                    ]
+                })
+                .chain(std::iter::once(DVec2::new(10.0 * run, 10.0 * rise)))
+                .collect()
+        };
+        let s = stairs(3.0, 2.0);
+        assert_eq!(simplify(&s, 1.0), vec![s[0], s[s.len() - 1]]);
+        let s = stairs(1.0, 4.0);
+        assert_eq!(simplify(&s, 1.0).len(), 2);
+        let s = stairs(3.0, 3.0);
+        assert!(simplify(&s, 1.0).len() > 2);
+    }
+
     #[test]
     fn hex_colours_read_as_tiled_and_css_write_them() {
         assert_eq!(parse_hex_color("#ffffff"), Some([1.0; 3]));

@@ -409,3 +409,18 @@ fn single(v: f64) -> f64 {
     }
     format!("{narrow}").parse().unwrap_or(v)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coordinates_keep_the_drawings_precision() {
+        // 5 mm in user units, as usvg computes it in 32 bits.
+        let five_mm = (5.0f32 * 96.0 / 25.4) as f64;
+        assert_eq!(format!("{five_mm}"), "18.89763832092285");
+        assert_eq!(format!("{}", single(five_mm)), "18.897638");
+        assert_eq!(single(100.0), 100.0);
+        assert_eq!(single(0.1f32 as f64), 0.1);
+    }
+}
