@@ -324,7 +324,7 @@ fn reference(
 ) -> Result<(Image, ReferenceInfo), Failure> {
     let noise_path = cached.with_extension("noise.txt");
     let description = format!(
-        "path tracing without the memo, {samples} spp, saved as `{}`",
+        "path tracing without the cache, {samples} spp, saved as `{}`",
         cached.display()
     );
     if !render {
