@@ -838,7 +838,7 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
     {
         let _ = writeln!(
             err,
-            "warning: --threads {n} on {}: more threads than cores only add switching, and the render is slower",
+            "warning: --threads {n} on {}: more threads than cores make the render slower, not faster",
             flatray_io::counted(cores, "core", "cores")
         );
     }
