@@ -118,6 +118,16 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Show a scene's render converge in a browser page, and edit it there:
+    /// drag lights and walls, change intensities, colours and materials,
+    /// undo, save.
+    #[command(after_help = "Examples:
+  flatray serve scenes/room.ron              then open http://127.0.0.1:8421/
+  flatray serve plan.ron --port 0 --open     any free port, opened in the browser
+  flatray serve plan.ron --host 0.0.0.0      other machines too (they can edit and save)
+
+The page: docs/serve.md.")]
+    Serve(serve::ServeArgs),
     /// Measure error against seconds and samples for each way of rendering.
     #[command(after_help = "Examples:
   flatray converge scenes/room.ron --scale 0.5                 every way of rendering, a reference first
@@ -300,6 +310,11 @@ struct RenderArgs {
     /// their tint, glass pale cyan, emitting walls yellow.
     #[arg(long)]
     draw_walls: bool,
+    /// Render again each time the scene file (or its floor image) is
+    /// saved, until interrupted; a scene that does not load is reported
+    /// and waited on.
+    #[arg(long, conflicts_with = "json")]
+    watch: bool,
     /// Debugging and benchmarking: render with the plain model, every
     /// effect on and no fast path (the same image, more slowly).
     #[arg(long, hide = true)]
@@ -485,6 +500,7 @@ where
             (&mut out, err),
         ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
+        Command::Serve(args) => serve::serve(args, &mut out),
         Command::Import(args) => import(args, &mut out, err),
         Command::Generate(args) => generate(args, &mut out),
         Command::Completions { shell } => {
@@ -586,6 +602,7 @@ impl Write for Checked<'_> {
 
 mod converge;
 mod json;
+mod serve;
 
 /// A failure with its exit code.
 pub(crate) struct Failure {
@@ -777,7 +794,44 @@ fn plan(
     Ok(())
 }
 
+/// `render`, once, or with `--watch` again after every change to the
+/// scene or its floor image, until interrupted.
 fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {
+    if !args.watch {
+        return render_once(&args, out, err);
+    }
+    loop {
+        let inputs = flatray_io::load(&args.scene)
+            .map_or_else(|_| vec![args.scene.clone()], |loaded| loaded.inputs);
+        let before = stamps(&inputs);
+        if let Err(failure) = render_once(&args, out, err) {
+            let _ = writeln!(err, "error: {}", failure.message);
+        }
+        let _ = out.flush();
+        let _ = writeln!(
+            err,
+            "watching {} for changes (Ctrl-C to stop)",
+            args.scene.display()
+        );
+        while stamps(&inputs) == before {
+            std::thread::sleep(std::time::Duration::from_millis(250));
+        }
+    }
+}
+
+/// The modification times and lengths of `files` (none for a file that
+/// cannot be read).
+fn stamps(files: &[PathBuf]) -> Vec<Option<(std::time::SystemTime, u64)>> {
+    files
+        .iter()
+        .map(|f| {
+            let m = std::fs::metadata(f).ok()?;
+            Some((m.modified().ok()?, m.len()))
+        })
+        .collect()
+}
+
+fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {
     let started = Instant::now();
     let output = match &args.output {
         Some(path) => path.clone(),

@@ -10,6 +10,7 @@
 //! returns names the file, and for scene text the line and column, and
 //! says what was expected; no input makes it panic.
 
+pub mod edit;
 mod error;
 mod explain;
 pub use explain::did_you_mean;
@@ -29,8 +30,9 @@ pub use format::ToneMap;
 pub use input::{MAX_INPUT_BYTES, read_within};
 pub use load::{Counts, Loaded, Warning, load, parse};
 pub use output::{
-    Format, linear_to_srgb, png_bytes, read_exr, remove_pending_files, srgb_to_linear, to_srgb8,
-    tone_map, write_bytes, write_exr, write_image, write_png, write_png_with_walls, write_text,
+    Format, exr_bytes, linear_to_srgb, png_bytes, read_exr, remove_pending_files, srgb_to_linear,
+    to_srgb8, tone_map, write_bytes, write_exr, write_image, write_png, write_png_with_walls,
+    write_text,
 };
 
 /// `n` and the noun, singular for one: "1 wall", "2 walls", "0 glass

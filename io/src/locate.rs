@@ -82,6 +82,64 @@ pub(crate) fn position(text: &str, offset: usize) -> (usize, usize) {
     (line, column)
 }
 
+/// The byte range of the value that starts at `start` (a number, a word,
+/// a string, or a bracketed value with what follows its name), up to the
+/// comma or closing bracket after it.
+pub(crate) fn value_end(text: &str, start: usize) -> usize {
+    let mut depth = 0usize;
+    let mut end = start;
+    for token in Tokens::new(text, start) {
+        match token.kind {
+            Kind::Open => depth += 1,
+            Kind::Close if depth == 0 => return end,
+            Kind::Close => {
+                depth -= 1;
+                if depth == 0 {
+                    end = token.end;
+                    continue;
+                }
+            }
+            Kind::Comma if depth == 0 => return end,
+            _ => {}
+        }
+        end = token.end;
+    }
+    end
+}
+
+/// The byte range of item `k` of the top-level list `list`.
+pub(crate) fn item_range(text: &str, list: &str, k: usize) -> Option<(usize, usize)> {
+    let start = *list_items(text, list).get(k)?;
+    Some((start, value_end(text, start)))
+}
+
+/// The byte range of the value of field `field` directly inside the item
+/// that spans `item` (a `Name(field: value, ...)`), if the item has it.
+pub(crate) fn item_field(text: &str, item: (usize, usize), field: &str) -> Option<(usize, usize)> {
+    let mut depth = 0usize;
+    let mut tokens = Tokens::new(text, item.0).peekable();
+    while let Some(token) = tokens.next() {
+        if token.at >= item.1 {
+            break;
+        }
+        match token.kind {
+            Kind::Open => depth += 1,
+            Kind::Close => depth = depth.saturating_sub(1),
+            Kind::Word
+                if depth == 1
+                    && &text[token.at..token.end] == field
+                    && tokens.peek().is_some_and(|t| t.kind == Kind::Colon) =>
+            {
+                tokens.next();
+                let value = tokens.next()?;
+                return Some((value.at, value_end(text, value.at)));
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 /// The byte offset of 1-based `line` and `column` (in characters), as
 /// the RON parser reports them; the end of the text past its last line.
 pub(crate) fn offset(text: &str, line: usize, column: usize) -> usize {
@@ -345,6 +403,19 @@ mod tests {
         assert!(list_items(text, "walls").is_empty());
         // A trailing comma adds no item.
         assert_eq!(list_items("(walls: [A, B,])", "walls").len(), 2);
+    }
+
+    #[test]
+    fn items_and_their_fields_have_ranges() {
+        let text = "Scene(lights: [\n  Point(at: (1, 2), color: (1, 1, 1)), // a lamp\n  Spot(at: (3, 4), cone: 30),\n])";
+        let (start, end) = item_range(text, "lights", 1).unwrap();
+        assert_eq!(&text[start..end], "Spot(at: (3, 4), cone: 30)");
+        let (a, b) = item_field(text, item_range(text, "lights", 0).unwrap(), "color").unwrap();
+        assert_eq!(&text[a..b], "(1, 1, 1)");
+        let (a, b) = item_field(text, (start, end), "cone").unwrap();
+        assert_eq!(&text[a..b], "30");
+        assert_eq!(item_field(text, (start, end), "color"), None);
+        assert_eq!(item_range(text, "lights", 2), None);
     }
 
     #[test]

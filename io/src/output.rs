@@ -132,19 +132,28 @@ pub fn png_bytes(image: &Image, tonemap: ToneMap) -> Result<Vec<u8>, String> {
 /// always gives the same bytes (compressed in parallel, blocks went out in
 /// the order they finished, and the offset table with them).
 pub fn write_exr(image: &Image, path: &Path) -> Result<(), WriteError> {
+    write_atomically(path, |w| encode_exr(image, w))
+}
+
+/// The EXR file [`write_exr`] writes, as bytes.
+pub fn exr_bytes(image: &Image) -> Result<Vec<u8>, String> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    encode_exr(image, &mut out)?;
+    Ok(out.into_inner())
+}
+
+fn encode_exr(image: &Image, w: impl std::io::Write + std::io::Seek) -> Result<(), String> {
     use exr::prelude::{SpecificChannels, Vec2, WritableImage};
     let width = image.width as usize;
     let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
         let [r, g, b] = image.pixels[p.y() * width + p.x()];
         (r, g, b)
     });
-    write_atomically(path, |w| {
-        exr::prelude::Image::from_channels((width, image.height as usize), channels)
-            .write()
-            .non_parallel()
-            .to_buffered(w)
-            .map_err(|e| e.to_string())
-    })
+    exr::prelude::Image::from_channels((width, image.height as usize), channels)
+        .write()
+        .non_parallel()
+        .to_buffered(w)
+        .map_err(|e| e.to_string())
 }
 
 /// Writes `bytes` to `path` atomically.

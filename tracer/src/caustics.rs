@@ -92,6 +92,8 @@ const CHUNK_BUDGET: usize = 32 << 20;
 pub const MAX_WALL_VALUES: usize = 1 << 20;
 /// Stream sample index of caustic photons, apart from every other stream.
 const CAUSTIC_STREAM: u64 = 1 << 42;
+/// Photons between two progress reports within a chunk.
+const PROGRESS_STEP: u64 = 4096;
 
 /// The layout of the diffuse walls' bins: per wall, its first value, its
 /// number of bins along it and its spans; per bin, a value per side. As
@@ -507,6 +509,10 @@ impl Estimator for CausticPass<'_> {
             list.iter().position(|&c| u < c).unwrap_or(list.len() - 1)
         };
         for index in first..last {
+            // Progress in steps, so that a caller hears from a long chunk.
+            if (index - first) % PROGRESS_STEP == PROGRESS_STEP - 1 {
+                progress(PROGRESS_STEP);
+            }
             let mut stream = Stream::new(self.seed, index, CAUSTIC_STREAM);
             stats.physics.caustic_photons += 1;
             let emitter = &self.emitters[pick(&self.shares, stream.uniform())];
@@ -548,7 +554,7 @@ impl Estimator for CausticPass<'_> {
                 stats,
             );
         }
-        progress(last.saturating_sub(first));
+        progress(last.saturating_sub(first) % PROGRESS_STEP);
         Part::Splats {
             fluence: floor,
             walls,

@@ -194,6 +194,9 @@ pub(crate) fn run<E: Estimator>(
         .into_par_iter()
         .with_max_len(1)
         .map(|unit| {
+            // A heartbeat before each unit: a caller that stops the
+            // render from its callback stops it here, before the work.
+            progress(0);
             let mut stats = Stats::default();
             let part = match estimator.render_unit(unit, &mut stats, progress) {
                 tile @ Part::Tile { .. } => {

@@ -257,7 +257,8 @@ pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
 }
 
 /// Renders `scene`. `progress` is called from worker threads with the
-/// number of pixel samples each finished tile took; the image does not
+/// number of pixel samples each finished tile took, and with 0, as a
+/// heartbeat, before each unit of work; the image does not
 /// depend on the number of threads or on their scheduling. The render is
 /// the sequence of passes that `passes.rs` describes: the same image as
 /// [`crate::Progressive`] driven to the same samples.
@@ -509,6 +510,7 @@ impl Fills {
         shared: &Shared,
         pass: &Pass,
         stats: &mut Stats,
+        progress: &(dyn Fn(u64) + Sync),
     ) -> Fills {
         let plan = &shared.plan;
         let (width, height) = image_size(scene, options.scale);
@@ -516,7 +518,11 @@ impl Fills {
         // which no path from the floor can find: traced from the lights
         // first, so that next-event estimation at the walls can read it.
         let caustics = if plan.caustics {
-            crate::caustics::trace_caustics(scene, options, (limits(options), pass), stats, &|_| {})
+            // Photons are no pixel samples: the callback hears of them
+            // with 0, as a heartbeat.
+            crate::caustics::trace_caustics(scene, options, (limits(options), pass), stats, &|_| {
+                progress(0)
+            })
         } else {
             None
         };
@@ -559,7 +565,7 @@ fn path_passes(
     let mut stats = Stats::default();
     let fills: Vec<Fills> = group
         .iter()
-        .map(|pass| Fills::new(scene, options, shared, pass, &mut stats))
+        .map(|pass| Fills::new(scene, options, shared, pass, &mut stats, progress))
         .collect();
     let contexts = group
         .iter()

@@ -1,0 +1,293 @@
+//! `flatray serve` in a real browser: headless Chromium loads the page
+//! the real binary serves, waits for the render, drags a lamp with the
+//! mouse through the page's own handles, checks that the light moved in
+//! the image, saves through the page's button and checks the file.
+//!
+//! Chromium is Debian's `chromium` package (`apt-get install chromium`),
+//! or the browser `FLATRAY_CHROMIUM` names. The screenshot it takes is
+//! written to `FLATRAY_SCREENSHOTS` (a folder) when that is set: that is
+//! how `docs/images/serve.png` is made.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use headless_chrome::protocol::cdp::{Input, Page};
+use headless_chrome::{Browser, LaunchOptions, Tab};
+
+fn chromium() -> PathBuf {
+    if let Some(path) = std::env::var_os("FLATRAY_CHROMIUM") {
+        return PathBuf::from(path);
+    }
+    for candidate in [
+        "/usr/bin/chromium",
+        "/usr/bin/chromium-browser",
+        "/usr/bin/google-chrome",
+    ] {
+        if Path::new(candidate).exists() {
+            return PathBuf::from(candidate);
+        }
+    }
+    panic!(
+        "this test drives a real browser: install Chromium (`apt-get install chromium`) or name one in FLATRAY_CHROMIUM"
+    );
+}
+
+struct Server(Child);
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// The mean sRGB value of the PNG's pixels within `radius` of `(x, y)`.
+fn brightness(png: &[u8], (x, y): (f64, f64), radius: f64) -> f64 {
+    let image = image::load_from_memory(png).unwrap().to_rgb8();
+    let mut sum = 0.0;
+    let mut n = 0.0;
+    for (px, py, p) in image.enumerate_pixels() {
+        let (dx, dy) = (px as f64 + 0.5 - x, py as f64 + 0.5 - y);
+        if dx * dx + dy * dy <= radius * radius {
+            sum += p.0.iter().map(|&c| c as f64).sum::<f64>() / 3.0;
+            n += 1.0;
+        }
+    }
+    sum / n
+}
+
+fn evaluate(tab: &Tab, js: &str) -> serde_json::Value {
+    tab.evaluate(js, false)
+        .unwrap_or_else(|e| panic!("{js}: {e}"))
+        .value
+        .unwrap_or_default()
+}
+
+/// Waits, up to 60 s, for the page's image to be a full-size frame of at
+/// least `spp` samples for a scene after version `after`.
+fn wait_for_render(tab: &Tab, after: u64, spp: u64) -> u64 {
+    let started = Instant::now();
+    loop {
+        let state = evaluate(
+            tab,
+            "JSON.stringify(document.getElementById('render').dataset)",
+        );
+        let state: serde_json::Value =
+            serde_json::from_str(state.as_str().unwrap_or("{}")).unwrap_or_default();
+        let job = state["job"]
+            .as_str()
+            .and_then(|j| j.parse().ok())
+            .unwrap_or(0u64);
+        let samples = state["spp"]
+            .as_str()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0u64);
+        if job > after && state["quick"] == "false" && samples >= spp {
+            return job;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "no render: {state}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+fn mouse(tab: &Tab, kind: Input::DispatchMouseEventTypeOption, (x, y): (f64, f64)) {
+    let pressed = !matches!(kind, Input::DispatchMouseEventTypeOption::MouseReleased);
+    tab.call_method(Input::DispatchMouseEvent {
+        Type: kind,
+        x,
+        y,
+        modifiers: None,
+        timestamp: None,
+        button: Some(Input::MouseButton::Left),
+        buttons: Some(if pressed { 1 } else { 0 }),
+        click_count: Some(1),
+        force: None,
+        tangential_pressure: None,
+        tilt_x: None,
+        tilt_y: None,
+        twist: None,
+        delta_x: None,
+        delta_y: None,
+        pointer_Type: None,
+    })
+    .unwrap();
+}
+
+/// Where world point `(x, y)` is on the screen.
+fn on_screen(tab: &Tab, (x, y): (f64, f64)) -> (f64, f64) {
+    let js = format!(
+        "(() => {{ const s = document.getElementById('plan'); const p = s.createSVGPoint(); p.x = {x}; p.y = {y}; const q = p.matrixTransform(s.getScreenCTM()); return JSON.stringify([q.x, q.y]); }})()"
+    );
+    let v: Vec<f64> =
+        serde_json::from_str(evaluate(tab, &js).as_str().unwrap_or("[]")).unwrap_or_default();
+    (v[0], v[1])
+}
+
+#[test]
+fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
+    let dir = std::env::temp_dir().join(format!("flatray-browser-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("room.ron");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    std::fs::copy(&room, &scene).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_flatray"))
+        .args(["serve", scene.to_str().unwrap(), "--port", "0"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    let _server = Server(child);
+    let url = first
+        .split(" at ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap_or_else(|| panic!("{first}"))
+        .to_string();
+
+    let options = LaunchOptions::default_builder()
+        .path(Some(chromium()))
+        .headless(true)
+        .sandbox(false)
+        .window_size(Some((1100, 760)))
+        .user_data_dir(Some(dir.join("profile")))
+        .args(
+            [
+                "--disable-gpu",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--disable-quic",
+                "--no-first-run",
+            ]
+            .iter()
+            .map(std::ffi::OsStr::new)
+            .collect(),
+        )
+        .build()
+        .unwrap();
+    let browser = Browser::new(options).unwrap();
+    let tab = browser.new_tab().unwrap();
+    tab.set_default_timeout(Duration::from_secs(30));
+    tab.navigate_to(&url)
+        .unwrap()
+        .wait_until_navigated()
+        .unwrap();
+    tab.wait_for_element("circle[data-light='1']").unwrap();
+    let first_job = wait_for_render(&tab, 0, 64);
+    let export = |path: &str| -> Vec<u8> {
+        let mut r = ureq::get(&format!("{url}{}", path.trim_start_matches('/')))
+            .call()
+            .unwrap();
+        r.body_mut()
+            .with_config()
+            .limit(64 << 20)
+            .read_to_vec()
+            .unwrap()
+    };
+    let before = export("/api/export.png");
+
+    // Drag the second lamp, (313, 134), to (420, 420), as a user would.
+    let (from, to) = ((313.0, 134.0), (420.0, 420.0));
+    let start = on_screen(&tab, from);
+    let end = on_screen(&tab, to);
+    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, start);
+    mouse(
+        &tab,
+        Input::DispatchMouseEventTypeOption::MousePressed,
+        start,
+    );
+    for k in 1..=10 {
+        let t = k as f64 / 10.0;
+        let p = (
+            start.0 + (end.0 - start.0) * t,
+            start.1 + (end.1 - start.1) * t,
+        );
+        mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, p);
+    }
+    mouse(
+        &tab,
+        Input::DispatchMouseEventTypeOption::MouseReleased,
+        end,
+    );
+    wait_for_render(&tab, first_job, 64);
+    let after = export("/api/export.png");
+    let near_new = (brightness(&before, to, 12.0), brightness(&after, to, 12.0));
+    let near_old = (
+        brightness(&before, from, 12.0),
+        brightness(&after, from, 12.0),
+    );
+    assert!(
+        near_new.1 > near_new.0 + 20.0,
+        "brighter where the lamp went: {near_new:?}"
+    );
+    assert!(
+        near_old.1 < near_old.0 - 20.0,
+        "darker where it was: {near_old:?}"
+    );
+
+    let shot = tab
+        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
+        .unwrap();
+    if let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") {
+        std::fs::write(Path::new(&folder).join("serve.png"), &shot).unwrap();
+    }
+
+    // Save through the page's button: the file holds the lamp's new place,
+    // its comments, and a backup of what it was.
+    tab.find_element("#save").unwrap().click().unwrap();
+    let started = Instant::now();
+    let saved = loop {
+        let text = std::fs::read_to_string(&scene).unwrap();
+        if text != std::fs::read_to_string(&room).unwrap() {
+            break text;
+        }
+        assert!(started.elapsed() < Duration::from_secs(20), "not saved");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let lamp = saved
+        .lines()
+        .filter(|l| l.trim_start().starts_with("Point("))
+        .nth(1)
+        .unwrap_or_default()
+        .to_string();
+    let at: Vec<f64> = lamp
+        .split("at: (")
+        .nth(1)
+        .and_then(|r| r.split(')').next())
+        .map(|xy| {
+            xy.split(',')
+                .filter_map(|v| v.trim().parse().ok())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert_eq!(at.len(), 2, "{lamp}");
+    assert!(
+        (at[0] - to.0).abs() < 3.0 && (at[1] - to.1).abs() < 3.0,
+        "{lamp}"
+    );
+    assert!(
+        saved.starts_with("// The original project's room"),
+        "the comments are kept"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("room.ron.bak")).unwrap(),
+        std::fs::read_to_string(&room).unwrap()
+    );
+    let message = evaluate(&tab, "document.getElementById('message').textContent");
+    assert!(
+        message.as_str().unwrap_or_default().starts_with("saved"),
+        "{message}"
+    );
+    drop(browser);
+    let _ = std::fs::remove_dir_all(&dir);
+}

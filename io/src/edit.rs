@@ -1,0 +1,429 @@
+//! Edits to a scene file's text, as a live view makes them (a light
+//! dragged, a wall's end moved, an intensity, a colour or a material
+//! changed), and the scene's items as the view draws them.
+//!
+//! An edit rewrites only the value it changes, in place, so the rest of
+//! the file (its comments, its layout, every other number as written)
+//! stays as it was. The edited text is checked by the same loader as any
+//! scene: an edit that makes the scene invalid is refused with the
+//! loader's message, and the text is not changed.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::format::{LightSpec, MaterialSpec, SceneFile};
+use crate::locate;
+
+/// One edit, by the item's place in its list (counting from 0, as the
+/// loader's messages do).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Edit {
+    /// Moves a point, spot or circle light to `to`.
+    MoveLight { index: usize, to: (f64, f64) },
+    /// Moves one end (`a` or `b`) of a line light.
+    MoveLightEnd {
+        index: usize,
+        end: End,
+        to: (f64, f64),
+    },
+    /// Moves one end of a wall.
+    MoveWallEnd {
+        index: usize,
+        end: End,
+        to: (f64, f64),
+    },
+    /// Sets a light's intensity.
+    LightIntensity { index: usize, value: f64 },
+    /// Sets a light's colour.
+    LightColor {
+        index: usize,
+        value: (f64, f64, f64),
+    },
+    /// Sets a wall's material.
+    WallMaterial {
+        index: usize,
+        material: MaterialKind,
+    },
+}
+
+/// An end of a segment.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum End {
+    A,
+    B,
+}
+
+impl End {
+    fn field(self) -> &'static str {
+        match self {
+            End::A => "a",
+            End::B => "b",
+        }
+    }
+}
+
+/// The materials a wall can be switched to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub enum MaterialKind {
+    Diffuse,
+    Mirror,
+    Transparent,
+}
+
+/// `text` with `edit` made: only the edited value is rewritten (or, when
+/// the item does not give it, added at the item's end). The result is
+/// checked as a scene (`path` names it in messages, `base` resolves its
+/// floor image); an edit that leaves no valid scene is refused with the
+/// loader's message.
+pub fn apply(text: &str, edit: &Edit, path: &Path, base: &Path) -> Result<String, String> {
+    let (list, index) = match *edit {
+        Edit::MoveLight { index, .. }
+        | Edit::MoveLightEnd { index, .. }
+        | Edit::LightIntensity { index, .. }
+        | Edit::LightColor { index, .. } => ("lights", index),
+        Edit::MoveWallEnd { index, .. } | Edit::WallMaterial { index, .. } => ("walls", index),
+    };
+    let item = locate::item_range(text, list, index)
+        .ok_or_else(|| format!("there is no item {index} in `{list}` (counting from 0)"))?;
+    let (field, value) = match *edit {
+        Edit::MoveLight { to, .. } => ("at", point(to)?),
+        Edit::MoveLightEnd { end, to, .. } | Edit::MoveWallEnd { end, to, .. } => {
+            (end.field(), point(to)?)
+        }
+        Edit::LightIntensity { value, .. } => ("intensity", number(value)?),
+        Edit::LightColor {
+            value: (r, g, b), ..
+        } => (
+            "color",
+            format!("({}, {}, {})", number(r)?, number(g)?, number(b)?),
+        ),
+        Edit::WallMaterial { material, .. } => (
+            "material",
+            match material {
+                MaterialKind::Diffuse => "Diffuse()",
+                MaterialKind::Mirror => "Mirror()",
+                MaterialKind::Transparent => "Transparent()",
+            }
+            .to_string(),
+        ),
+    };
+    let edited = match locate::item_field(text, item, field) {
+        Some((start, end)) => format!("{}{value}{}", &text[..start], &text[end..]),
+        None => {
+            // Before the item's closing bracket, after a comma if the
+            // last field has none.
+            let close = item.1.saturating_sub(1);
+            if !text[..item.1].ends_with(')') {
+                return Err(format!("item {index} of `{list}` has no `{field}` to set"));
+            }
+            let before = text[item.0..close].trim_end();
+            let comma = if before.ends_with('(') {
+                ""
+            } else if before.ends_with(',') {
+                " "
+            } else {
+                ", "
+            };
+            let at = item.0 + before.len();
+            format!("{}{comma}{field}: {value}{}", &text[..at], &text[at..])
+        }
+    };
+    crate::parse(&edited, path, base).map_err(|e| match e {
+        crate::SceneError::Invalid { message, .. } => message,
+        other => other.to_string(),
+    })?;
+    Ok(edited)
+}
+
+/// A number as a scene writes it: at most a thousandth of a unit, no
+/// trailing zeros.
+fn number(v: f64) -> Result<String, String> {
+    if !v.is_finite() {
+        return Err(format!("expected a finite number, found {v}"));
+    }
+    let rounded = (v * 1000.0).round() / 1000.0;
+    let rounded = if rounded == 0.0 { 0.0 } else { rounded };
+    Ok(format!("{rounded}"))
+}
+
+fn point((x, y): (f64, f64)) -> Result<String, String> {
+    Ok(format!("({}, {})", number(x)?, number(y)?))
+}
+
+/// What a live view draws of a scene: the canvas, and the items in the
+/// file's own order (so that an edit names them by the same index).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Items {
+    pub canvas: (u32, u32),
+    pub origin: (f64, f64),
+    pub walls: Vec<WallItem>,
+    pub lights: Vec<LightItem>,
+    pub glass: Vec<Vec<(f64, f64)>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct WallItem {
+    pub a: (f64, f64),
+    pub b: (f64, f64),
+    /// `Diffuse`, `Mirror` or `Transparent`.
+    pub material: &'static str,
+    /// The wall's own colour (albedo or tint), `None` for a diffuse wall
+    /// that takes the floor's.
+    pub color: Option<(f64, f64, f64)>,
+    pub emits: bool,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LightItem {
+    /// `Point`, `Spot`, `Line`, `Circle` or `Directional`.
+    pub kind: &'static str,
+    /// Where a point, spot or circle light stands.
+    pub at: Option<(f64, f64)>,
+    /// A line light's ends.
+    pub a: Option<(f64, f64)>,
+    pub b: Option<(f64, f64)>,
+    pub radius: Option<f64>,
+    pub direction: Option<(f64, f64)>,
+    pub intensity: f64,
+    pub color: (f64, f64, f64),
+}
+
+/// The items of a scene `text` that loads (`loaded`, its canvas).
+pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let options =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let file: SceneFile = options.from_str(text).map_err(|e| e.to_string())?;
+    let canvas = loaded.scene.canvas;
+    let walls = file
+        .walls
+        .iter()
+        .map(|w| {
+            let (material, color) = match w.material {
+                MaterialSpec::FloorDiffuse | MaterialSpec::Diffuse { albedo: None } => {
+                    ("Diffuse", None)
+                }
+                MaterialSpec::Diffuse { albedo: Some(c) } => ("Diffuse", Some((c.0, c.1, c.2))),
+                MaterialSpec::Mirror { tint } => ("Mirror", Some((tint.0, tint.1, tint.2))),
+                MaterialSpec::Transparent { tint } => {
+                    ("Transparent", Some((tint.0, tint.1, tint.2)))
+                }
+            };
+            WallItem {
+                a: (w.a.0, w.a.1),
+                b: (w.b.0, w.b.1),
+                material,
+                color,
+                emits: w.emit.is_some(),
+            }
+        })
+        .collect();
+    let lights = file
+        .lights
+        .iter()
+        .map(|l| {
+            let mut item = LightItem {
+                kind: "Point",
+                at: None,
+                a: None,
+                b: None,
+                radius: None,
+                direction: None,
+                intensity: 0.0,
+                color: (1.0, 1.0, 1.0),
+            };
+            let (color, intensity) = match *l {
+                LightSpec::Point {
+                    at,
+                    color,
+                    intensity,
+                    ..
+                } => {
+                    item.at = Some((at.0, at.1));
+                    (color, intensity)
+                }
+                LightSpec::Spot {
+                    at,
+                    direction,
+                    color,
+                    intensity,
+                    ..
+                } => {
+                    item.kind = "Spot";
+                    item.at = Some((at.0, at.1));
+                    item.direction = Some((direction.0, direction.1));
+                    (color, intensity)
+                }
+                LightSpec::Line {
+                    a,
+                    b,
+                    color,
+                    intensity,
+                    ..
+                } => {
+                    item.kind = "Line";
+                    item.a = Some((a.0, a.1));
+                    item.b = Some((b.0, b.1));
+                    (color, intensity)
+                }
+                LightSpec::Circle {
+                    at,
+                    radius,
+                    color,
+                    intensity,
+                    ..
+                } => {
+                    item.kind = "Circle";
+                    item.at = Some((at.0, at.1));
+                    item.radius = Some(radius.0);
+                    (color, intensity)
+                }
+                LightSpec::Directional {
+                    direction,
+                    color,
+                    intensity,
+                } => {
+                    item.kind = "Directional";
+                    item.direction = Some((direction.0, direction.1));
+                    (color, intensity)
+                }
+            };
+            item.color = (color.0, color.1, color.2);
+            item.intensity = intensity.0;
+            item
+        })
+        .collect();
+    let glass = file
+        .glass
+        .iter()
+        .map(|g| g.points.iter().map(|p| (p.0, p.1)).collect())
+        .collect();
+    Ok(Items {
+        canvas: (canvas.width, canvas.height),
+        origin: (canvas.origin.x, canvas.origin.y),
+        walls,
+        lights,
+        glass,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "// The test room.
+Scene(
+    canvas: (100, 80),
+    floor: Color((0.5, 0.5, 0.5)),
+    walls: [
+        Wall(a: (10, 10), b: (90, 10)), // the north wall
+        Wall(a: (10, 70), b: (90, 70), material: Mirror(tint: (0.9, 0.9, 0.9))),
+    ],
+    lights: [
+        Point(at: (50, 40), intensity: 20), // the lamp
+        Line(a: (20, 60), b: (40, 60),),
+    ],
+)
+";
+
+    fn edit(e: Edit) -> Result<String, String> {
+        apply(TEXT, &e, Path::new("t.ron"), Path::new("."))
+    }
+
+    #[test]
+    fn an_edit_rewrites_its_value_and_keeps_the_rest() {
+        let moved = edit(Edit::MoveLight {
+            index: 0,
+            to: (61.25, 33.0),
+        })
+        .unwrap();
+        assert_eq!(
+            moved,
+            TEXT.replace("Point(at: (50, 40)", "Point(at: (61.25, 33)")
+        );
+        let wall = edit(Edit::MoveWallEnd {
+            index: 1,
+            end: End::B,
+            to: (95.0, 75.5),
+        })
+        .unwrap();
+        assert!(wall.contains("Wall(a: (10, 70), b: (95, 75.5), material: Mirror"));
+        assert!(wall.contains("// the north wall") && wall.starts_with("// The test room."));
+        let material = edit(Edit::WallMaterial {
+            index: 1,
+            material: MaterialKind::Transparent,
+        })
+        .unwrap();
+        assert!(material.contains("b: (90, 70), material: Transparent()),"));
+        // A field the item does not give is added at its end.
+        let added = edit(Edit::WallMaterial {
+            index: 0,
+            material: MaterialKind::Mirror,
+        })
+        .unwrap();
+        assert!(
+            added.contains("Wall(a: (10, 10), b: (90, 10), material: Mirror()), // the north wall")
+        );
+        let colour = edit(Edit::LightColor {
+            index: 1,
+            value: (1.0, 0.5, 0.25),
+        })
+        .unwrap();
+        assert!(
+            colour.contains("Line(a: (20, 60), b: (40, 60), color: (1, 0.5, 0.25))"),
+            "{colour}"
+        );
+        let end = edit(Edit::MoveLightEnd {
+            index: 1,
+            end: End::A,
+            to: (25.0, 61.0),
+        })
+        .unwrap();
+        assert!(end.contains("Line(a: (25, 61), b: (40, 60),)"));
+    }
+
+    #[test]
+    fn an_edit_that_breaks_the_scene_is_refused() {
+        let e = edit(Edit::LightIntensity {
+            index: 0,
+            value: -1.0,
+        });
+        assert!(e.unwrap_err().contains("expected an intensity from 0"));
+        let e = edit(Edit::MoveLightEnd {
+            index: 1,
+            end: End::A,
+            to: (40.0, 60.0),
+        });
+        assert!(e.unwrap_err().contains("two different endpoints"));
+        assert!(
+            edit(Edit::MoveLight {
+                index: 7,
+                to: (1.0, 1.0)
+            })
+            .unwrap_err()
+            .contains("no item 7")
+        );
+        assert!(
+            edit(Edit::LightIntensity {
+                index: 0,
+                value: f64::NAN
+            })
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn items_follow_the_files_order() {
+        let loaded = crate::parse(TEXT, Path::new("t.ron"), Path::new(".")).unwrap();
+        let items = items(TEXT, &loaded).unwrap();
+        assert_eq!(items.canvas, (100, 80));
+        assert_eq!(items.walls.len(), 2);
+        assert_eq!(items.walls[1].material, "Mirror");
+        assert_eq!(items.lights[0].at, Some((50.0, 40.0)));
+        assert_eq!(items.lights[0].intensity, 20.0);
+        assert_eq!(items.lights[1].kind, "Line");
+    }
+}
