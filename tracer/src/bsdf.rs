@@ -18,7 +18,6 @@ use std::f64::consts::PI;
 use flatray_geometry::{DVec2, Side, reflect};
 
 use crate::glass::{GlassState, interact};
-use crate::path::diffuse_albedo;
 use crate::sampling::{Stream, cosine_half_circle, uniform_half_circle};
 use crate::scene::{Material, Scene};
 use crate::{Rgb, Stats};
@@ -196,6 +195,32 @@ impl Bsdf {
                     dir: event.dir,
                     weight,
                 }
+            }
+        }
+    }
+}
+
+/// A diffuse wall's albedo at `x`, the point at `u` on wall `wall`: its
+/// own, or the floor's there (colour bleeding from the floor), counted in
+/// `stats`; with `tables`, read from the table along the walls.
+#[inline]
+pub(crate) fn diffuse_albedo(
+    scene: &Scene,
+    albedo: Option<Rgb>,
+    (wall, u, x): (u32, f64, DVec2),
+    tables: bool,
+    stats: &mut Stats,
+) -> Rgb {
+    match albedo {
+        Some(rho) => rho,
+        None => {
+            stats.work.floor_albedo_reads += 1;
+            if tables {
+                scene
+                    .albedo_along
+                    .at(&scene.floor, &scene.canvas, wall, u, x)
+            } else {
+                scene.floor.albedo_at(&scene.canvas, x)
             }
         }
     }

@@ -30,10 +30,10 @@
 use flatray_geometry::{DVec2, Ray, Side, Skip};
 
 use crate::film::{Estimator, Film, Part, run};
-use crate::light_tracer::{Deposits, Grid, follow_photon};
+use crate::light_tracer::{Deposits, Grid, WallDeposits, follow_photon};
 use crate::lights::{Aperture, Photon};
+use crate::options::{RenderOptions, image_size};
 use crate::passes::Pass;
-use crate::render::{RenderOptions, image_size};
 use crate::run::Limits;
 use crate::sampling::Stream;
 use crate::scene::{Material, Scene};
@@ -222,10 +222,11 @@ impl WallBins {
     fn index((first, bins, bin, _): (usize, usize, usize, f64), side: Side) -> usize {
         first + side.index() * bins + bin
     }
+}
 
-    /// Adds `power`, arriving at the point `u` of wall `wall` from `side`:
-    /// as irradiance over its bin.
-    pub fn add(&self, values: &mut [Rgb], (wall, side, u): (u32, Side, f64), power: Rgb) {
+impl WallDeposits for WallBins {
+    /// As irradiance over the bin that holds the point.
+    fn add(&self, values: &mut [Rgb], (wall, side, u): (u32, Side, f64), power: Rgb) {
         if let Some(found) = self.locate(wall, u)
             && let Some(value) = values.get_mut(Self::index(found, side))
         {

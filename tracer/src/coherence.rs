@@ -575,7 +575,7 @@ pub(crate) fn centre_transmittance(
 ) -> Rgb {
     let skip = Skip(u32::MAX, scene.light_wall[index].unwrap_or(u32::MAX));
     match scene.lights[index].shape {
-        LightShape::Point { at } | LightShape::Spot { at, .. } => crate::light::transmittance(
+        LightShape::Point { at } | LightShape::Spot { at, .. } => crate::lights::transmittance(
             scene,
             &Ray::new(centre, at - centre),
             1.0,
@@ -583,7 +583,7 @@ pub(crate) fn centre_transmittance(
             walls,
             stats,
         ),
-        LightShape::Directional { direction } => crate::light::transmittance(
+        LightShape::Directional { direction } => crate::lights::transmittance(
             scene,
             &Ray::new(centre, -direction),
             f64::INFINITY,
@@ -591,7 +591,7 @@ pub(crate) fn centre_transmittance(
             walls,
             stats,
         ),
-        LightShape::Line { segment, .. } => crate::light::transmittance(
+        LightShape::Line { segment, .. } => crate::lights::transmittance(
             scene,
             &Ray::new(centre, segment.point_at(0.5) - centre),
             1.0,
@@ -600,7 +600,7 @@ pub(crate) fn centre_transmittance(
             stats,
         ),
         // Not supported (`supports`): no pixel of it is `Same`.
-        LightShape::Circle { at, .. } => crate::light::transmittance(
+        LightShape::Circle { at, .. } => crate::lights::transmittance(
             scene,
             &Ray::new(centre, at - centre),
             1.0,

@@ -127,7 +127,7 @@ mod tests {
     use super::*;
     use crate::Rgb;
     use crate::Stats;
-    use crate::light::{Receiver, Visibility, light_contribution};
+    use crate::lights::{Receiver, Visibility, light_contribution};
     use crate::sampling::Stream;
 
     /// A turned plan of two rooms joined by a door, with a stub, a pane,

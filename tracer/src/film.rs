@@ -10,8 +10,17 @@
 
 use rayon::prelude::*;
 
-use crate::passes::PixelSums;
 use crate::{Rgb, Stats};
+
+/// One pixel's sums over its samples: of all, and of a first half (a
+/// pass's own first half of samples; in the totals, the noise estimate's
+/// first half: `passes::fold`), whose difference from the rest estimates the
+/// noise.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct PixelSums {
+    pub all: Rgb,
+    pub first: Rgb,
+}
 
 /// What one unit of work measured.
 pub(crate) enum Part {

@@ -36,6 +36,7 @@ pub mod metrics;
 mod mirror;
 mod onward;
 pub mod optics;
+mod options;
 mod passes;
 mod path;
 pub mod plan;
@@ -51,13 +52,13 @@ mod strata;
 pub type Rgb = glam::DVec3;
 
 pub use caustics::{FULL_RATE_SHARE, LEAST_RATE, PHOTONS_PER_SAMPLE, photon_rate};
-pub use memo::MemoOptions;
-pub use passes::{FIRST_PASS, Progressive, next_pass_end};
-pub use plan::Plan;
-pub use render::{
-    FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS, MAX_CULLED_WALLS,
-    RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, image_size, pixel_sample, render,
+pub use options::{
+    DEFAULT_SPECULAR, FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS,
+    MAX_CULLED_WALLS, MemoOptions, RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, image_size,
 };
-pub use run::{DEFAULT_SPECULAR, ROULETTE_FROM};
+pub use passes::{FIRST_PASS, next_pass_end};
+pub use plan::Plan;
+pub use render::{Progressive, pixel_sample, render};
+pub use run::ROULETTE_FROM;
 pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
 pub use stats::{Noise, Physics, Stats, Work};

@@ -6,15 +6,15 @@
 use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
 use crate::bsdf::{Bsdf, Sampling, Transport};
-use crate::caustics::WallBins;
+use crate::film::PixelSums;
 use crate::film::{Estimator, Film, Part, run};
 use crate::glass::{GlassState, absorption, transmit};
-use crate::lights::Photon;
-use crate::passes::{Pass, PixelSums};
-use crate::render::{RenderOptions, image_size};
+use crate::lights::{Kernel, Photon};
+use crate::options::{RenderOptions, image_size};
+use crate::passes::Pass;
 use crate::run::{Limits, Run};
 use crate::sampling::Stream;
-use crate::scene::{Falloff, Light, Scene};
+use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
 
 /// The number of fixed work chunks: each sums its paths in order into its
@@ -38,7 +38,7 @@ pub(crate) fn light_pass(
     let (width, height) = image_size(scene, options.scale);
     let pixels = width as usize * height as usize;
     // A photon at a black wall stops there: its power is zero.
-    let limits = crate::render::limits(options);
+    let limits = Limits::of(options);
     let paths = pass.count() as u64 * pixels as u64;
 
     let powers: Vec<f64> = scene
@@ -206,6 +206,14 @@ fn trace_photon(
     follow_photon(scene, photon, power, limits, &mut deposits, stream, stats);
 }
 
+/// Where a photon's light on a diffuse wall is kept, when it is kept:
+/// the caustic pass's bins along the walls (`caustics::WallBins`).
+pub(crate) trait WallDeposits: Sync {
+    /// Adds `power`, arriving at the point `u` of wall `wall` from `side`,
+    /// to `values`.
+    fn add(&self, values: &mut [Rgb], at: (u32, flatray_geometry::Side, f64), power: Rgb);
+}
+
 /// Where a photon's light goes: the floor's pixels, and for the caustic
 /// pass the diffuse walls' bins.
 pub(crate) struct Deposits<'a> {
@@ -215,7 +223,7 @@ pub(crate) struct Deposits<'a> {
     /// after its first specular event (a mirror or glass), and it stops at
     /// its first diffuse wall, its power binned there, if it has been
     /// specular before.
-    pub walls: Option<(&'a WallBins, &'a mut [Rgb])>,
+    pub walls: Option<(&'a dyn WallDeposits, &'a mut [Rgb])>,
 }
 
 /// Follows `photon`, of `power`, through at most `limits.bounces` diffuse
@@ -348,86 +356,6 @@ pub(crate) fn follow_photon(
             return;
         }
         skip = Skip::one(index);
-    }
-}
-
-/// How the first flight of a photon reproduces its light's kernel: the
-/// photon density of a point light in the plane already falls as `1 / r`
-/// (`Flatland`), so a flight at distance `r` is weighted by `G(r') r`
-/// (`r' = max(r, r0)`) for a point and `G(r') r'` for a line light, the
-/// per-radian term of `Falloff::per_radian`. Both are 1 for `Flatland`
-/// beyond `r0`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Kernel {
-    None,
-    Point(Falloff),
-    Line(Falloff),
-}
-
-impl Kernel {
-    #[inline]
-    fn factor(self, r: f64, r0: f64) -> f64 {
-        match self {
-            Kernel::None => 1.0,
-            Kernel::Point(falloff) => falloff.g(r, r0) * r,
-            Kernel::Line(falloff) => falloff.per_radian(r, r0),
-        }
-    }
-
-    /// Whether the factor is 1 everywhere beyond `r0`, so a flight needs no
-    /// per-pixel evaluation there.
-    fn is_flat_beyond_r0(self) -> bool {
-        match self {
-            Kernel::None => true,
-            Kernel::Point(f) | Kernel::Line(f) => f == Falloff::Flatland,
-        }
-    }
-
-    /// The factor's integral over distances `s0..s1` from the light
-    /// (`0 <= s0 <= s1`), in closed form: what a pixel crossing between
-    /// those distances adds per unit of scaled power, so the track-length
-    /// estimate of a pixel's mean fluence has the kernel's exact mean
-    /// along the crossing, not its value at one point.
-    ///
-    /// Below `r0` the distance is clamped: a point's factor is `G(r0) s`,
-    /// a line's `G(r0) r0`. Beyond it both are `G(s) s`: 1, `1 / s`,
-    /// `(1 - s / R)^2 s` up to the window's range `R`, or `s`.
-    fn integral(self, s0: f64, s1: f64, r0: f64) -> f64 {
-        let falloff = match self {
-            Kernel::None => return s1 - s0,
-            Kernel::Point(f) | Kernel::Line(f) => f,
-        };
-        let mut sum = 0.0;
-        let (a, b) = (s0, s1.min(r0));
-        if b > a {
-            sum += match self {
-                Kernel::Point(_) => falloff.g(r0, r0) * (b - a) * (0.5 * (a + b)),
-                _ => falloff.per_radian(r0, r0) * (b - a),
-            };
-        }
-        let (a, b) = (s0.max(r0), s1);
-        if b > a {
-            sum += match falloff {
-                Falloff::Flatland => b - a,
-                Falloff::InverseSquare if a > 0.0 => ((b - a) / a).ln_1p(),
-                Falloff::InverseSquare => f64::INFINITY,
-                Falloff::Window { range } => {
-                    let b = b.min(range);
-                    if b > a {
-                        // A cubic: Simpson's rule is exact.
-                        let f = |s: f64| {
-                            let w = 1.0 - s / range;
-                            w * w * s
-                        };
-                        (b - a) / 6.0 * (f(a) + 4.0 * f(0.5 * (a + b)) + f(b))
-                    } else {
-                        0.0
-                    }
-                }
-                Falloff::Constant => (b - a) * (0.5 * (a + b)),
-            };
-        }
-        sum
     }
 }
 
@@ -575,45 +503,6 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The closed-form integral of every kernel's factor matches a fine
-    /// midpoint rule over the factor itself, across `r0` and the window's
-    /// range, and from the light out to far away.
-    #[test]
-    fn a_kernel_integral_is_the_integral_of_its_factor() {
-        let r0 = 0.5;
-        let falloffs = [
-            Falloff::Flatland,
-            Falloff::InverseSquare,
-            Falloff::Window { range: 3.7 },
-            Falloff::Constant,
-        ];
-        let spans = [
-            (0.0, 0.3),
-            (0.0, 0.5),
-            (0.2, 0.9),
-            (0.5, 2.0),
-            (3.0, 4.5),
-            (5.0, 5.001),
-            (1e6, 1e6 + 0.7),
-        ];
-        for falloff in falloffs {
-            for kernel in [Kernel::Point(falloff), Kernel::Line(falloff), Kernel::None] {
-                for (s0, s1) in spans {
-                    let n = 200_000;
-                    let h = (s1 - s0) / n as f64;
-                    let numeric: f64 = (0..n)
-                        .map(|k| kernel.factor(s0 + (k as f64 + 0.5) * h, r0) * h)
-                        .sum();
-                    let exact = kernel.integral(s0, s1, r0);
-                    assert!(
-                        (exact - numeric).abs() <= 1e-7 * numeric.abs().max(1e-12),
-                        "{kernel:?} over {s0}..{s1}: {exact} against {numeric}"
-                    );
-                }
-            }
-        }
-    }
 
     /// Beer-Lambert's integral along a crossing, per channel.
     #[test]

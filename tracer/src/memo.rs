@@ -7,42 +7,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use flatray_cache::{Value, WallMemo};
 use flatray_geometry::{Ray, Side, Skip};
 
-use crate::light::{Receiver, Visibility, light_contribution};
+use crate::lights::{Receiver, Visibility, light_contribution};
+use crate::options::MemoOptions;
 use crate::scene::{Material, Scene};
 use crate::{Rgb, Stats};
-
-/// How the memo is used.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MemoOptions {
-    /// Whether a render uses the memo at all.
-    pub enabled: bool,
-    /// Length of a wall bin, in pixels of the rendered image.
-    pub bin_length: f64,
-    /// The fewest receiver points per pixel and render pass for the
-    /// floor's direct light. A pass takes at least as many points as
-    /// samples, so the error keeps falling as the samples grow.
-    pub floor_samples: u32,
-    /// Stratified points per line or circle light for a wall bin's
-    /// irradiance.
-    pub line_samples: u32,
-    /// Whether, with the memo on and more than one bounce, paths end at
-    /// their first diffuse wall and read the rest of their light from the
-    /// onward memo (`onward.rs`), rather than being followed from wall to
-    /// wall.
-    pub onward: bool,
-}
-
-impl Default for MemoOptions {
-    fn default() -> MemoOptions {
-        MemoOptions {
-            enabled: true,
-            bin_length: 1.0,
-            floor_samples: 1,
-            line_samples: 64,
-            onward: true,
-        }
-    }
-}
 
 /// Bytes the wall memo may take: over it, the plan switches it off.
 pub const WALL_MEMO_BUDGET: u64 = 256 << 20;
@@ -171,4 +139,42 @@ pub(crate) fn build_wall_memo(
 
 pub(crate) fn to_value(v: Rgb) -> Value {
     [v.x as f32, v.y as f32, v.z as f32]
+}
+
+/// The onward memo (`onward.rs` fills it) as paths read it. Its copies: `copies[h][m - 1]` holds `C_m`; the second
+/// is empty where the memo is kept once.
+#[derive(Debug, Default)]
+pub(crate) struct OnwardMemo {
+    pub(crate) copies: [Vec<WallMemo>; 2],
+}
+
+/// What a path reads: one copy per half of a pixel's samples.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Onward<'a> {
+    pub(crate) copies: [&'a [WallMemo]; 2],
+    /// Samples below this read the first copy (`Pass::middle`: the noise
+    /// estimate's first half).
+    pub(crate) half: u32,
+}
+
+impl<'a> Onward<'a> {
+    /// The memo as a render pass reads it: samples below `middle` (the
+    /// pass's first half) read the first copy, the others the second (the
+    /// first too, where the memo is kept once).
+    pub fn of(memo: &'a OnwardMemo, middle: u32) -> Onward<'a> {
+        let second = match memo.copies[1].is_empty() {
+            true => &memo.copies[0],
+            false => &memo.copies[1],
+        };
+        Onward {
+            copies: [&memo.copies[0], second],
+            half: middle,
+        }
+    }
+
+    /// The tables that sample `sample` reads: `[m - 1]` for `C_m`.
+    #[inline(always)]
+    pub fn for_sample(self, sample: u32) -> &'a [WallMemo] {
+        self.copies[(sample >= self.half) as usize]
+    }
 }

@@ -10,7 +10,7 @@
 use flatray_geometry::{ArcCandidates, DVec2};
 use rayon::prelude::*;
 
-use crate::render::LONG_LIST;
+use crate::options::LONG_LIST;
 use crate::sampling::ARCS;
 use crate::scene::{Material, Scene};
 

@@ -36,7 +36,7 @@
 use flatray_cache::WallMemo;
 use flatray_geometry::{Ray, Side, Skip};
 
-use crate::memo::to_value;
+use crate::memo::{Onward, OnwardMemo, to_value};
 use crate::path::{Leg, Trace, follow};
 use crate::sampling::{Stream, cosine_half_circle};
 use crate::scene::Material;
@@ -52,44 +52,6 @@ pub const MIN_GATHERS: u32 = 8;
 /// The stream sample numbers of gathers start here, apart from every
 /// pixel sample's.
 const ONWARD_STREAM: u64 = 1 << 43;
-
-/// The onward memo's copies: `copies[h][m - 1]` holds `C_m`; the second
-/// is empty where the memo is kept once.
-#[derive(Debug, Default)]
-pub(crate) struct OnwardMemo {
-    copies: [Vec<WallMemo>; 2],
-}
-
-/// What a path reads: one copy per half of a pixel's samples.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Onward<'a> {
-    copies: [&'a [WallMemo]; 2],
-    /// Samples below this read the first copy (`Pass::middle`: the noise
-    /// estimate's first half).
-    half: u32,
-}
-
-impl<'a> Onward<'a> {
-    /// The memo as a render pass reads it: samples below `middle` (the
-    /// pass's first half) read the first copy, the others the second (the
-    /// first too, where the memo is kept once).
-    pub fn of(memo: &'a OnwardMemo, middle: u32) -> Onward<'a> {
-        let second = match memo.copies[1].is_empty() {
-            true => &memo.copies[0],
-            false => &memo.copies[1],
-        };
-        Onward {
-            copies: [&memo.copies[0], second],
-            half: middle,
-        }
-    }
-
-    /// The tables that sample `sample` reads: `[m - 1]` for `C_m`.
-    #[inline(always)]
-    pub fn for_sample(self, sample: u32) -> &'a [WallMemo] {
-        self.copies[(sample >= self.half) as usize]
-    }
-}
 
 /// Gather directions per bin, order and copy for a render pass of
 /// `samples` per pixel over `pixels` pixels, with `values` (wall, side,

@@ -17,8 +17,8 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use crate::film::pixel_scale;
-use crate::render::{Image, RenderOptions, Rendered};
+use crate::film::{PixelSums, pixel_scale};
+use crate::options::{Image, Rendered};
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
@@ -144,16 +144,6 @@ impl Pass {
 /// Offsets the index of a later pass's seed from every pixel's.
 const PASS_SEEDS: u64 = 1 << 42;
 
-/// One pixel's sums over its samples: of all, and of a first half (a
-/// pass's own first half of samples; in the totals, the noise estimate's
-/// first half: [`fold`]), whose difference from the rest estimates the
-/// noise.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct PixelSums {
-    pub all: Rgb,
-    pub first: Rgb,
-}
-
 /// A pixel's totals `total` after one more pass of sums `pass`. The noise
 /// estimate's two halves are the first pass's two halves while it is the
 /// only one, and then every pass before the last against the last: at 16
@@ -274,54 +264,6 @@ impl Totals {
             stats.merge(&row_stats);
         }
         Rendered { image, stats }
-    }
-}
-
-/// A render driven pass by pass: the image after any pass is the one a
-/// render of that many samples gives, bit for bit, and more samples can
-/// be added to it.
-pub struct Progressive<'a> {
-    inner: crate::render::Passes<'a>,
-}
-
-impl<'a> Progressive<'a> {
-    /// Prepares a render of `scene` (`options.samples` is not used: the
-    /// passes say how many samples are taken): builds what every pass
-    /// shares.
-    pub fn new(scene: &'a Scene, options: &RenderOptions) -> Progressive<'a> {
-        Progressive {
-            inner: crate::render::Passes::new(scene, options),
-        }
-    }
-
-    /// Samples per pixel taken so far.
-    pub fn samples(&self) -> u32 {
-        self.inner.samples()
-    }
-
-    /// Where the next pass ends if more are to follow it
-    /// ([`next_pass_end`]); `None` once a pass has ended short of that,
-    /// since a render of more samples would not have taken that pass.
-    pub fn next_end(&self) -> Option<u32> {
-        self.inner.next_end()
-    }
-
-    /// Takes the next pass, ending at `end` samples per pixel: at most
-    /// [`Progressive::next_end`] (a pass that ends short of it is the
-    /// last). Returns false, taking nothing, when no such pass may follow.
-    /// `progress` is called with pixel samples (or photon paths) done.
-    pub fn pass(&mut self, end: u32, progress: &(dyn Fn(u64) + Sync)) -> bool {
-        self.inner.pass(end, progress)
-    }
-
-    /// The image and statistics so far.
-    pub fn rendered(&self) -> Rendered {
-        self.inner.rendered()
-    }
-
-    /// The image's size in pixels.
-    pub fn size(&self) -> (u32, u32) {
-        self.inner.size()
     }
 }
 

@@ -9,10 +9,11 @@ use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
 use crate::bsdf::{Bsdf, Sampling, Transport};
 use crate::caustics::Caustics;
 use crate::glass::{GlassState, absorption, transmit};
-use crate::light::{Receiver, direct_light};
+use crate::light::direct_light;
+use crate::lights::Receiver;
 use crate::lights::choice::LightTable;
 use crate::lights::line_emitted;
-use crate::onward::Onward;
+use crate::memo::Onward;
 use crate::run::Run;
 use crate::sampling::{Stream, circle_in_arc};
 use crate::scene::{Light, LightShape, Scene};
@@ -393,32 +394,6 @@ pub(crate) fn follow(
         }
     }
     fluence
-}
-
-/// A diffuse wall's albedo at `x`, the point at `u` on wall `wall`: its
-/// own, or the floor's there (colour bleeding from the floor), counted in
-/// `stats`; with `tables`, read from the table along the walls.
-#[inline]
-pub(crate) fn diffuse_albedo(
-    scene: &Scene,
-    albedo: Option<Rgb>,
-    (wall, u, x): (u32, f64, DVec2),
-    tables: bool,
-    stats: &mut Stats,
-) -> Rgb {
-    match albedo {
-        Some(rho) => rho,
-        None => {
-            stats.work.floor_albedo_reads += 1;
-            if tables {
-                scene
-                    .albedo_along
-                    .at(&scene.floor, &scene.canvas, wall, u, x)
-            } else {
-                scene.floor.albedo_at(&scene.canvas, x)
-            }
-        }
-    }
 }
 
 /// The walls that a ray leaving wall `wall` (a mirror, or a diffuse wall

@@ -10,17 +10,23 @@ use flatray_cache::WallMemo;
 
 use crate::caustics::Caustics;
 use crate::coherence::{Coherence, FloorCoherence, centre_transmittance};
+use crate::film::PixelSums;
 use crate::film::{Estimator, Film, Part, run};
-use crate::light::{
-    Receiver, Strata, Visibility, direct_light_chosen, direct_light_points, numbers_per_point,
-};
+use crate::light::{Strata, direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::lights::choice::LightTable;
-use crate::memo::{MemoOptions, build_wall_memo};
+use crate::lights::{Receiver, Visibility};
+use crate::memo::build_wall_memo;
+use crate::memo::{Onward, OnwardMemo};
 use crate::mirror::MirrorArcs;
-use crate::onward::{Onward, OnwardMemo};
-use crate::passes::{Pass, PixelSums, Totals};
+use crate::options::MemoOptions;
+use crate::options::{
+    CULL_BLOCK, FINE_CULLING_SAMPLES, FastPath, Integrator, LONG_LIST, RenderOptions, Rendered,
+    TILE, TILE_SHADOW_TESTS, image_size,
+};
+use crate::passes::{Pass, Totals};
 use crate::path::{MirrorWalls, Trace, path_begin, path_finish, path_sample};
 use crate::plan::Plan;
+use crate::run::Limits;
 use crate::sampling::{
     ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc, sobol_points,
 };
@@ -28,233 +34,6 @@ use crate::scene::Scene;
 use crate::shortcut::memo_bounce;
 use crate::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::{Rgb, Stats};
-
-/// Which estimator a render uses.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Integrator {
-    /// Path tracing with next-event estimation at every diffuse vertex and
-    /// cosine-weighted bounces: the sound default.
-    #[default]
-    Path,
-    /// The original project's estimator, kept as a baseline: uniform
-    /// random bounce directions, each diffuse vertex aimed at the lights
-    /// (for one bounce, exactly its light-directed last bounce).
-    Original,
-    /// Light tracing: photon paths from the lights, each free flight added
-    /// to the pixels it crosses by its track length. Sees point lights in
-    /// mirrors, which path tracing cannot.
-    Light,
-}
-
-/// Everything about a render that is not the scene.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RenderOptions {
-    /// Samples per pixel.
-    pub samples: u32,
-    /// Most diffuse reflections (off walls) between a light and the
-    /// floor. Mirrors, glass and panes do not count: see `specular`.
-    pub bounces: u32,
-    /// Most specular events (mirror reflections, glass refractions and
-    /// reflections) in a row: between a light, a diffuse wall or the
-    /// floor and the next of them. Past [`ROULETTE_FROM`] events in a
-    /// row, a path goes on with the probability of its run's throughput
-    /// (Russian roulette, unbiased); at `specular` it stops.
-    pub specular: u32,
-    pub seed: u64,
-    /// Multiplies every pixel value.
-    pub exposure: f64,
-    /// Pixels per world unit.
-    pub scale: f64,
-    pub integrator: Integrator,
-    /// The direct-light memo.
-    pub memo: MemoOptions,
-    /// The caustic pass (on by default): the light of points, spots and
-    /// suns through mirrors and glass, which path tracing alone cannot
-    /// see. Off, that light is missing from the image.
-    pub caustics: bool,
-    /// The plain model: every effect computed wherever it could add
-    /// light, even where the plan would skip it, and no fast path (no
-    /// culling, lanes, shared shadow rays, tables or shortcuts, and the
-    /// pixel loop compiled for any processor). The same image, bit for
-    /// bit (`tests/tests/identity.rs`), more slowly: for tests, debugging
-    /// and benchmarks.
-    pub reference: bool,
-    /// The fast paths a render may take (all, by default); `reference`
-    /// takes none. Each computes what the model computes, bit for bit: a
-    /// fast path is left out only to measure what it buys.
-    pub fast_paths: FastPaths,
-    /// How next-event estimation picks its lights.
-    pub light_choice: LightChoice,
-}
-
-impl RenderOptions {
-    /// Whether the render takes fast path `path`.
-    #[inline]
-    pub fn takes(&self, path: FastPath) -> bool {
-        !self.reference && self.fast_paths.contains(path)
-    }
-}
-
-/// A fast path beside the model (`ARCHITECTURE.md`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum FastPath {
-    /// The floor's rays, the rays off mirrors and the floor's shadow rays
-    /// test only the walls their block of pixels (or piece of mirror) and
-    /// arc of directions can meet, where the walls are few.
-    Culling,
-    /// The floor memo's strata share one shadow ray per light where no
-    /// shadow edge crosses their pixel (`coherence.rs`).
-    Coherence,
-    /// The floor memo's light-by-light loops, with line lights' angle
-    /// samples in lanes (`light::direct_light_strata`).
-    StrataLoops,
-    /// One bounce read straight from the wall memo (`shortcut.rs`).
-    Shortcut,
-    /// The floor's albedo along walls read from a table.
-    Tables,
-    /// The pixel loop compiled a second time with AVX2.
-    Avx,
-    /// No shadow ray to a chosen light that a wall hides from the whole
-    /// cell of the light table (`dark.rs`).
-    DarkCells,
-}
-
-impl FastPath {
-    /// Every fast path, in a fixed order.
-    pub const ALL: [FastPath; 7] = [
-        FastPath::Culling,
-        FastPath::Coherence,
-        FastPath::StrataLoops,
-        FastPath::Shortcut,
-        FastPath::Tables,
-        FastPath::Avx,
-        FastPath::DarkCells,
-    ];
-
-    fn bit(self) -> u8 {
-        1 << (self as u8)
-    }
-}
-
-/// A set of fast paths.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct FastPaths(u8);
-
-impl FastPaths {
-    /// Every fast path.
-    pub const ALL: FastPaths = FastPaths(0b111_1111);
-
-    /// All but `path`.
-    pub fn without(self, path: FastPath) -> FastPaths {
-        FastPaths(self.0 & !path.bit())
-    }
-
-    pub fn contains(self, path: FastPath) -> bool {
-        self.0 & path.bit() != 0
-    }
-}
-
-impl Default for FastPaths {
-    fn default() -> FastPaths {
-        FastPaths::ALL
-    }
-}
-
-/// Which lights next-event estimation sends shadow rays to.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum LightChoice {
-    /// The plan decides: a light table for scenes of more than
-    /// [`MANY_LIGHTS`] lights, every light otherwise.
-    #[default]
-    Auto,
-    /// One shadow ray to every light at every receiver.
-    Every,
-    /// The lights a table of the plan's cells chooses
-    /// (`lights::choice`): the brightest there always, one of the rest
-    /// at random.
-    Table,
-}
-
-/// Over this many lights, the plan chooses lights by a table.
-pub const MANY_LIGHTS: usize = 8;
-
-impl Default for RenderOptions {
-    fn default() -> RenderOptions {
-        RenderOptions {
-            samples: 16,
-            bounces: 1,
-            specular: crate::run::DEFAULT_SPECULAR,
-            seed: 0,
-            exposure: 1.0,
-            scale: 1.0,
-            integrator: Integrator::Path,
-            memo: MemoOptions::default(),
-            caustics: true,
-            reference: false,
-            fast_paths: FastPaths::ALL,
-            light_choice: LightChoice::Auto,
-        }
-    }
-}
-
-/// A linear RGB image, row-major from the top-left pixel.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<[f32; 3]>,
-}
-
-impl Image {
-    pub fn new(width: u32, height: u32) -> Image {
-        Image {
-            width,
-            height,
-            pixels: vec![[0.0; 3]; width as usize * height as usize],
-        }
-    }
-
-    #[inline]
-    pub fn get(&self, x: u32, y: u32) -> [f32; 3] {
-        self.pixels[y as usize * self.width as usize + x as usize]
-    }
-}
-
-/// The result of a render.
-#[derive(Clone, Debug)]
-pub struct Rendered {
-    pub image: Image,
-    pub stats: Stats,
-}
-
-/// The side of a square tile in pixels.
-pub const TILE: u32 = 16;
-/// The side of the square blocks of pixels whose floor rays share lists
-/// of the walls each arc of directions can meet.
-pub const CULL_BLOCK: u32 = 4;
-
-/// Scenes of more walls than this leave their floor rays to the BVH: a
-/// tile's lists test every wall, and in a large plan an arc's list grows
-/// long.
-pub const MAX_CULLED_WALLS: usize = 512;
-
-/// With a light table, each tile lists the walls its floor's shadow rays
-/// to each light can cross where lights times walls are at most this: that
-/// many wall tests per tile (16 x 16 pixels).
-pub const TILE_SHADOW_TESTS: usize = 8192;
-
-/// Pixels rendered with fewer samples than this (over the passes rendered
-/// together) take their culling lists from their whole tile, not from
-/// their block: a block's list of one arc would serve fewer than
-/// `CULL_BLOCK^2 * FINE_CULLING_SAMPLES / ARCS` = 16 rays.
-pub const FINE_CULLING_SAMPLES: u32 = 64;
-
-/// The image size for `scene` at `scale`: at least one pixel each way.
-pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
-    let w = (scene.canvas.width as f64 * scale).round().max(1.0) as u32;
-    let h = (scene.canvas.height as f64 * scale).round().max(1.0) as u32;
-    (w, h)
-}
 
 /// Renders `scene`. `progress` is called from worker threads with the
 /// number of pixel samples each finished tile took, and with 0, as a
@@ -520,9 +299,13 @@ impl Fills {
         let caustics = if plan.caustics {
             // Photons are no pixel samples: the callback hears of them
             // with 0, as a heartbeat.
-            crate::caustics::trace_caustics(scene, options, (limits(options), pass), stats, &|_| {
-                progress(0)
-            })
+            crate::caustics::trace_caustics(
+                scene,
+                options,
+                (Limits::of(options), pass),
+                stats,
+                &|_| progress(0),
+            )
         } else {
             None
         };
@@ -840,14 +623,6 @@ fn trace_for<'a>(
         shared.light_table.as_ref(),
         onward,
     )
-}
-
-/// How far the paths of a render go.
-pub(crate) fn limits(options: &RenderOptions) -> crate::run::Limits {
-    crate::run::Limits {
-        bounces: options.bounces,
-        specular: options.specular,
-    }
 }
 
 /// The switches of a path sample, from the plan and what it reads.
@@ -1608,11 +1383,6 @@ fn arc_in_lanes<const CHECKED: bool, const N: usize>(
     }
 }
 
-/// Rays whose arc lists more walls than this ask the whole set instead
-/// (its BVH, or in a set of a few dozen walls its scan in lanes): the
-/// same answers, for less work than a long list.
-pub(crate) const LONG_LIST: usize = 16;
-
 /// A ray alone in its arc whose list holds at least this many walls tests
 /// them four at a time (`SegmentSet::closest_hit_among_wide`); a shorter
 /// list costs less one wall at a time.
@@ -1783,6 +1553,54 @@ pub fn pixel_sample(
         sample,
         stats,
     )
+}
+
+/// A render driven pass by pass: the image after any pass is the one a
+/// render of that many samples gives, bit for bit, and more samples can
+/// be added to it.
+pub struct Progressive<'a> {
+    inner: Passes<'a>,
+}
+
+impl<'a> Progressive<'a> {
+    /// Prepares a render of `scene` (`options.samples` is not used: the
+    /// passes say how many samples are taken): builds what every pass
+    /// shares.
+    pub fn new(scene: &'a Scene, options: &RenderOptions) -> Progressive<'a> {
+        Progressive {
+            inner: Passes::new(scene, options),
+        }
+    }
+
+    /// Samples per pixel taken so far.
+    pub fn samples(&self) -> u32 {
+        self.inner.samples()
+    }
+
+    /// Where the next pass ends if more are to follow it
+    /// ([`next_pass_end`]); `None` once a pass has ended short of that,
+    /// since a render of more samples would not have taken that pass.
+    pub fn next_end(&self) -> Option<u32> {
+        self.inner.next_end()
+    }
+
+    /// Takes the next pass, ending at `end` samples per pixel: at most
+    /// [`Progressive::next_end`] (a pass that ends short of it is the
+    /// last). Returns false, taking nothing, when no such pass may follow.
+    /// `progress` is called with pixel samples (or photon paths) done.
+    pub fn pass(&mut self, end: u32, progress: &(dyn Fn(u64) + Sync)) -> bool {
+        self.inner.pass(end, progress)
+    }
+
+    /// The image and statistics so far.
+    pub fn rendered(&self) -> Rendered {
+        self.inner.rendered()
+    }
+
+    /// The image's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.inner.size()
+    }
 }
 
 #[cfg(test)]

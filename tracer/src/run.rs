@@ -13,11 +13,6 @@ use crate::sampling::Stream;
 use crate::scene::{Material, Scene};
 use crate::{Rgb, Stats};
 
-/// The default of `RenderOptions::specular`: light crosses glass bodies
-/// (two events each), prisms and lenses, and goes to and fro between
-/// facing mirrors; Russian roulette ends most long runs well before it.
-pub const DEFAULT_SPECULAR: u32 = 32;
-
 /// Specular events in a row up to which a path always goes on; past
 /// them, Russian roulette decides.
 pub const ROULETTE_FROM: u32 = 8;
@@ -28,6 +23,16 @@ pub const ROULETTE_FROM: u32 = 8;
 pub(crate) struct Limits {
     pub bounces: u32,
     pub specular: u32,
+}
+
+impl Limits {
+    /// How far the paths of a render with `options` go.
+    pub(crate) fn of(options: &crate::options::RenderOptions) -> Limits {
+        Limits {
+            bounces: options.bounces,
+            specular: options.specular,
+        }
+    }
 }
 
 /// The specular events since a path (or photon) left the floor, a light

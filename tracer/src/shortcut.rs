@@ -10,7 +10,8 @@ use std::f64::consts::TAU;
 use flatray_cache::WallMemo;
 use flatray_geometry::DVec2;
 
-use crate::path::{Trace, diffuse_albedo, memo_irradiance};
+use crate::bsdf::diffuse_albedo;
+use crate::path::{Trace, memo_irradiance};
 use crate::scene::Material;
 use crate::{Rgb, Stats};
 

@@ -6,11 +6,11 @@
 
 use flatray_geometry::{DVec2, Ray};
 
-use crate::light::{
-    Receiver, Strata, Visibility, direct_light_chosen, light_contribution, transmittance,
-};
+use crate::light::{Strata, direct_light_chosen};
 use crate::lights::choice::{LightTable, NUMBERS};
-use crate::lights::{arriving, point_incident};
+use crate::lights::{
+    Receiver, Visibility, arriving, light_contribution, point_incident, transmittance,
+};
 use crate::sampling::angle_sample_lanes;
 use crate::scene::{EMITTING_SIDE, Light, LightShape, Scene};
 use crate::{Rgb, Stats};

@@ -41,7 +41,7 @@
 use flatray_geometry::DVec2;
 use rayon::prelude::*;
 
-use crate::light::{Receiver, Visibility, light_contribution};
+use crate::lights::{Receiver, Visibility, light_contribution};
 use crate::sampling::Stream;
 use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};

@@ -8,8 +8,8 @@ use std::f64::consts::TAU;
 
 use flatray_geometry::{DVec2, Ray, Skip};
 
+use super::Kernel;
 use super::{Incident, Photon};
-use crate::light_tracer::Kernel;
 use crate::sampling::{Stream, cosine_half_circle};
 use crate::scene::Light;
 

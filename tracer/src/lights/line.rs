@@ -4,8 +4,8 @@
 
 use flatray_geometry::{DVec2, Ray, Segment, Side, Skip, intersect};
 
+use super::Kernel;
 use super::{Incident, Photon};
-use crate::light_tracer::Kernel;
 use crate::sampling::{Stream, cosine_half_circle, sample_subtended_angle};
 use crate::scene::{EMITTING_SIDE, Light, lies_on_line};
 

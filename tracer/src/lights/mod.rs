@@ -26,6 +26,10 @@
 //! (`coherence::supports`, `light::direct_light_strata`) and fall back to
 //! these functions for every other.
 
+mod contribution;
+mod kernel;
+pub(crate) use contribution::{Receiver, Visibility, light_contribution, transmittance};
+pub(crate) use kernel::Kernel;
 pub(crate) mod choice;
 mod circle;
 mod line;
@@ -35,7 +39,6 @@ mod sun;
 
 use flatray_geometry::{DVec2, Ray, Segment, Skip};
 
-use crate::light_tracer::Kernel;
 use crate::sampling::Stream;
 use crate::scene::{Light, LightShape, Scene};
 use sun::sun_line;

@@ -5,8 +5,8 @@ use std::f64::consts::TAU;
 
 use flatray_geometry::{DVec2, Segment, Skip};
 
+use super::Kernel;
 use super::{Incident, Photon};
-use crate::light_tracer::Kernel;
 use crate::sampling::{Stream, uniform_circle};
 use crate::scene::{Light, lies_on_line};
 

@@ -3,8 +3,8 @@
 
 use flatray_geometry::{DVec2, Skip};
 
+use super::Kernel;
 use super::{Incident, Photon};
-use crate::light_tracer::Kernel;
 use crate::sampling::Stream;
 use crate::scene::{Light, smooth_window};
 

@@ -4,8 +4,8 @@
 
 use flatray_geometry::{DVec2, Segment, Skip};
 
+use super::Kernel;
 use super::{Incident, Photon};
-use crate::light_tracer::Kernel;
 use crate::sampling::Stream;
 use crate::scene::Scene;
 

@@ -6,7 +6,7 @@
 
 mod wording;
 
-use crate::render::{FastPath, FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
+use crate::options::{FastPath, FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Floor, Rgb};
 
@@ -225,7 +225,7 @@ impl Plan {
         let floor_memo =
             !tracing_light && indirect_possible && reflectors > 0 && options.memo.enabled;
         let pairs = scene.walls.len() * scene.lights.len();
-        let (width, height) = crate::render::image_size(scene, options.scale);
+        let (width, height) = crate::options::image_size(scene, options.scale);
         let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
         // Path tracing's next-event estimation, wherever it runs, takes
         // the table's lights in a scene of many (the same in the reference:
@@ -246,7 +246,7 @@ impl Plan {
         let floor_ray_culling = !tracing_light
             && indirect
             && !scene.walls.is_empty()
-            && scene.walls.len() <= crate::render::MAX_CULLED_WALLS
+            && scene.walls.len() <= crate::options::MAX_CULLED_WALLS
             && options.takes(FastPath::Culling);
         Plan {
             fast_paths: options.fast_paths,

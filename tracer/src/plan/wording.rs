@@ -5,10 +5,10 @@ use std::fmt;
 
 use super::{Inventory, Plan};
 use crate::mirror::{GATHER_PIECE, MIRROR_PIECE};
-use crate::render::{
+use crate::options::{
     CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE, TILE_SHADOW_TESTS,
 };
-use crate::render::{FastPath, LightChoice, MANY_LIGHTS};
+use crate::options::{FastPath, LightChoice, MANY_LIGHTS};
 use crate::run::ROULETTE_FROM;
 use crate::sampling::ARCS;
 
