@@ -291,6 +291,26 @@ pub fn clip_to_box(
     (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
 }
 
+/// Whether two closed segments share a point: they cross, one touches
+/// the other, or, lying on one line, they overlap. By the crossing rule's
+/// own orientation (`Segment::side_value`): a point exactly on a line is
+/// on it, whatever rounding put it there. The loader's test of a glass
+/// polygon, the coherence masks and the caustic pass's apertures all ask
+/// this one question.
+pub fn segments_meet(a: &Segment, b: &Segment) -> bool {
+    let straddles = |s: &Segment, t: &Segment| {
+        let (p, q) = (s.side_value(t.a), s.side_value(t.b));
+        !((p > 0.0 && q > 0.0) || (p < 0.0 && q < 0.0))
+    };
+    if a.side_value(b.a) == 0.0 && a.side_value(b.b) == 0.0 {
+        // On one line: they meet where their extents along it overlap.
+        let e = a.edge();
+        let (t0, t1) = ((b.a - a.a).dot(e), (b.b - a.a).dot(e));
+        return t0.max(t1) >= 0.0 && t0.min(t1) <= e.length_squared();
+    }
+    straddles(a, b) && straddles(b, a)
+}
+
 /// The crossing of `ray` with `seg` at `t > 0`, if any.
 #[inline]
 pub fn intersect(ray: &Ray, seg: &Segment) -> Option<Hit> {

@@ -157,3 +157,38 @@ fn refraction_follows_snell_and_reflects_totally_beyond_the_critical_angle() {
     let a = 41.0f64.to_radians();
     assert!(refract(v(a.sin(), -a.cos()), n, 1.5).is_some());
 }
+
+/// Closed segments meet when they cross, touch, or overlap on one line;
+/// on one line but apart, or parallel apart, they do not.
+#[test]
+fn segments_meet_when_they_share_a_point() {
+    let a = seg(0.0, 0.0, 4.0, 0.0);
+    assert!(segments_meet(&a, &seg(2.0, -1.0, 2.0, 1.0)), "crossing");
+    assert!(
+        segments_meet(&a, &seg(2.0, 0.0, 2.0, 1.0)),
+        "touching at an end"
+    );
+    assert!(
+        segments_meet(&a, &seg(4.0, 0.0, 5.0, 3.0)),
+        "sharing an end"
+    );
+    assert!(
+        segments_meet(&a, &seg(3.0, 0.0, 6.0, 0.0)),
+        "overlapping on one line"
+    );
+    assert!(segments_meet(&a, &seg(6.0, 0.0, -1.0, 0.0)), "holding it");
+    assert!(
+        !segments_meet(&a, &seg(5.0, 0.0, 6.0, 0.0)),
+        "on one line, apart"
+    );
+    assert!(!segments_meet(&a, &seg(0.0, 1.0, 4.0, 1.0)), "parallel");
+    assert!(
+        !segments_meet(&a, &seg(5.0, -1.0, 5.0, 1.0)),
+        "beyond its end"
+    );
+    assert!(!segments_meet(&a, &seg(2.0, 0.5, 3.0, 2.0)), "above it");
+    // Either order, and turned.
+    for (p, q) in [(a, seg(3.0, 0.0, 6.0, 0.0)), (a, seg(5.0, 0.0, 6.0, 0.0))] {
+        assert_eq!(segments_meet(&p, &q), segments_meet(&q, &p));
+    }
+}

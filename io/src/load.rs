@@ -559,7 +559,7 @@ fn validate_polygon(points: &[DVec2]) -> Result<(), String> {
                 );
                 flatray_geometry::cross(u, v) == 0.0 && u.dot(v) > 0.0
             } else {
-                segments_meet(&a, &b)
+                flatray_geometry::segments_meet(&a, &b)
             };
             if touch {
                 return Err(format!(
@@ -576,23 +576,6 @@ fn validate_polygon(points: &[DVec2]) -> Result<(), String> {
         return Err("the glass polygon has no area".to_string());
     }
     Ok(())
-}
-
-/// Whether two segments meet (cross or touch), by the crossing rule both
-/// ways.
-fn segments_meet(a: &Segment, b: &Segment) -> bool {
-    let side = |s: &Segment, p: DVec2| s.side_value(p);
-    let straddles = |s: &Segment, t: &Segment| {
-        let (p, q) = (side(s, t.a), side(s, t.b));
-        !((p > 0.0 && q > 0.0) || (p < 0.0 && q < 0.0))
-    };
-    if side(a, b.a) == 0.0 && side(a, b.b) == 0.0 {
-        // Collinear: they meet if their projections overlap.
-        let e = a.edge();
-        let (t0, t1) = ((b.a - a.a).dot(e), (b.b - a.a).dot(e));
-        return t0.max(t1) >= 0.0 && t0.min(t1) <= e.length_squared();
-    }
-    straddles(a, b) && straddles(b, a)
 }
 
 /// Whether `p` lies inside the polygon `v` (even-odd rule).
@@ -615,7 +598,8 @@ fn polygons_cross(p: &[DVec2], q: &[DVec2]) -> bool {
             .collect()
     };
     let (ep, eq) = (edges(p), edges(q));
-    ep.iter().any(|a| eq.iter().any(|b| segments_meet(a, b)))
+    ep.iter()
+        .any(|a| eq.iter().any(|b| flatray_geometry::segments_meet(a, b)))
 }
 
 fn rgb(c: Color) -> Rgb {

@@ -27,7 +27,7 @@
 //! a scene of more diffuse walls than that holds leaves the caustic light
 //! on walls out).
 
-use flatray_geometry::{DVec2, Ray, Side, Skip};
+use flatray_geometry::{Ray, Segment, Side, Skip, segments_meet};
 
 use crate::film::{Estimator, Film, Part, run};
 use crate::light_tracer::{Deposits, Grid, WallDeposits, follow_photon};
@@ -326,7 +326,7 @@ fn reaching(scene: &Scene, aperture: &Aperture, target: u32) -> Vec<Aperture> {
             (Some((w0, a0, b0)), Some((w1, a1, b1))) => {
                 // The same wall, and its chord across the part never meets
                 // the target's: it is in front all the way.
-                w0 == w1 && !segments_meet(a0, a1, b0, b1)
+                w0 == w1 && !segments_meet(&Segment::new(a0, a1), &Segment::new(b0, b1))
             }
             _ => false,
         }
@@ -348,17 +348,6 @@ fn reaching(scene: &Scene, aperture: &Aperture, target: u32) -> Vec<Aperture> {
         }
     }
     parts
-}
-
-/// Whether segments `p0 p1` and `q0 q1` meet (touching counts).
-fn segments_meet(p0: DVec2, p1: DVec2, q0: DVec2, q1: DVec2) -> bool {
-    let side = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
-    let (d1, d2) = (side(q0, q1, p0), side(q0, q1, p1));
-    let (d3, d4) = (side(p0, p1, q0), side(p0, p1, q1));
-    if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 {
-        return true;
-    }
-    false
 }
 
 /// The caustic pass as units of the render loop: chunks of photons, each

@@ -540,26 +540,9 @@ fn near_light(wall: &Segment, light: &Segment) -> bool {
     near(light.a, wall) || near(light.b, wall) || near(wall.a, light) || near(wall.b, light)
 }
 
-/// Whether closed segments `p q` and `r s` share a point.
+/// Whether segments `p q` and `r s` meet (touching counts).
 fn segments_meet(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
-    use flatray_geometry::cross;
-    let d1 = cross(q - p, r - p);
-    let d2 = cross(q - p, s - p);
-    let d3 = cross(s - r, p - r);
-    let d4 = cross(s - r, q - r);
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
-        return true;
-    }
-    let on = |a: DVec2, b: DVec2, c: DVec2, side: f64| {
-        side == 0.0
-            && c.x >= a.x.min(b.x)
-            && c.x <= a.x.max(b.x)
-            && c.y >= a.y.min(b.y)
-            && c.y <= a.y.max(b.y)
-    };
-    on(p, q, r, d1) || on(p, q, s, d2) || on(r, s, p, d3) || on(r, s, q, d4)
+    flatray_geometry::segments_meet(&Segment::new(p, q), &Segment::new(r, s))
 }
 
 /// The transmittance from a pixel's `centre` to light `index`: what every
