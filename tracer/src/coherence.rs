@@ -167,14 +167,9 @@ fn light_states(
     for wall in walls() {
         let (a, b) = (to_pixels(wall.a), to_pixels(wall.b));
         // The opaque wall that hides each end from a point, spot or sun.
-        let hider = |end: DVec2| match light.shape {
-            LightShape::Point { at } | LightShape::Spot { at, .. } => {
-                hidden_by(scene, own, end, at - end, 1.0, step)
-            }
-            LightShape::Directional { direction } => {
-                hidden_by(scene, own, end, -direction, f64::INFINITY, step)
-            }
-            LightShape::Line { .. } | LightShape::Circle { .. } => None,
+        let hider = |end: DVec2| {
+            let (way, t_max) = light.shape.source()?.way_from(end);
+            hidden_by(scene, own, end, way, t_max, step)
         };
         let hiders = [hider(wall.a), hider(wall.b)];
         if !hides_whole(hiders[0], hiders[1]) {
@@ -557,23 +552,19 @@ pub(crate) fn centre_transmittance(
     stats: &mut Stats,
 ) -> Rgb {
     let skip = Skip(u32::MAX, scene.light_wall[index].unwrap_or(u32::MAX));
-    match scene.lights[index].shape {
-        LightShape::Point { at } | LightShape::Spot { at, .. } => crate::lights::transmittance(
+    let shape = &scene.lights[index].shape;
+    if let Some(source) = shape.source() {
+        let (way, t_max) = source.way_from(centre);
+        return crate::lights::transmittance(
             scene,
-            &Ray::new(centre, at - centre),
-            1.0,
+            &Ray::new(centre, way),
+            t_max,
             skip,
             walls,
             stats,
-        ),
-        LightShape::Directional { direction } => crate::lights::transmittance(
-            scene,
-            &Ray::new(centre, -direction),
-            f64::INFINITY,
-            Skip::NONE,
-            walls,
-            stats,
-        ),
+        );
+    }
+    match *shape {
         LightShape::Line { segment, .. } => crate::lights::transmittance(
             scene,
             &Ray::new(centre, segment.point_at(0.5) - centre),
@@ -591,6 +582,10 @@ pub(crate) fn centre_transmittance(
             walls,
             stats,
         ),
+        // Lights with a source were answered above.
+        LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
+            Rgb::ZERO
+        }
     }
 }
 

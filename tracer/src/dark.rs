@@ -10,8 +10,9 @@
 use flatray_geometry::{DVec2, Ray, Segment, Skip, cross};
 use rayon::prelude::*;
 
+use crate::lights::Source;
 use crate::lights::choice::LightTable;
-use crate::scene::{LightShape, Scene};
+use crate::scene::Scene;
 
 /// For every cell of `table`, a bit per light (`table.dark_words()`
 /// words a cell): set for a light, beside the cell's always-lights, that
@@ -58,10 +59,10 @@ fn hidden_from_box(scene: &Scene, index: usize, corners: [DVec2; 4]) -> bool {
     let light = &scene.lights[index];
     // The way from a point to the light: towards `at` up to it, or
     // against the sun's direction without end.
-    let (target, sun) = match light.shape {
-        LightShape::Point { at } | LightShape::Spot { at, .. } => (at, false),
-        LightShape::Directional { direction } => (-direction, true),
-        LightShape::Line { .. } | LightShape::Circle { .. } => return false,
+    let (target, sun) = match light.shape.source() {
+        Some(Source::At(at)) => (at, false),
+        Some(Source::Sun(direction)) => (-direction, true),
+        None => return false,
     };
     let way = |q: DVec2| if sun { target } else { target - q };
     let centre = (corners[0] + corners[2]) * 0.5;
@@ -129,6 +130,7 @@ mod tests {
     use crate::Stats;
     use crate::lights::{Receiver, Visibility, light_contribution};
     use crate::sampling::Stream;
+    use crate::scene::LightShape;
 
     /// A turned plan of two rooms joined by a door, with a stub, a pane,
     /// lamps in each room, a spot, a light on a wall's end and a sun.

@@ -411,7 +411,39 @@ impl Aperture {
     }
 }
 
+/// Where every shadow ray of a light goes, from any point: to a point
+/// light's or a spot's position, or against the sun's direction. Lights
+/// with an area (lines, circles) have no one source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Source {
+    /// To this point.
+    At(DVec2),
+    /// Against this direction of travel, without end.
+    Sun(DVec2),
+}
+
+impl Source {
+    /// The shadow ray's direction from `x` and its `t_max`: up to the point
+    /// (`t = 1`), or without end towards the sun.
+    #[inline]
+    pub(crate) fn way_from(self, x: DVec2) -> (DVec2, f64) {
+        match self {
+            Source::At(p) => (p - x, 1.0),
+            Source::Sun(direction) => (-direction, f64::INFINITY),
+        }
+    }
+}
+
 impl LightShape {
+    /// The one place this light's shadow rays all go, if it has one.
+    pub(crate) fn source(&self) -> Option<Source> {
+        match *self {
+            LightShape::Point { at } | LightShape::Spot { at, .. } => Some(Source::At(at)),
+            LightShape::Directional { direction } => Some(Source::Sun(direction)),
+            LightShape::Line { .. } | LightShape::Circle { .. } => None,
+        }
+    }
+
     /// Where this light sends photons that can reach `target` first: for
     /// lights of one direction per point; `None` for lights with an area
     /// (path tracing sees those in mirrors) and where the target subtends
