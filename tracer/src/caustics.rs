@@ -58,15 +58,11 @@ pub const LEAST_RATE: f64 = 1.0 / 16.0;
 ///
 /// Where a small share of the light meets mirrors, their light adds
 /// little to the image's error, and photons spent there buy less than
-/// path samples. The square follows measurement: on ten scenes with
-/// mirrors or glass (five example scenes and five generated apartments of
-/// up to 73 lights), each rendered at 64 spp with the full rate, a
-/// quarter and a sixteenth of it (one run each), the rate nearest to this
-/// one reached an error per second within 11 % of the best of the three,
-/// and was the best on five. Any photon count gives an unbiased caustic
-/// estimate; the rate only moves noise between the pass and the path
-/// samples (`docs/performance.md`, "Caustic photons by the mirrors'
-/// share").
+/// path samples; the square is the rate that, measured on scenes with
+/// mirrors or glass, came nearest the best error per second. Any photon
+/// count gives an unbiased caustic estimate; the rate only moves noise
+/// between the pass and the path samples (`docs/performance.md`,
+/// "Caustic photons by the mirrors' share").
 pub fn photon_rate(share: f64) -> f64 {
     let ratio = share / FULL_RATE_SHARE;
     let factor = ratio * ratio;

@@ -40,9 +40,8 @@ use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
 
 /// Above this many (wall, light) pairs every pixel traces its strata.
-/// Drawing the boundaries costs about a line across the canvas per pair;
-/// on a generated plan of 289 walls and 73 lights (21,097 pairs) the
-/// masks still pay (`docs/performance.md`, "What each fast path buys").
+/// Drawing the boundaries costs about a line across the canvas per pair:
+/// this bounds that cost.
 pub const MAX_PAIRS: usize = 1 << 16;
 
 /// Above this many (pixel, light) cells (a byte each) the masks are not

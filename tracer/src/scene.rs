@@ -300,10 +300,9 @@ impl Floor {
 }
 
 /// The floor's albedo along the walls that take it: for each such wall,
-/// equal cells of its parameter `u`, about a quarter of a unit long (at
-/// one cell per unit, the cells next to borders, which read the floor,
-/// made 4 % of the render), each holding the
-/// albedo wherever it is one colour over the whole cell (a NaN marks a
+/// equal cells of its parameter `u`, about a quarter of a unit long (short,
+/// so that few cells straddle a border and read the floor), each holding
+/// the albedo wherever it is one colour over the whole cell (a NaN marks a
 /// cell that crosses a border: read the floor there). A hit reads its cell
 /// instead of evaluating the floor: the same value, found in a table.
 #[derive(Clone, Debug, Default)]
