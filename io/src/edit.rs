@@ -12,7 +12,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::format::{LightSpec, MaterialSpec, SceneFile};
+use crate::format::{LightSpec, MaterialSpec};
 use crate::locate;
 
 /// One edit, by the item's place in its list (counting from 0, as the
@@ -76,9 +76,14 @@ pub enum MaterialKind {
 /// `text` with `edit` made: only the edited value is rewritten (or, when
 /// the item does not give it, added at the item's end). The result is
 /// checked as a scene (`path` names it in messages, `base` resolves its
-/// floor image); an edit that leaves no valid scene is refused with the
-/// loader's message.
-pub fn apply(text: &str, edit: &Edit, path: &Path, base: &Path) -> Result<String, String> {
+/// floor image), and given back with what it loads as; an edit that
+/// leaves no valid scene is refused with the loader's message.
+pub fn apply(
+    text: &str,
+    edit: &Edit,
+    path: &Path,
+    base: &Path,
+) -> Result<(String, crate::Loaded), String> {
     let (list, index) = match *edit {
         Edit::MoveLight { index, .. }
         | Edit::MoveLightEnd { index, .. }
@@ -131,11 +136,11 @@ pub fn apply(text: &str, edit: &Edit, path: &Path, base: &Path) -> Result<String
             format!("{}{comma}{field}: {value}{}", &text[..at], &text[at..])
         }
     };
-    crate::parse(&edited, path, base).map_err(|e| match e {
+    let loaded = crate::parse(&edited, path, base).map_err(|e| match e {
         crate::SceneError::Invalid { message, .. } => message,
         other => other.to_string(),
     })?;
-    Ok(edited)
+    Ok((edited, loaded))
 }
 
 /// A number as a scene writes it: at most a thousandth of a unit, no
@@ -194,9 +199,7 @@ pub struct LightItem {
 /// The items of a scene `text` that loads (`loaded`, its canvas).
 pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let options =
-        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-    let file: SceneFile = options.from_str(text).map_err(|e| e.to_string())?;
+    let file = crate::load::scene_file(text).map_err(|e| e.to_string())?;
     let canvas = loaded.scene.canvas;
     let walls = file
         .walls
@@ -330,7 +333,7 @@ Scene(
 ";
 
     fn edit(e: Edit) -> Result<String, String> {
-        apply(TEXT, &e, Path::new("t.ron"), Path::new("."))
+        apply(TEXT, &e, Path::new("t.ron"), Path::new(".")).map(|(text, _)| text)
     }
 
     #[test]

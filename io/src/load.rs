@@ -118,13 +118,20 @@ fn foreign(path: &Path, bytes: &[u8]) -> Option<(&'static str, bool)> {
     Some((what, false))
 }
 
+/// The serde form of scene `text` (without a byte-order mark), as the
+/// format reads it: unvalidated beyond what its types check.
+pub(crate) fn scene_file(text: &str) -> Result<SceneFile, ron::error::SpannedError> {
+    ron::Options::default()
+        .with_default_extension(Extensions::IMPLICIT_SOME)
+        .from_str(text)
+}
+
 /// Parses and validates scene `text`; `path` names it in messages and
 /// `base` is the folder that relative paths resolve against.
 pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError> {
     // A UTF-8 byte-order mark is no part of the scene.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
-    let file: SceneFile = options.from_str(text).map_err(|e| {
+    let file = scene_file(text).map_err(|e| {
         let (at, message) = crate::explain::explain(&e, text);
         let (line, column) = locate::position(text, at);
         SceneError::Invalid {

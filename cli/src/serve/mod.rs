@@ -356,19 +356,16 @@ async fn edit(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> Res
         }
     };
     let mut scene = lock(&shared);
-    let edited = match flatray_io::edit::apply(&scene.text, &edit, &shared.path, &shared.base) {
-        Ok(text) => text,
-        Err(message) => {
-            return refused(
-                StatusCode::UNPROCESSABLE_ENTITY,
-                serde_json::json!({"message": message}),
-            );
-        }
-    };
-    let loaded = match load_text(&edited, &shared.path) {
-        Ok(loaded) => loaded,
-        Err(r) => return refused(StatusCode::UNPROCESSABLE_ENTITY, r.json()),
-    };
+    let (edited, loaded) =
+        match flatray_io::edit::apply(&scene.text, &edit, &shared.path, &shared.base) {
+            Ok(done) => done,
+            Err(message) => {
+                return refused(
+                    StatusCode::UNPROCESSABLE_ENTITY,
+                    serde_json::json!({"message": message}),
+                );
+            }
+        };
     let before = scene.text.clone();
     match adopt(&shared, &mut scene, edited, loaded) {
         Ok(()) => {
