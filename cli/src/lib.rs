@@ -822,13 +822,14 @@ fn render(args: RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
 /// The modification times and lengths of `files` (none for a file that
 /// cannot be read).
 fn stamps(files: &[PathBuf]) -> Vec<Option<(std::time::SystemTime, u64)>> {
-    files
-        .iter()
-        .map(|f| {
-            let m = std::fs::metadata(f).ok()?;
-            Some((m.modified().ok()?, m.len()))
-        })
-        .collect()
+    files.iter().map(|f| stamp(f)).collect()
+}
+
+/// A file's modification time and length: what changes when it is
+/// saved. `None` when it cannot be read.
+pub(crate) fn stamp(path: &Path) -> Option<(std::time::SystemTime, u64)> {
+    let m = std::fs::metadata(path).ok()?;
+    Some((m.modified().ok()?, m.len()))
 }
 
 fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {

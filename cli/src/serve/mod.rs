@@ -28,7 +28,7 @@ use flatray_io::{Loaded, SceneError};
 use tokio_stream::StreamExt;
 use tokio_stream::wrappers::WatchStream;
 
-use crate::Failure;
+use crate::{Failure, stamp};
 use render::{Frame, Job, Worker};
 
 /// The page, served as it is.
@@ -214,12 +214,6 @@ impl Refusal {
     fn json(&self) -> serde_json::Value {
         serde_json::json!({"message": self.message, "line": self.line, "column": self.column})
     }
-}
-
-/// The file's modification time and length.
-fn stamp(path: &Path) -> Option<(SystemTime, u64)> {
-    let m = std::fs::metadata(path).ok()?;
-    Some((m.modified().ok()?, m.len()))
 }
 
 fn lock(shared: &Shared) -> std::sync::MutexGuard<'_, Scene> {
