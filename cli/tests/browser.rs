@@ -8,13 +8,13 @@
 //! written to `FLATRAY_SCREENSHOTS` (a folder) when that is set: that is
 //! how `docs/images/serve.png` is made.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use headless_chrome::protocol::cdp::{Input, Page};
 use headless_chrome::{Browser, LaunchOptions, Tab};
+
+mod common;
 
 fn chromium() -> PathBuf {
     if let Some(path) = std::env::var_os("FLATRAY_CHROMIUM") {
@@ -32,15 +32,6 @@ fn chromium() -> PathBuf {
     panic!(
         "this test drives a real browser: install Chromium (`apt-get install chromium`) or name one in FLATRAY_CHROMIUM"
     );
-}
-
-struct Server(Child);
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }
 
 /// The mean sRGB value of the PNG's pixels within `radius` of `(x, y)`.
@@ -136,23 +127,8 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
     let scene = dir.join("room.ron");
     let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
     std::fs::copy(&room, &scene).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_flatray"))
-        .args(["serve", scene.to_str().unwrap(), "--port", "0"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut first = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut first)
-        .unwrap();
-    let _server = Server(child);
-    let url = first
-        .split(" at ")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .unwrap_or_else(|| panic!("{first}"))
-        .to_string();
+    let server = common::serve(&scene);
+    let url = server.url.clone();
 
     let options = LaunchOptions::default_builder()
         .path(Some(chromium()))
@@ -178,16 +154,14 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
     let browser = Browser::new(options).unwrap();
     let tab = browser.new_tab().unwrap();
     tab.set_default_timeout(Duration::from_secs(30));
-    tab.navigate_to(&url)
+    tab.navigate_to(&format!("{url}/"))
         .unwrap()
         .wait_until_navigated()
         .unwrap();
     tab.wait_for_element("circle[data-light='1']").unwrap();
     let first_job = wait_for_render(&tab, 0, 64);
     let export = |path: &str| -> Vec<u8> {
-        let mut r = ureq::get(&format!("{url}{}", path.trim_start_matches('/')))
-            .call()
-            .unwrap();
+        let mut r = ureq::get(&format!("{url}{path}")).call().unwrap();
         r.body_mut()
             .with_config()
             .limit(64 << 20)

@@ -4,8 +4,10 @@
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+
+mod common;
 
 const ROOM: &str = "// A test room: a lamp, a wall.
 Scene(
@@ -23,7 +25,7 @@ Scene(
 
 /// A running `flatray serve` on a free port, stopped when dropped.
 struct Server {
-    child: Child,
+    _serving: common::Serving,
     url: String,
     dir: PathBuf,
     scene: PathBuf,
@@ -36,25 +38,10 @@ impl Server {
         std::fs::create_dir_all(&dir).unwrap();
         let scene = dir.join("room.ron");
         std::fs::write(&scene, text).unwrap();
-        let mut child = Command::new(env!("CARGO_BIN_EXE_flatray"))
-            .args(["serve", scene.to_str().unwrap(), "--port", "0"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut first = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut first)
-            .unwrap();
-        let url = first
-            .split(" at ")
-            .nth(1)
-            .and_then(|rest| rest.split(' ').next())
-            .unwrap_or_else(|| panic!("no address in {first:?}"))
-            .trim_end_matches('/')
-            .to_string();
+        let serving = common::serve(&scene);
+        let url = serving.url.clone();
         Server {
-            child,
+            _serving: serving,
             url,
             dir,
             scene,
@@ -109,8 +96,6 @@ impl Server {
 
 impl Drop for Server {
     fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
         let _ = std::fs::remove_dir_all(&self.dir);
     }
 }
