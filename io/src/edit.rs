@@ -211,6 +211,7 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
                 }
                 MaterialSpec::Diffuse { albedo: Some(c) } => ("Diffuse", Some((c.0, c.1, c.2))),
                 MaterialSpec::Mirror { tint } => ("Mirror", Some((tint.0, tint.1, tint.2))),
+                MaterialSpec::Rough { tint, .. } => ("Rough", Some((tint.0, tint.1, tint.2))),
                 MaterialSpec::Transparent { tint } => {
                     ("Transparent", Some((tint.0, tint.1, tint.2)))
                 }

@@ -191,6 +191,11 @@ impl TryFrom<(f64, f64, f64)> for Color {
 fn white() -> Color {
     Color::WHITE
 }
+/// A rough mirror's roughness when not given: a slight blur.
+pub const ROUGH_DEFAULT: f64 = 0.1;
+fn rough_default() -> f64 {
+    ROUGH_DEFAULT
+}
 fn one() -> Intensity {
     Intensity(1.0)
 }
@@ -417,6 +422,13 @@ pub enum MaterialSpec {
         albedo: Option<Color>,
     },
     Mirror {
+        #[serde(default = "white")]
+        tint: Color,
+    },
+    /// A rough mirror: a glossy lobe about the mirror direction.
+    Rough {
+        #[serde(default = "rough_default")]
+        roughness: f64,
         #[serde(default = "white")]
         tint: Color,
     },

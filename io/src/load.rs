@@ -211,7 +211,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
     let default_falloff = falloff(file.falloff);
     let mut walls = Vec::with_capacity(file.walls.len());
     let mut lights = Vec::with_capacity(file.lights.len());
-    for wall in &file.walls {
+    let wall_items = locate::list_items(text, "walls");
+    for (wall_index, wall) in file.walls.iter().enumerate() {
         let segment = Segment::new(
             DVec2::new(wall.a.0, wall.a.1),
             DVec2::new(wall.b.0, wall.b.1),
@@ -222,6 +223,26 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 albedo: albedo.map(rgb),
             },
             MaterialSpec::Mirror { tint } => Material::Mirror { tint: rgb(tint) },
+            MaterialSpec::Rough { roughness, tint } => {
+                if !(0.0..=1.0).contains(&roughness) {
+                    let at = locate::item_range(text, "walls", wall_index).map_or(
+                        wall_items.get(wall_index).copied().unwrap_or(0),
+                        |(start, end)| {
+                            text[start..end]
+                                .find("roughness")
+                                .map_or(start, |k| start + k)
+                        },
+                    );
+                    return Err(error_at(
+                        at,
+                        format!(
+                            "wall {wall_index}: a rough mirror's `roughness` is from 0 (a mirror) \
+                             to 1 (a broad lobe), not {roughness}"
+                        ),
+                    ));
+                }
+                Material::rough(roughness, rgb(tint))
+            }
             MaterialSpec::Transparent { tint } => Material::Transparent { tint: rgb(tint) },
         };
         if let Some(EmitSpec {
@@ -490,12 +511,7 @@ fn overlap_warnings(text: &str, walls: &[Wall], listed: usize) -> Vec<Warning> {
         return Vec::new();
     }
     let items = locate::list_items(text, "walls");
-    let kind = |w: &Wall| match w.material {
-        Material::Diffuse { .. } => "wall",
-        Material::Mirror { .. } => "mirror",
-        Material::Transparent { .. } => "pane",
-        Material::Glass { .. } => "glass edge",
-    };
+    let kind = |w: &Wall| w.material.noun();
     let same = |x: &Wall, y: &Wall| {
         let (p, q) = (x.segment, y.segment);
         x.material == y.material && ((p.a == q.a && p.b == q.b) || (p.a == q.b && p.b == q.a))

@@ -1,6 +1,6 @@
 //! Walls drawn over a tone-mapped image, so that a render shows its plan:
 //! anti-aliased lines in a colour that tells the material (diffuse walls
-//! in their own colour, mirrors silver-blue, panes in their tint, glass
+//! in their own colour, mirrors silver-blue, rough mirrors greyer, panes in their tint, glass
 //! pale cyan, emitting walls warm yellow).
 
 use flatray_geometry::DVec2;
@@ -18,6 +18,7 @@ fn wall_colour(scene: &Scene, index: usize) -> [f64; 3] {
         }
         Material::Diffuse { albedo: None } => [0.9, 0.9, 0.88],
         Material::Mirror { .. } => [0.7, 0.82, 1.0],
+        Material::Rough { .. } => [0.62, 0.7, 0.85],
         Material::Transparent { tint } => {
             [0.3 + 0.5 * tint.x, 0.5 + 0.5 * tint.y, 0.55 + 0.45 * tint.z]
         }

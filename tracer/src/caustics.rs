@@ -36,7 +36,7 @@ use crate::options::{RenderOptions, image_size};
 use crate::passes::Pass;
 use crate::run::Limits;
 use crate::sampling::Stream;
-use crate::scene::{Material, Scene};
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Caustic photons per pixel sample of the render where the mirrors and
@@ -306,10 +306,7 @@ fn reaching(scene: &Scene, aperture: &Aperture, target: u32) -> Vec<Aperture> {
             if !(beyond.is_finite() && beyond > 0.0) {
                 return None;
             }
-            let diffuse = matches!(
-                scene.walls[wall as usize].material,
-                Material::Diffuse { .. }
-            );
+            let diffuse = scene.walls[wall as usize].material.is_diffuse();
             // Well inside the wall, and well in front of the target.
             (diffuse
                 && wall != target
@@ -378,12 +375,7 @@ pub(crate) fn trace_caustics(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Option<Caustics> {
     let targets: Vec<u32> = (0..scene.walls.len() as u32)
-        .filter(|&i| {
-            matches!(
-                scene.walls[i as usize].material,
-                Material::Mirror { .. } | Material::Glass { .. }
-            )
-        })
+        .filter(|&i| scene.walls[i as usize].material.turns_specularly())
         .collect();
     let emitters: Vec<Emitter> = scene
         .lights

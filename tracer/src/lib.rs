@@ -22,15 +22,14 @@
 //! block calls the pixel loop compiled with AVX2, after checking that the
 //! processor has it (`render.rs::pixel_fn`).
 
-mod bsdf;
 mod caustics;
 mod coherence;
 mod dark;
 mod film;
-mod glass;
 mod light;
 mod light_tracer;
 mod lights;
+mod material;
 mod memo;
 pub mod metrics;
 mod mirror;

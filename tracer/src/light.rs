@@ -3,7 +3,8 @@
 use flatray_geometry::DVec2;
 
 use crate::lights::choice::{LightTable, NUMBERS};
-use crate::lights::{Receiver, Visibility, light_contribution};
+use crate::lights::{Receiver, Visibility, light_contribution, weighed_contribution};
+use crate::material::{Bsdf, Sampling};
 use crate::sampling::Stream;
 use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
@@ -30,6 +31,76 @@ pub(crate) fn direct_light(
         }
         None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
     }
+}
+
+/// Next-event estimation at a glossy wall point `x` (the receiver: the
+/// wall side the path arrived on, of unit normal `n`) for a path leaving
+/// towards `wo`: the outgoing light `∫ f(wo, wi) L(wi) cos dtheta`, one
+/// sample of every light (the lights' own numbers from `stream`, as
+/// [`direct_light_with`] draws them; no light table). A light with an area
+/// is weighed against the BSDF's own samples by the power heuristic; the
+/// path loop gives a BSDF sample that meets it the other share
+/// ([`glossy_emission_weight`]). A sample where `f` is zero casts no shadow
+/// ray.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn direct_light_glossy(
+    scene: &Scene,
+    x: DVec2,
+    (receiver, n): (Receiver, DVec2),
+    bsdf: &Bsdf,
+    wo: DVec2,
+    shadows: bool,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    let vis = Visibility::of(shadows);
+    let mut sum = Rgb::ZERO;
+    for index in 0..scene.lights.len() {
+        let light = &scene.lights[index];
+        let u = light_number(light, stream);
+        let area = light.shape.has_area();
+        sum += weighed_contribution(scene, index, x, receiver, u, vis, stats, |s, v| {
+            let wi = s.dir();
+            let f = bsdf.eval(n, wo, wi);
+            if f == Rgb::ZERO {
+                return None;
+            }
+            let weight = if area {
+                power_heuristic(s.pdf, bsdf.pdf(n, wo, wi, Sampling::Cosine))
+            } else {
+                1.0
+            };
+            Some(f * (v * weight))
+        });
+    }
+    sum
+}
+
+/// The share of a glossy BSDF's sample from `x` (of density `pdf`, on
+/// wall `wall`) that meets light `light`: the power heuristic against the
+/// light's own sampling there, 1 where next-event estimation takes none.
+#[inline]
+pub(crate) fn glossy_emission_weight(
+    scene: &Scene,
+    light: &Light,
+    (x, wall): (DVec2, u32),
+    pdf: f64,
+) -> f64 {
+    if light
+        .shape
+        .grazes(wall, &scene.walls[wall as usize].segment)
+    {
+        return 1.0;
+    }
+    power_heuristic(pdf, light.shape.pdf_towards(x))
+}
+
+/// The power heuristic's weight for a sample of density `a` against one
+/// other strategy of density `b` (Veach's `beta = 2`).
+#[inline]
+fn power_heuristic(a: f64, b: f64) -> f64 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
 /// How many numbers each floor stratum draws for its direct light.

@@ -5,11 +5,11 @@
 
 use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
-use crate::bsdf::{Bsdf, Sampling, Transport};
 use crate::film::PixelSums;
 use crate::film::{Estimator, Film, Part, run};
-use crate::glass::{GlassState, absorption, transmit};
 use crate::lights::{Kernel, Photon};
+use crate::material::glass::{GlassState, absorption, transmit};
+use crate::material::{Bsdf, Sampling, Transport};
 use crate::options::{RenderOptions, image_size};
 use crate::passes::Pass;
 use crate::run::{Limits, Run};
@@ -299,17 +299,19 @@ pub(crate) fn follow_photon(
             return;
         };
         let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), true, stats);
-        if let Bsdf::Transparent { .. } = bsdf {
+        if bsdf.is_straight() {
             stats.physics.transparent_passes += 1;
         }
         if let Some((bins, values)) = &mut deposits.walls
             && !bsdf.is_specular()
         {
-            // The caustic pass ends at the first diffuse wall: what
-            // arrives there after specular events is binned, for the path
-            // tracer's next-event estimation to read.
+            // The caustic pass ends at the first non-specular wall: what
+            // arrives at a diffuse one after specular events is binned,
+            // for the path tracer's next-event estimation to read (a
+            // glossy wall's outgoing light depends on where light came
+            // from, which bins of irradiance do not keep).
             stats.physics.paths_to_walls += 1;
-            if run.specular() {
+            if run.specular() && bsdf.lambertian().is_some() {
                 let arriving = power * kernel.factor(travelled, r0);
                 bins.add(values, (index, side, h.u), arriving);
             }
@@ -322,7 +324,7 @@ pub(crate) fn follow_photon(
             }
             diffuse += 1;
         }
-        if let Bsdf::Mirror { .. } = bsdf {
+        if bsdf.is_mirror() {
             stats.physics.mirror_reflections += 1;
         }
         // Photons carry power, which refraction conserves.
@@ -337,7 +339,7 @@ pub(crate) fn follow_photon(
         );
         if bsdf.is_specular() {
             power *= scattered.weight;
-            if !matches!(bsdf, Bsdf::Transparent { .. }) {
+            if !bsdf.is_straight() {
                 let Some(weight) = run.next(limits.specular, power, stream, stats) else {
                     return;
                 };

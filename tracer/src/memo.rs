@@ -9,7 +9,7 @@ use flatray_geometry::{Ray, Side, Skip};
 
 use crate::lights::{Receiver, Visibility, light_contribution};
 use crate::options::MemoOptions;
-use crate::scene::{Material, Scene};
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Bytes the wall memo may take: over it, the plan switches it off.
@@ -31,7 +31,7 @@ pub(crate) fn wall_memo_bytes(
     let per_bin = 2 * std::mem::size_of::<Value>() as u64;
     let mut bytes = 0u64;
     for (index, w) in scene.walls.iter().enumerate() {
-        if !matches!(w.material, Material::Diffuse { .. }) {
+        if !w.material.is_diffuse() {
             bytes += per_bin;
             continue;
         }
@@ -86,7 +86,7 @@ pub(crate) fn build_wall_memo(
         scene.lights.len(),
         |wall, side, u, light_index| {
             let w = &scene.walls[wall as usize];
-            if !matches!(w.material, Material::Diffuse { .. }) {
+            if !w.material.is_diffuse() {
                 return [0.0; 3];
             }
             let side = Side::of_index(side);

@@ -41,8 +41,8 @@ impl MirrorArcs {
     /// mirrors, and with `gathers` for its diffuse walls; `None` where no
     /// wall takes any.
     pub(crate) fn build(scene: &Scene, scale: f64, gathers: bool) -> Option<MirrorArcs> {
-        let mirror = |m: &Material| matches!(m, Material::Mirror { .. });
-        let diffuse = |m: &Material| gathers && matches!(m, Material::Diffuse { .. });
+        let mirror = |m: &Material| m.is_mirror();
+        let diffuse = |m: &Material| gathers && m.is_diffuse();
         if !scene
             .walls
             .iter()

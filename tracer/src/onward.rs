@@ -39,7 +39,6 @@ use flatray_geometry::{Ray, Side, Skip};
 use crate::memo::{Onward, OnwardMemo, to_value};
 use crate::path::{Leg, Trace, follow};
 use crate::sampling::{Stream, cosine_half_circle};
-use crate::scene::Material;
 use crate::{Rgb, Stats};
 
 /// Bytes the onward memo may take (both copies, every order): over it,
@@ -107,7 +106,7 @@ pub(crate) fn build_onward(
             let counted_listed = std::sync::atomic::AtomicU64::new(0);
             let table = wall_memo.build_like(gathers as usize, |wall, side, u, k| {
                 let w = &scene.walls[wall as usize];
-                if !matches!(w.material, Material::Diffuse { .. }) {
+                if !w.material.is_diffuse() {
                     return [0.0; 3];
                 }
                 let side_of = Side::of_index(side);

@@ -6,17 +6,16 @@ use std::f64::consts::TAU;
 use flatray_cache::{Key, WallMemo};
 use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
 
-use crate::bsdf::{Bsdf, Sampling, Transport};
 use crate::caustics::Caustics;
-use crate::glass::{GlassState, absorption, transmit};
-use crate::light::direct_light;
+use crate::light::{direct_light, direct_light_glossy, glossy_emission_weight};
 use crate::lights::Receiver;
 use crate::lights::choice::LightTable;
-use crate::lights::line_emitted;
+use crate::material::glass::{GlassState, absorption, transmit};
+use crate::material::{Bsdf, Sampling, Transport};
 use crate::memo::Onward;
 use crate::run::Run;
 use crate::sampling::{Stream, circle_in_arc};
-use crate::scene::{Light, LightShape, Scene};
+use crate::scene::{Light, Scene};
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
@@ -211,6 +210,10 @@ pub(crate) fn follow(
     // After a mirror the path can carry light from a line light that no
     // shadow ray found, so emission met by the ray then counts.
     let mut after_mirror = false;
+    // Where the ray left a glossy wall, and the density of its direction:
+    // light with an area that it meets is weighed against next-event
+    // estimation there (multiple importance sampling).
+    let mut glossy_from: Option<GlossyStart> = None;
     // Distance travelled since the receiver or the last diffuse vertex:
     // a light seen through mirrors is that far away.
     let mut unfolded = 0.0;
@@ -227,11 +230,18 @@ pub(crate) fn follow(
                 .closest_hit_within(&ray, f64::INFINITY, skip, line_walls),
         };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        if mirror_emission && (after_mirror || force) {
+        if mirror_emission && (after_mirror || force || glossy_from.is_some()) {
             stats.work.emission_tests += 1;
-            let emitted = emission_crossed(scene, &ray, hit_t, unfolded);
-            if after_mirror {
-                fluence += throughput * emitted;
+            match glossy_from {
+                Some(from) => {
+                    fluence += throughput * emission_crossed_weighed(scene, &ray, hit_t, from);
+                }
+                None => {
+                    let emitted = emission_crossed(scene, &ray, hit_t, unfolded);
+                    if after_mirror {
+                        fluence += throughput * emitted;
+                    }
+                }
             }
         }
         let Some((index, h)) = hit else {
@@ -260,15 +270,25 @@ pub(crate) fn follow(
                 h.t,
             );
         }
-        if after_mirror && let Some(light) = scene.light_of_wall(index) {
+        if (after_mirror || glossy_from.is_some())
+            && let Some(light) = scene.light_of_wall(index)
+        {
             let light = &scene.lights[light as usize];
-            fluence += throughput * line_emission(light, side, unfolded, scene.small_radius);
+            let emitted = line_emission(light, side, unfolded, scene.small_radius);
+            fluence += throughput
+                * match glossy_from {
+                    Some(from) => {
+                        emitted
+                            * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf)
+                    }
+                    None => emitted,
+                };
         }
 
         let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), trace.tables, stats);
         // A transparent wall is no scattering event: the path goes on
         // straight, and nothing is counted.
-        let straight = matches!(bsdf, Bsdf::Transparent { .. });
+        let straight = bsdf.is_straight();
         if straight {
             stats.physics.transparent_passes += 1;
         } else if !bsdf.is_specular() {
@@ -341,7 +361,38 @@ pub(crate) fn follow(
                 break;
             }
         }
-        if let Bsdf::Mirror { .. } = bsdf {
+        if bsdf.is_glossy() {
+            // Next-event estimation through the lobe, each light weighed
+            // against the lobe's own sample below.
+            let receiver = Receiver {
+                normal: Some(normal()),
+                wall: Some(index),
+                shadow_walls: None,
+            };
+            let wo = -ray.dir;
+            fluence += throughput
+                * direct_light_glossy(
+                    scene,
+                    x,
+                    (receiver, normal()),
+                    &bsdf,
+                    wo,
+                    shadows,
+                    stream,
+                    stats,
+                );
+            if diffuse == bounces {
+                if !mirror_emission {
+                    stats.physics.paths_bounce_limit += 1;
+                    break;
+                }
+                // The lobe's sample still looks for lights with an area,
+                // and goes on by mirrors and glass; its next non-specular
+                // wall ends it.
+                last_leg = true;
+            }
+        }
+        if bsdf.is_mirror() {
             stats.physics.mirror_reflections += 1;
         }
         let sampling = match integrator {
@@ -363,7 +414,19 @@ pub(crate) fn follow(
             stats.physics.paths_absorbed += 1;
             break;
         }
-        ray = Ray::new(x, scattered.dir);
+        let left = Ray::new(x, scattered.dir);
+        glossy_from = if bsdf.is_glossy() {
+            Some(GlossyStart {
+                x,
+                wall: index,
+                pdf: bsdf.pdf(normal(), -ray.dir, scattered.dir, sampling),
+            })
+        } else if straight {
+            glossy_from
+        } else {
+            None
+        };
+        ray = left;
         skip = Skip::one(index);
         if straight {
             // Still on the first ray's line: its walls still hold.
@@ -377,11 +440,12 @@ pub(crate) fn follow(
             // After a specular event, light met by the ray counts: no
             // next-event estimation could have found it.
             after_mirror = true;
-            line_walls = match bsdf {
-                Bsdf::Mirror { .. } => trace
+            line_walls = if bsdf.is_mirror() {
+                trace
                     .mirror_arcs
-                    .and_then(|arcs| arcs.walls(index, h.u, ray.dir)),
-                _ => None,
+                    .and_then(|arcs| arcs.walls(index, h.u, ray.dir))
+            } else {
+                None
             };
             if line_walls.is_some() {
                 stats.work.culled_mirror_rays += 1;
@@ -481,13 +545,31 @@ fn emission_crossed(scene: &Scene, ray: &Ray, t_max: f64, unfolded: f64) -> Rgb 
     sum
 }
 
-/// What a path ray meeting solid line light `light` from `side` at total
-/// distance `r` carries back (see [`crate::lights::line_emitted`]).
-fn line_emission(light: &Light, side: Side, r: f64, r0: f64) -> Rgb {
-    match light.shape {
-        LightShape::Line { one_sided, .. } => {
-            light.color * line_emitted(light, one_sided, side, r, r0)
+/// [`emission_crossed`] for a ray that left a glossy wall: each light
+/// it meets weighed against next-event estimation there.
+fn emission_crossed_weighed(scene: &Scene, ray: &Ray, t_max: f64, from: GlossyStart) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    for light in &scene.lights {
+        if let Some(t) = light.shape.met_by(ray, t_max) {
+            let weight = glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf);
+            sum += light.color
+                * (light.intensity * light.falloff.per_radian(t, scene.small_radius) * weight);
         }
-        _ => Rgb::ZERO,
     }
+    sum
+}
+
+/// Where a path's ray left a glossy wall: the point, the wall, and the
+/// density per radian of the ray's direction.
+#[derive(Clone, Copy, Debug)]
+struct GlossyStart {
+    x: DVec2,
+    wall: u32,
+    pdf: f64,
+}
+
+/// What a path ray meeting solid line light `light` from `side` at total
+/// distance `r` carries back.
+fn line_emission(light: &Light, side: Side, r: f64, r0: f64) -> Rgb {
+    light.color * light.shape.emitted_at_wall(light, side, r, r0)
 }

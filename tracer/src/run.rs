@@ -10,7 +10,7 @@
 use flatray_geometry::{Segment, Side};
 
 use crate::sampling::Stream;
-use crate::scene::{Material, Scene};
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Specular events in a row up to which a path always goes on; past
@@ -149,12 +149,7 @@ const LAST_LEG_PAIRS: usize = 1 << 22;
 pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
     let walls = &scene.walls;
     let specular: Vec<usize> = (0..walls.len())
-        .filter(|&i| {
-            matches!(
-                walls[i].material,
-                Material::Mirror { .. } | Material::Glass { .. }
-            )
-        })
+        .filter(|&i| walls[i].material.turns_specularly())
         .collect();
     let diffuse = walls.len() - specular.len();
     let areas = scene.lights.iter().any(|l| l.shape.has_area());
@@ -182,7 +177,7 @@ pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
         .iter()
         .map(|&m| {
             let ms = &walls[m].segment;
-            if matches!(walls[m].material, Material::Glass { .. }) {
+            if walls[m].material.is_glass() {
                 return [true; 2];
             }
             [Side::Positive, Side::Negative].map(|side| {
@@ -199,7 +194,7 @@ pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
         .collect();
     let mut sides = vec![false; 2 * walls.len()];
     for (w, wall) in walls.iter().enumerate() {
-        if !matches!(wall.material, Material::Diffuse { .. }) {
+        if !wall.material.is_diffuse() {
             continue;
         }
         let ws = &wall.segment;
@@ -219,7 +214,7 @@ pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Canvas, Falloff, Floor, Light, LightShape, Wall};
+    use crate::scene::{Canvas, Falloff, Floor, Light, LightShape, Material, Wall};
     use flatray_geometry::DVec2;
 
     /// A mirror along x = 10 with a line light on its right: walls on the

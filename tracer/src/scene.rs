@@ -324,18 +324,19 @@ impl AlbedoAlong {
     fn new(canvas: &Canvas, floor: &Floor, walls: &[Wall]) -> AlbedoAlong {
         let taking = walls
             .iter()
-            .filter(|w| matches!(w.material, Material::Diffuse { albedo: None }))
+            .filter(|w| w.material.takes_floor_albedo())
             .count();
         // The budget shared out: many long walls get coarser cells (a
         // cell that crosses a border reads the floor: the same values).
         let most = (ALBEDO_CELLS_BUDGET / taking.max(1)).clamp(1, MAX_ALBEDO_CELLS);
         let cells = walls
             .iter()
-            .map(|wall| match wall.material {
-                Material::Diffuse { albedo: None } => {
+            .map(|wall| {
+                if wall.material.takes_floor_albedo() {
                     Self::cells(canvas, floor, &wall.segment, most)
+                } else {
+                    Vec::new()
                 }
-                _ => Vec::new(),
             })
             .collect();
         AlbedoAlong { cells }
@@ -471,11 +472,148 @@ pub enum Material {
     Diffuse { albedo: Option<Rgb> },
     /// Perfect specular reflector.
     Mirror { tint: Rgb },
+    /// A rough mirror: a glossy lobe about the mirror direction, of
+    /// spread `roughness` (in `(0, 1]`: the standard deviation of the
+    /// sine of the reflected angle; 0 is [`Material::Mirror`], which
+    /// [`Material::rough`] gives; 1 a broad lobe), reflected light
+    /// multiplied by `tint`.
+    Rough { roughness: f64, tint: Rgb },
     /// Light passes straight through, multiplied by `tint`.
     Transparent { tint: Rgb },
     /// An edge of glass body `body` (an index into `Scene::glass`), whose
     /// inside is on side `inside`: Fresnel reflection or Snell refraction.
     Glass { body: u32, inside: Side },
+}
+
+/// What the rest of the tracer asks of a material, answered here beside
+/// its definition so that no other module matches a material's kind. The
+/// light a material sends on is its BSDF's (`crate::material`).
+impl Material {
+    /// A rough mirror of `roughness`, clamped to `[0, 1]`: roughness 0
+    /// (or below) is the perfect mirror itself, the same bits.
+    pub fn rough(roughness: f64, tint: Rgb) -> Material {
+        if roughness > 0.0 {
+            Material::Rough {
+                roughness: roughness.min(1.0),
+                tint,
+            }
+        } else {
+            Material::Mirror { tint }
+        }
+    }
+
+    /// A Lambertian reflector: the walls the memos bin and the caustic
+    /// pass ends at.
+    #[inline]
+    pub fn is_diffuse(&self) -> bool {
+        matches!(self, Material::Diffuse { .. })
+    }
+
+    /// A Lambertian reflector that takes the floor's albedo where it
+    /// stands.
+    #[inline]
+    pub fn takes_floor_albedo(&self) -> bool {
+        matches!(self, Material::Diffuse { albedo: None })
+    }
+
+    /// A Lambertian reflector's own albedo, `Some(None)` when it takes the
+    /// floor's; `None` for every other material.
+    #[inline]
+    pub fn diffuse_albedo(&self) -> Option<Option<Rgb>> {
+        match *self {
+            Material::Diffuse { albedo } => Some(albedo),
+            _ => None,
+        }
+    }
+
+    /// The perfect mirror.
+    #[inline]
+    pub fn is_mirror(&self) -> bool {
+        matches!(self, Material::Mirror { .. })
+    }
+
+    /// A rough mirror: a glossy, non-specular lobe.
+    #[inline]
+    pub fn is_glossy(&self) -> bool {
+        matches!(self, Material::Rough { .. })
+    }
+
+    /// A transparent wall's tint; `None` for every other material.
+    #[inline]
+    pub fn pane_tint(&self) -> Option<Rgb> {
+        match *self {
+            Material::Transparent { tint } => Some(tint),
+            _ => None,
+        }
+    }
+
+    /// A transparent wall.
+    #[inline]
+    pub fn is_pane(&self) -> bool {
+        self.pane_tint().is_some()
+    }
+
+    /// A glass edge's body and the side its inside is on.
+    #[inline]
+    pub fn glass(&self) -> Option<(u32, Side)> {
+        match *self {
+            Material::Glass { body, inside } => Some((body, inside)),
+            _ => None,
+        }
+    }
+
+    /// A glass edge.
+    #[inline]
+    pub fn is_glass(&self) -> bool {
+        self.glass().is_some()
+    }
+
+    /// Whether the wall turns light by a delta event (a mirror or a glass
+    /// edge): where light tracing must carry a lamp's light on, since no
+    /// shadow ray finds it, and paths go on past their last bounce.
+    #[inline]
+    pub fn turns_specularly(&self) -> bool {
+        matches!(self, Material::Mirror { .. } | Material::Glass { .. })
+    }
+
+    /// Whether the wall blocks light: all but a clear pane.
+    #[inline]
+    pub fn occludes(&self) -> bool {
+        !matches!(self, Material::Transparent { tint } if *tint == Rgb::ONE)
+    }
+
+    /// Whether the wall sends light on (not black, not a pane), where a
+    /// diffuse wall that takes the floor's albedo does so unless
+    /// `floor_black`.
+    pub fn reflects(&self, floor_black: bool) -> bool {
+        match *self {
+            Material::Diffuse { albedo: Some(a) } => a != Rgb::ZERO,
+            Material::Diffuse { albedo: None } => !floor_black,
+            Material::Mirror { tint } | Material::Rough { tint, .. } => tint != Rgb::ZERO,
+            Material::Transparent { .. } => false,
+            Material::Glass { .. } => true,
+        }
+    }
+
+    /// Whether the wall turns light by a delta event and sends some on.
+    pub fn reflects_specularly(&self) -> bool {
+        match *self {
+            Material::Mirror { tint } => tint != Rgb::ZERO,
+            Material::Glass { .. } => true,
+            _ => false,
+        }
+    }
+
+    /// The material's name in the scene format's words.
+    pub fn noun(&self) -> &'static str {
+        match self {
+            Material::Diffuse { .. } => "wall",
+            Material::Mirror { .. } => "mirror",
+            Material::Rough { .. } => "rough mirror",
+            Material::Transparent { .. } => "pane",
+            Material::Glass { .. } => "glass edge",
+        }
+    }
 }
 
 /// A closed polygon of glass; its edges are walls of `Material::Glass`.
@@ -617,9 +755,11 @@ impl Scene {
         mut lights: Vec<Light>,
         mut glass: Vec<GlassBody>,
     ) -> Scene {
-        if walls.iter().any(
-            |w| matches!(w.material, Material::Glass { body, .. } if body as usize >= glass.len()),
-        ) {
+        if walls.iter().any(|w| {
+            w.material
+                .glass()
+                .is_some_and(|(body, _)| body as usize >= glass.len())
+        }) {
             glass.push(GlassBody {
                 ior: 1.5,
                 dispersion: 0.0,
@@ -632,6 +772,12 @@ impl Scene {
                 {
                     *body = fallback;
                 }
+            }
+        }
+        // A rough mirror of roughness 0 is the mirror, to the bit.
+        for w in &mut walls {
+            if let Material::Rough { roughness, tint } = w.material {
+                w.material = Material::rough(roughness, tint);
             }
         }
         let (walls, merged) = resolve_overlaps(walls, &mut lights);
@@ -679,9 +825,12 @@ impl Scene {
     pub(crate) fn diffuse_lengths(&self) -> Vec<f64> {
         self.walls
             .iter()
-            .map(|w| match w.material {
-                Material::Diffuse { .. } => w.segment.length(),
-                _ => 0.0,
+            .map(|w| {
+                if w.material.is_diffuse() {
+                    w.segment.length()
+                } else {
+                    0.0
+                }
             })
             .collect()
     }
@@ -703,7 +852,7 @@ impl Scene {
     pub fn stops_rays(&self, index: u32) -> bool {
         self.walls
             .get(index as usize)
-            .is_some_and(|w| !matches!(w.material, Material::Transparent { .. }))
+            .is_some_and(|w| !w.material.is_pane())
     }
 
     /// How many of the walls the scene was built from lay along other
@@ -722,7 +871,7 @@ impl Scene {
             .enumerate()
             .map(|(index, w)| {
                 let mut cuts = Vec::new();
-                if matches!(w.material, Material::Diffuse { .. }) {
+                if w.material.is_diffuse() {
                     let along = Ray::new(w.segment.a, w.segment.edge());
                     self.segments.for_each_crossing(
                         &along,
@@ -782,9 +931,8 @@ fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize
         emitting
     };
     let segments: Vec<Segment> = walls.iter().map(|w| w.segment).collect();
-    let groups = flatray_geometry::overlap::overlap_groups(&segments, |i| {
-        !matches!(walls[i].material, Material::Glass { .. })
-    });
+    let groups =
+        flatray_geometry::overlap::overlap_groups(&segments, |i| !walls[i].material.is_glass());
     if groups.is_empty() {
         return (walls, 0);
     }
@@ -854,7 +1002,7 @@ fn resolve_group(
     pieces: &flatray_geometry::overlap::Pieces,
 ) -> Vec<Wall> {
     use std::collections::BTreeSet;
-    let pane = |g: usize| matches!(walls[group[g]].material, Material::Transparent { .. });
+    let pane = |g: usize| walls[group[g]].material.is_pane();
     // Each member's rank in its class (opaque walls by the wall a path
     // meets first, panes by tint then coordinates): an order of values,
     // not of the list.
@@ -913,12 +1061,8 @@ fn resolve_group(
         // The tints of a piece's panes, where a run of them starts.
         let starts_run = k == 0 || owners[k - 1] != owners[k];
         tints.push(match owners[k] {
-            Owner::Panes(_) if starts_run => panes.iter().fold(Rgb::ONE, |t, &(_, g)| match walls
-                [group[g]]
-                .material
-            {
-                Material::Transparent { tint } => t * tint,
-                _ => t,
+            Owner::Panes(_) if starts_run => panes.iter().fold(Rgb::ONE, |t, &(_, g)| {
+                t * walls[group[g]].material.pane_tint().unwrap_or(Rgb::ONE)
             }),
             _ => Rgb::ONE,
         });
@@ -952,16 +1096,17 @@ fn resolve_group(
 }
 
 /// Which of two opaque walls on one line a path sees: a mirror before a
-/// diffuse wall, the darker before the brighter, a wall of its own colour
+/// rough mirror before a diffuse wall, the darker before the brighter, a wall of its own colour
 /// before one of the floor's, then by coordinates.
 fn seen_order(x: &Wall, y: &Wall) -> std::cmp::Ordering {
     let rank = |w: &Wall| match w.material {
         Material::Mirror { tint } => (0, tint),
-        Material::Diffuse { albedo: Some(c) } => (1, c),
-        Material::Diffuse { albedo: None } => (2, Rgb::ZERO),
+        Material::Rough { tint, .. } => (1, tint),
+        Material::Diffuse { albedo: Some(c) } => (2, c),
+        Material::Diffuse { albedo: None } => (3, Rgb::ZERO),
         // Neither panes nor glass reach here.
-        Material::Transparent { tint } => (3, tint),
-        Material::Glass { .. } => (4, Rgb::ZERO),
+        Material::Transparent { tint } => (4, tint),
+        Material::Glass { .. } => (5, Rgb::ZERO),
     };
     let ((cx, tx), (cy, ty)) = (rank(x), rank(y));
     cx.cmp(&cy)

@@ -10,9 +10,8 @@ use std::f64::consts::TAU;
 use flatray_cache::WallMemo;
 use flatray_geometry::DVec2;
 
-use crate::bsdf::diffuse_albedo;
+use crate::material::diffuse_albedo;
 use crate::path::{Trace, memo_irradiance};
-use crate::scene::Material;
 use crate::{Rgb, Stats};
 
 /// The common case of `path::path_finish`, straight: one bounce, the first
@@ -35,9 +34,7 @@ pub(crate) fn memo_bounce(
 ) -> Option<Rgb> {
     let scene = trace.scene;
     let wall = scene.walls.get(index as usize)?;
-    let Material::Diffuse { albedo } = wall.material else {
-        return None;
-    };
+    let albedo = wall.material.diffuse_albedo()?;
     if u == 0.0 || u == 1.0 || (trace.memo_checks && flatray_cache::checked(index, u)) {
         return None;
     }

@@ -51,6 +51,16 @@ pub(super) fn incident(
     })
 }
 
+/// The density per radian of [`incident`]'s directions from `x`: one
+/// over the angle the disk subtends, 0 on or inside the rim.
+pub(super) fn pdf(at: DVec2, radius: f64, x: DVec2) -> f64 {
+    let d = (at - x).length();
+    if d <= radius {
+        return 0.0;
+    }
+    1.0 / (2.0 * (radius / d).asin())
+}
+
 /// `2 I` per unit length of the rim, outward: `4 pi R I`.
 pub(super) fn power(radius: f64) -> f64 {
     2.0 * TAU * radius

@@ -5,8 +5,8 @@
 
 use flatray_geometry::{DVec2, Ray, Skip, Strategy};
 
-use super::arriving;
-use crate::scene::{Material, Scene};
+use super::{Incident, arriving};
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Who receives the light: the floor (no cosine, every direction) or one
@@ -76,6 +76,7 @@ impl Visibility {
 /// the transmittance of one shadow ray (none when `vis` is known: the plan
 /// found nothing that occludes, or the floor's coherence masks know the
 /// answer). `u` in `[0, 1)` is the light's number, if it takes one.
+#[inline]
 pub(crate) fn light_contribution(
     scene: &Scene,
     index: usize,
@@ -84,6 +85,28 @@ pub(crate) fn light_contribution(
     u: f64,
     vis: Visibility,
     stats: &mut Stats,
+) -> Rgb {
+    weighed_contribution(scene, index, x, receiver, u, vis, stats, |_, v| {
+        Some(Rgb::splat(v))
+    })
+}
+
+/// [`light_contribution`] with the arriving value `v` (the light's
+/// sample times the receiver's cosine over its pdf) turned into a colour
+/// by `weigh(sample, v)` before the shadow ray: a BSDF's `f` and a
+/// multiple importance sampling weight, at a glossy receiver. `None`: the
+/// sample brings nothing, and no shadow ray is cast.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn weighed_contribution(
+    scene: &Scene,
+    index: usize,
+    x: DVec2,
+    receiver: Receiver,
+    u: f64,
+    vis: Visibility,
+    stats: &mut Stats,
+    weigh: impl FnOnce(&Incident, f64) -> Option<Rgb>,
 ) -> Rgb {
     let light = &scene.lights[index];
     if let Some(w) = receiver.wall
@@ -110,6 +133,9 @@ pub(crate) fn light_contribution(
     if v == 0.0 {
         return Rgb::ZERO;
     }
+    let Some(weighed) = weigh(&s, v) else {
+        return Rgb::ZERO;
+    };
     // A light that sits on a wall shines past it: its shadow rays ignore
     // that wall (for a solid line light, its own wall).
     let vis = match vis {
@@ -123,7 +149,7 @@ pub(crate) fn light_contribution(
         ),
         Visibility::Known(known) => known,
     };
-    Rgb::splat(v) * vis * light.color
+    weighed * vis * light.color
 }
 
 /// What fraction of light gets along `ray` for `0 < t < t_max`: zero when
@@ -150,14 +176,15 @@ pub(crate) fn transmittance(
     let mut blocked = false;
     let segments = &scene.segments;
     segments.for_each_crossing_within(ray, t_max, skip, walls, |index, _| {
-        match scene.walls[index as usize].material {
-            Material::Transparent { tint } => {
+        match scene.walls[index as usize].material.pane_tint() {
+            Some(tint) => {
                 through *= tint;
                 panes += 1;
                 through != Rgb::ZERO
             }
-            // Glass refracts: no straight shadow ray gets through it.
-            Material::Diffuse { .. } | Material::Mirror { .. } | Material::Glass { .. } => {
+            // Opaque; and glass refracts: no straight shadow ray gets
+            // through it.
+            None => {
                 through = Rgb::ZERO;
                 blocked = true;
                 false
@@ -174,7 +201,7 @@ pub(crate) fn transmittance(
     loop {
         let mut next: Option<(u32, Rgb)> = None;
         segments.for_each_crossing_within(ray, t_max, skip, walls, |index, _| {
-            if let Material::Transparent { tint } = scene.walls[index as usize].material
+            if let Some(tint) = scene.walls[index as usize].material.pane_tint()
                 && after.is_none_or(|a| index > a)
                 && next.is_none_or(|(n, _)| index < n)
             {
@@ -193,7 +220,7 @@ pub(crate) fn transmittance(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Canvas, Floor, Wall};
+    use crate::scene::{Canvas, Floor, Material, Wall};
     use flatray_geometry::Segment;
 
     /// Panes across a ray, in an order of indices unlike their order

@@ -6,7 +6,7 @@ use flatray_geometry::{DVec2, Ray, Segment, Side, Skip, intersect};
 
 use super::Kernel;
 use super::{Incident, Photon};
-use crate::sampling::{Stream, cosine_half_circle, sample_subtended_angle};
+use crate::sampling::{Stream, cosine_half_circle, sample_subtended_angle, subtended_angle};
 use crate::scene::{EMITTING_SIDE, Light, lies_on_line};
 
 /// A direction uniform in the angle the segment subtends at `x`: pdf one
@@ -31,6 +31,16 @@ pub(super) fn incident(
         value: light.falloff.per_radian(s.distance, r0),
         pdf: 1.0 / s.subtended,
     })
+}
+
+/// The density per radian of [`incident`]'s directions from `x`: one
+/// over the angle the segment subtends, 0 where it draws none.
+pub(super) fn pdf(segment: &Segment, one_sided: bool, x: DVec2) -> f64 {
+    if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
+        return 0.0;
+    }
+    let angle = subtended_angle(x, segment);
+    if angle > 0.0 { 1.0 / angle } else { 0.0 }
 }
 
 /// A wall never receives its own light, nor a line light along its own

@@ -28,7 +28,9 @@
 
 mod contribution;
 mod kernel;
-pub(crate) use contribution::{Receiver, Visibility, light_contribution, transmittance};
+pub(crate) use contribution::{
+    Receiver, Visibility, light_contribution, transmittance, weighed_contribution,
+};
 pub(crate) use kernel::Kernel;
 pub(crate) mod choice;
 mod circle;
@@ -37,13 +39,12 @@ mod point;
 mod spot;
 mod sun;
 
-use flatray_geometry::{DVec2, Ray, Segment, Skip};
+use flatray_geometry::{DVec2, Ray, Segment, Side, Skip};
 
 use crate::sampling::Stream;
 use crate::scene::{Light, LightShape, Scene};
 use sun::sun_line;
 
-pub(crate) use line::emitted as line_emitted;
 pub(crate) use point::incident as point_incident;
 
 /// A sample of the light that reaches a receiver point from one light,
@@ -128,6 +129,38 @@ impl LightShape {
             } => line::incident(&segment, one_sided, light, x, u, r0),
             LightShape::Directional { direction } => Some(sun::incident(direction)),
             LightShape::Circle { at, radius } => circle::incident(at, radius, light, x, u, r0),
+        }
+    }
+
+    /// The density per radian with which [`LightShape::incident`] draws
+    /// a direction from `x` that meets the light: for a light with an
+    /// area, what multiple importance sampling weighs a BSDF's sample that
+    /// met it against. 0 for a light of one direction (no ray meets it),
+    /// and where `incident` draws nothing.
+    #[inline]
+    pub(crate) fn pdf_towards(&self, x: DVec2) -> f64 {
+        match *self {
+            LightShape::Line {
+                segment, one_sided, ..
+            } => line::pdf(&segment, one_sided, x),
+            LightShape::Circle { at, radius } => circle::pdf(at, radius, x),
+            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
+                0.0
+            }
+        }
+    }
+
+    /// What a path ray meeting this light's wall (a solid line light)
+    /// from `side`, at total distance `r`, carries back; nothing for a
+    /// light that is no wall.
+    #[inline]
+    pub(crate) fn emitted_at_wall(&self, light: &Light, side: Side, r: f64, r0: f64) -> f64 {
+        match *self {
+            LightShape::Line { one_sided, .. } => line::emitted(light, one_sided, side, r, r0),
+            LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. }
+            | LightShape::Circle { .. } => 0.0,
         }
     }
 

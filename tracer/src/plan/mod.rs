@@ -26,6 +26,8 @@ pub struct Inventory {
     pub lights: usize,
     pub walls: usize,
     pub mirrors: usize,
+    /// Rough mirrors: glossy walls, each a non-specular bounce.
+    pub rough_mirrors: usize,
     pub panes: usize,
     pub glass_edges: usize,
     pub glass_bodies: usize,
@@ -59,28 +61,17 @@ impl Inventory {
             areas: lights(&|s| s.has_area()),
             lights: scene.lights.len(),
             walls: scene.walls.len(),
-            mirrors: walls(&|m| matches!(m, Material::Mirror { .. })),
-            panes: walls(&|m| matches!(m, Material::Transparent { .. })),
-            glass_edges: walls(&|m| matches!(m, Material::Glass { .. })),
+            mirrors: walls(&Material::is_mirror),
+            rough_mirrors: walls(&Material::is_glossy),
+            panes: walls(&Material::is_pane),
+            glass_edges: walls(&Material::is_glass),
             glass_bodies: scene.glass.len(),
             dispersive: scene.glass.iter().filter(|g| g.dispersion != 0.0).count(),
-            diffuse: walls(&|m| matches!(m, Material::Diffuse { .. })),
-            floor_albedo_walls: walls(&|m| matches!(m, Material::Diffuse { albedo: None })),
-            occluders: walls(
-                &|m| !matches!(m, Material::Transparent { tint } if *tint == Rgb::ONE),
-            ),
-            reflectors: walls(&|m| match *m {
-                Material::Diffuse { albedo: Some(a) } => a != Rgb::ZERO,
-                Material::Diffuse { albedo: None } => !floor_black,
-                Material::Mirror { tint } => tint != Rgb::ZERO,
-                Material::Transparent { .. } => false,
-                Material::Glass { .. } => true,
-            }),
-            specular_reflectors: walls(&|m| match *m {
-                Material::Mirror { tint } => tint != Rgb::ZERO,
-                Material::Glass { .. } => true,
-                _ => false,
-            }),
+            diffuse: walls(&Material::is_diffuse),
+            floor_albedo_walls: walls(&Material::takes_floor_albedo),
+            occluders: walls(&Material::occludes),
+            reflectors: walls(&|m| m.reflects(floor_black)),
+            specular_reflectors: walls(&Material::reflects_specularly),
             queries: scene.segments().describe(),
         }
     }
@@ -112,7 +103,8 @@ pub struct Plan {
     pub shadows: bool,
     /// Indirect paths from the floor.
     pub indirect: bool,
-    /// Lights with an area met by a path ray after a mirror.
+    /// Lights with an area met by a path ray after a mirror or glass, or
+    /// off a rough mirror.
     pub mirror_emission: bool,
     /// Paths go on past their last diffuse bounce, to meet lights with an
     /// area after mirrors and glass.
@@ -157,6 +149,7 @@ impl Plan {
             spots,
             suns,
             areas,
+            rough_mirrors,
             glass_edges,
             diffuse,
             occluders,
@@ -179,7 +172,11 @@ impl Plan {
         let indirect = indirect_possible
             && ((options.bounces > 0 && (force || reflectors > 0))
                 || (specular_paths && areas > 0));
-        let mirror_emission = indirect && (force || (specular_paths && areas > 0));
+        // A rough mirror's own samples meet lights with an area, weighed
+        // against next-event estimation there.
+        let glossy_paths = options.bounces > 0 && rough_mirrors > 0;
+        let mirror_emission =
+            indirect && (force || ((specular_paths || glossy_paths) && areas > 0));
         // Past its last diffuse bounce a path goes on only where such a
         // light could be met; not forced, as it would find none.
         let last_legs = indirect && specular_paths && areas > 0;

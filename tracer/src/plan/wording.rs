@@ -49,6 +49,7 @@ impl Plan {
             lights,
             walls,
             mirrors,
+            rough_mirrors,
             panes,
             glass_edges,
             glass_bodies,
@@ -222,15 +223,36 @@ impl Plan {
             specular_why(mirrors, "mirror"),
         );
         add(
-            "lines and circles seen in mirrors or glass",
-            mirror_emission,
-            if mirror_emission && !(specular > 0 && areas > 0) {
-                "forced on".into()
-            } else if mirror_emission {
-                "mirrors or glass, and line or circle lights, in the scene".into()
+            "rough mirrors",
+            indirect && bounces > 0 && rough_mirrors > 0,
+            if rough_mirrors == 0 {
+                "no rough mirror in the scene".into()
+            } else if bounces == 0 {
+                "bounces = 0: a rough mirror's reflection is a bounce".into()
             } else if !indirect {
                 "no indirect light is traced".into()
-            } else if specular == 0 {
+            } else {
+                n(rough_mirrors, "rough mirror")
+            },
+        );
+        let glossy = rough_mirrors > 0 && bounces > 0;
+        add(
+            "lines and circles seen in mirrors or glass",
+            mirror_emission,
+            if mirror_emission && !((specular > 0 || glossy) && areas > 0) {
+                "forced on".into()
+            } else if mirror_emission {
+                match (specular > 0, glossy) {
+                    (true, false) => "mirrors or glass, and line or circle lights, in the scene",
+                    (false, _) => "rough mirrors, and line or circle lights, in the scene",
+                    (true, true) => {
+                        "mirrors or glass, rough mirrors, and line or circle lights, in the scene"
+                    }
+                }
+                .into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else if specular == 0 && !glossy {
                 "no mirror or glass in the scene".into()
             } else {
                 "no line or circle light in the scene".into()

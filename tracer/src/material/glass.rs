@@ -26,10 +26,10 @@ impl GlassState {
     /// otherwise the tracked state.
     #[inline]
     pub fn flight_body(&self, material: &Material, arrival: Side) -> Option<u32> {
-        match *material {
-            Material::Glass { body, inside } if arrival == inside => Some(body),
-            Material::Glass { .. } => None,
-            _ => self.inside,
+        match material.glass() {
+            Some((body, inside)) if arrival == inside => Some(body),
+            Some(_) => None,
+            None => self.inside,
         }
     }
 }
