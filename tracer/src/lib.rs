@@ -22,9 +22,8 @@
 //! block calls the pixel loop compiled with AVX2, after checking that the
 //! processor has it (`render.rs::pixel_fn`).
 
+mod accel;
 mod caustics;
-mod coherence;
-mod dark;
 mod film;
 mod light;
 mod light_tracer;
@@ -32,20 +31,19 @@ mod lights;
 mod material;
 mod memo;
 pub mod metrics;
-mod mirror;
 mod onward;
 pub mod optics;
 mod options;
 mod passes;
 mod path;
+mod pixel;
 pub mod plan;
 mod render;
 mod run;
 pub mod sampling;
 pub mod scene;
-mod shortcut;
 mod stats;
-mod strata;
+mod tile;
 
 /// A linear RGB triple: a colour, an albedo, or a light quantity.
 pub type Rgb = glam::DVec3;
@@ -57,7 +55,8 @@ pub use options::{
 };
 pub use passes::{FIRST_PASS, next_pass_end};
 pub use plan::Plan;
-pub use render::{Progressive, pixel_sample, render};
+pub use render::{Progressive, render};
 pub use run::ROULETTE_FROM;
 pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
 pub use stats::{Noise, Physics, Stats, Work};
+pub use tile::pixel_sample;

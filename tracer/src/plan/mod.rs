@@ -238,8 +238,8 @@ impl Plan {
         let floor_coherence = floor_memo
             && shadows
             && options.takes(FastPath::Coherence)
-            && pairs <= crate::coherence::MAX_PAIRS
-            && mask_cells <= crate::coherence::MAX_CELLS;
+            && pairs <= crate::accel::coherence::MAX_PAIRS
+            && mask_cells <= crate::accel::coherence::MAX_CELLS;
         let floor_ray_culling = !tracing_light
             && indirect
             && !scene.walls.is_empty()

@@ -4,7 +4,7 @@
 use std::fmt;
 
 use super::{Inventory, Plan};
-use crate::mirror::{GATHER_PIECE, MIRROR_PIECE};
+use crate::accel::mirror::{GATHER_PIECE, MIRROR_PIECE};
 use crate::options::{
     CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE, TILE_SHADOW_TESTS,
 };
@@ -363,15 +363,15 @@ impl Plan {
                 "the reference model runs no fast path".into()
             } else if !fast_paths.contains(FastPath::Coherence) {
                 "left out (--without coherence)".into()
-            } else if pairs > crate::coherence::MAX_PAIRS {
+            } else if pairs > crate::accel::coherence::MAX_PAIRS {
                 format!(
                     "{pairs} wall-light pairs, over {}: drawing the shadow edges would cost more than it saves",
-                    crate::coherence::MAX_PAIRS
+                    crate::accel::coherence::MAX_PAIRS
                 )
-            } else if mask_cells > crate::coherence::MAX_CELLS {
+            } else if mask_cells > crate::accel::coherence::MAX_CELLS {
                 format!(
                     "{mask_cells} pixel-light cells, over its budget of {}",
-                    crate::coherence::MAX_CELLS
+                    crate::accel::coherence::MAX_CELLS
                 )
             } else {
                 "one shadow ray per light where no shadow edge crosses the pixel".into()

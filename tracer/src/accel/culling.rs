@@ -1,0 +1,159 @@
+//! A fast path: the walls each block of pixels' rays can meet, per arc of
+//! directions, and the walls its floor points' shadow rays towards each
+//! light can cross. The pixel loop (`pixel.rs`) tests only those, through
+//! the geometry's listed queries: the same answers as the whole set.
+
+use flatray_geometry::{ArcCandidates, DVec2, hull_candidates};
+
+use crate::Rgb;
+use crate::light::Strata;
+use crate::lights::Visibility;
+use crate::lights::choice::LightTable;
+use crate::options::{LONG_LIST, TILE_SHADOW_TESTS};
+use crate::sampling::ARCS;
+use crate::scene::Scene;
+
+/// What a block of pixels culls: for each arc of directions, the walls its
+/// floor rays can meet; for each light, the walls the shadow rays from its
+/// floor points can cross (`None` for a sun: every wall).
+#[derive(Default)]
+pub(crate) struct BlockCulling {
+    pub(crate) arcs: ArcCandidates,
+    pub(crate) shadows: Vec<Option<Vec<u32>>>,
+}
+
+impl BlockCulling {
+    /// The lists for the block `[lo, hi]` of tile `tile`; the shadow lists
+    /// only when shadow rays are cast.
+    pub(crate) fn fill(
+        &mut self,
+        scene: &Scene,
+        lo: DVec2,
+        hi: DVec2,
+        tile: &ArcCandidates,
+        shadows: bool,
+    ) {
+        self.arcs.fill(&scene.segments, lo, hi, ARCS, Some(tile));
+        self.fill_shadows(scene, lo, hi, shadows);
+    }
+
+    /// Shadow rays whose list holds more walls than this ask the BVH: the
+    /// same answer, for less work than a long list.
+    pub(crate) fn drop_long_shadow_lists(&mut self) {
+        for list in &mut self.shadows {
+            if list.as_ref().is_some_and(|l| l.len() > LONG_LIST) {
+                *list = None;
+            }
+        }
+    }
+
+    /// The shadow lists for the block `[lo, hi]` (only when shadow rays
+    /// are cast). Without `shadows`, the lists stay as they are: those of
+    /// the block's tile, or none.
+    pub(crate) fn fill_shadows(&mut self, scene: &Scene, lo: DVec2, hi: DVec2, shadows: bool) {
+        self.shadows.resize(scene.lights.len(), None);
+        if shadows {
+            self.fill_shadows_of(scene, lo, hi, |_| true);
+        }
+    }
+
+    /// The shadow lists for the block `[lo, hi]` of the lights that
+    /// `listed` takes; the other lights have none.
+    pub(crate) fn fill_shadows_of(
+        &mut self,
+        scene: &Scene,
+        lo: DVec2,
+        hi: DVec2,
+        listed: impl Fn(usize) -> bool,
+    ) {
+        self.shadows.resize(scene.lights.len(), None);
+        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        for (index, (light, list)) in scene.lights.iter().zip(&mut self.shadows).enumerate() {
+            let hull = light.shape.hull().filter(|_| listed(index));
+            let Some(hull) = hull else {
+                *list = None;
+                continue;
+            };
+            let points = [
+                corners[0], corners[1], corners[2], corners[3], hull[0], hull[1], hull[2], hull[3],
+            ];
+            hull_candidates(&scene.segments, &points, list.get_or_insert_with(Vec::new));
+        }
+    }
+}
+
+/// The buffers of a pixel's floor memo, kept by a tile for all its pixels:
+/// no allocation per pixel.
+#[derive(Default)]
+pub(crate) struct Batch {
+    /// Each light's visibility over the pixel (without coherence masks,
+    /// the same for every pixel, and filled once).
+    pub(crate) visibility: Vec<Visibility>,
+    /// Per light, whether the pixel shares its transmittance and it is
+    /// not yet traced (with a light table and coherence masks).
+    pub(crate) shared: Vec<bool>,
+    /// The floor memo's points of one pixel, for all its passes.
+    pub(crate) floor: Strata,
+    /// The light table's weights of the seen lights at those points.
+    pub(crate) weights: Vec<f64>,
+    /// The path samples' sums of each pass.
+    pub(crate) sums: Vec<Sums>,
+    /// Per light, whether the tile's points have its shadow list.
+    pub(crate) listed: Vec<bool>,
+}
+
+/// Marks in `listed` the lights whose shadow rays from the tile `[lo, hi]`
+/// take a list: every light where lights times walls fit
+/// [`TILE_SHADOW_TESTS`]; else those that the table's cells under the tile
+/// take at every point or by what their probes saw, or else their
+/// always-lights alone, as long as they fit; else none (the BVH answers).
+pub(crate) fn tile_lights(
+    scene: &Scene,
+    table: &LightTable,
+    tile: (DVec2, DVec2),
+    listed: &mut Vec<bool>,
+) {
+    let walls = scene.walls.len().max(1);
+    let lights = scene.lights.len();
+    listed.clear();
+    if lights * walls <= TILE_SHADOW_TESTS {
+        listed.resize(lights, true);
+        return;
+    }
+    if table.lights_in_box(tile, true, listed) * walls <= TILE_SHADOW_TESTS
+        || table.lights_in_box(tile, false, listed) * walls <= TILE_SHADOW_TESTS
+    {
+        return;
+    }
+    listed.clear();
+    listed.resize(lights, false);
+}
+
+/// A pixel's sum of sample values in one pass, and apart the sum of its
+/// first half of samples (those below `half`), whose difference from the
+/// second half estimates the pixel's noise. The sum of all is taken in
+/// the same order with or without the halves: the image does not change.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sums {
+    pub(crate) all: Rgb,
+    pub(crate) first: Rgb,
+    pub(crate) half: u32,
+}
+
+impl Sums {
+    pub(crate) fn new(half: u32) -> Sums {
+        Sums {
+            all: Rgb::ZERO,
+            first: Rgb::ZERO,
+            half,
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn add(&mut self, sample: u32, value: Rgb) {
+        self.all += value;
+        if sample < self.half {
+            self.first += value;
+        }
+    }
+}

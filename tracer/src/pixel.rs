@@ -1,0 +1,842 @@
+//! One pixel's estimate over the passes of a render: the floor's direct
+//! light (once per pixel with the floor memo, its strata sharing shadow
+//! rays where the coherence masks allow), then its path samples in the
+//! order of their arcs, the floor's rays culled by block and arc and
+//! traced in lanes where the plan says so.
+
+use std::ops::Range;
+
+use flatray_geometry::{DVec2, Hit, HitLanes, Ray, RayLanes, Skip};
+
+use flatray_cache::WallMemo;
+
+use crate::accel::coherence::{Coherence, FloorCoherence, centre_transmittance};
+use crate::accel::culling::{Batch, BlockCulling, Sums};
+use crate::accel::shortcut::memo_bounce;
+use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
+use crate::film::PixelSums;
+use crate::light::{direct_light_chosen, direct_light_points, numbers_per_point};
+use crate::lights::{Receiver, Visibility};
+use crate::options::{FastPath, LONG_LIST, RenderOptions};
+use crate::passes::Pass;
+use crate::path::{Trace, path_begin, path_finish, path_sample};
+use crate::sampling::{
+    ARCS, Stream, StreamKey, arc_points, first_sample_of_arc, sample_arc, sobol_points,
+};
+use crate::scene::Scene;
+use crate::{Rgb, Stats};
+
+/// What every pixel of one render pass shares.
+pub(crate) struct Context<'a> {
+    pub(crate) options: &'a RenderOptions,
+    pub(crate) pass: &'a Pass,
+    pub(crate) size: (u32, u32),
+    /// Whether the floor's direct light is estimated once per pixel.
+    pub(crate) floor_memo: bool,
+    /// Where that estimate's strata can share their shadow rays.
+    pub(crate) coherence: Option<&'a FloorCoherence>,
+    /// Whether the floor's rays test only their arc's walls.
+    pub(crate) culling: bool,
+    pub(crate) trace: Trace<'a>,
+    /// The wall memo, where paths take the one-bounce shortcut
+    /// (`shortcut.rs`: one bounce, the memo, not the reference).
+    pub(crate) one_bounce_memo: Option<&'a WallMemo>,
+    /// [`render_pixel`], compiled for this processor.
+    pub(crate) render_pixel: PixelFn,
+}
+
+pub(crate) type PixelFn = fn(
+    &[Context],
+    Option<PixelSums>,
+    (u32, u32),
+    Option<&BlockCulling>,
+    &mut Batch,
+    &mut Stats,
+) -> PixelSums;
+
+/// [`render_pixel`] compiled with AVX2 (the same operations, so the same
+/// bits: no fused multiply-add is enabled).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(crate) fn render_pixel_avx2(
+    contexts: &[Context],
+    total: Option<PixelSums>,
+    (x, y): (u32, u32),
+    culled: Option<&BlockCulling>,
+    batch: &mut Batch,
+    stats: &mut Stats,
+) -> PixelSums {
+    render_pixel(contexts, total, (x, y), culled, batch, stats)
+}
+
+/// The fastest [`render_pixel`] this processor runs.
+pub(crate) fn pixel_fn() -> PixelFn {
+    #[cfg(target_arch = "x86_64")]
+    if !flatray_geometry::portable_forced() && is_x86_feature_detected!("avx2") {
+        return |contexts, total, xy, culled, batch, stats| {
+            // SAFETY: the processor has AVX2, checked just above.
+            unsafe { render_pixel_avx2(contexts, total, xy, culled, batch, stats) }
+        };
+    }
+    // Out of line, compiled for any x86-64 processor (or any other).
+    render_pixel
+}
+
+/// Stream sample indices from here up key the floor memo's points' line
+/// light numbers, apart from every path sample's.
+pub(crate) const FLOOR_STREAMS: u64 = 1 << 40;
+
+/// The stream sample index that draws a pixel's seeds for its floor
+/// points' scrambling.
+pub(crate) const FLOOR_SEED_STREAM: u64 = (1 << 41) + 1;
+
+/// One pixel's totals after the passes of `contexts` (one per pass, in
+/// order), from its totals `total` before them (`None` before the first
+/// pass). Each pass adds the floor's direct light and its path samples,
+/// each half weighted by its samples (`passes.rs`). With the floor memo,
+/// the floor's direct light is estimated once per pixel over all the
+/// passes' floor points, each pass reading its own; without, each sample
+/// estimates it anew. A sample whose estimate is not finite is left out
+/// and reported in `stats`.
+#[inline(always)]
+pub(crate) fn render_pixel(
+    contexts: &[Context],
+    mut total: Option<PixelSums>,
+    (x, y): (u32, u32),
+    culled: Option<&BlockCulling>,
+    batch: &mut Batch,
+    stats: &mut Stats,
+) -> PixelSums {
+    let (Some(first), Some(last)) = (contexts.first(), contexts.last()) else {
+        return total.unwrap_or_default();
+    };
+    let Context {
+        options,
+        size,
+        floor_memo,
+        coherence,
+        ref trace,
+        ..
+    } = *first;
+    let scene = trace.scene;
+    let pixel = Pixel::new(scene, size, x, y, options.seed);
+    let step = pixel.step;
+    let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
+    // The passes' floor points: the direct light at each, filled once.
+    let points = first.pass.points.start..last.pass.points.end;
+    if floor_memo && !points.is_empty() {
+        // Each light's transmittance where the whole pixel shares it.
+        let centre = corner + 0.5 * step;
+        // The floor's shadow rays, its points' and its centre's, take the
+        // pixel's block lists.
+        let shadow_walls = culled.map(|c| &c.shadows[..]);
+        let receiver = Receiver {
+            shadow_walls,
+            ..Receiver::FLOOR
+        };
+        let visibility = &mut batch.visibility;
+        batch.shared.clear();
+        match coherence {
+            // With a light table, each point takes a few lights: a shared
+            // transmittance is traced when a point first takes its light.
+            Some(coherence) if trace.light_table.is_some() => {
+                visibility.clear();
+                for state in coherence.pixel(x, y) {
+                    let (vis, shared) = match state {
+                        Coherence::Varies => (Visibility::Trace, false),
+                        Coherence::Same => (Visibility::Trace, true),
+                        Coherence::Clear => {
+                            stats.work.floor_shared_visibility += 1;
+                            (Visibility::Known(Rgb::ONE), false)
+                        }
+                    };
+                    visibility.push(vis);
+                    batch.shared.push(shared);
+                }
+            }
+            Some(coherence) => {
+                visibility.clear();
+                visibility.extend(
+                    coherence
+                        .pixel(x, y)
+                        .iter()
+                        .enumerate()
+                        .map(|(light, state)| match state {
+                            Coherence::Varies => Visibility::Trace,
+                            Coherence::Same => {
+                                stats.work.floor_shared_visibility += 1;
+                                Visibility::Known(centre_transmittance(
+                                    scene,
+                                    light,
+                                    centre,
+                                    receiver.walls_towards(light),
+                                    stats,
+                                ))
+                            }
+                            Coherence::Clear => {
+                                stats.work.floor_shared_visibility += 1;
+                                Visibility::Known(Rgb::ONE)
+                            }
+                        }),
+                )
+            }
+            // The same for every pixel of the render: filled once per
+            // batch, not per pixel (a pass over every light).
+            None => {
+                if visibility.len() != scene.lights.len() {
+                    visibility.clear();
+                    visibility.resize(scene.lights.len(), Visibility::of(trace.shadows));
+                }
+            }
+        }
+        // The pass's points (progressive jitter: the pixel's earlier
+        // points are drawn again to place them), and the numbers each line
+        // light draws, in the order `direct_light_with` draws them; then
+        // the lights one by one over all points (`direct_light_strata`).
+        // The pass's points, from the pixel's scrambled Sobol sequence,
+        // and the numbers each line light draws, in the order
+        // `direct_light_with` draws them; then the lights one by one over
+        // all points (`direct_light_strata`).
+        let floor = &mut batch.floor;
+        floor.points.clear();
+        floor.numbers.clear();
+        let numbers = numbers_per_point(scene, trace.light_table);
+        let bits = pixel.key.stream(FLOOR_SEED_STREAM).bits();
+        let seeds = [(bits >> 32) as u32, bits as u32];
+        floor.points.resize(points.len(), DVec2::ZERO);
+        sobol_points(points.start, seeds, (corner, step), &mut floor.points);
+        if numbers > 0 {
+            for k in points.clone() {
+                let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
+                for _ in 0..numbers {
+                    floor.numbers.push(stream.uniform());
+                }
+            }
+        }
+        match trace.light_table {
+            Some(table) => {
+                // A light the whole pixel shares is traced once, from the
+                // centre, when a point first takes it (the very value each
+                // point's own ray would give); a light no point takes
+                // costs no ray.
+                let shared = &mut batch.shared;
+                let mut centre_stats = Stats::default();
+                let vis = |light: usize| {
+                    if shared.get(light).copied().unwrap_or(false) {
+                        shared[light] = false;
+                        centre_stats.work.floor_shared_visibility += 1;
+                        visibility[light] = Visibility::Known(centre_transmittance(
+                            scene,
+                            light,
+                            centre,
+                            receiver.walls_towards(light),
+                            &mut centre_stats,
+                        ));
+                    }
+                    visibility[light]
+                };
+                if options.takes(FastPath::StrataLoops) {
+                    let strata = (floor, &mut batch.weights);
+                    direct_light_chosen_strata(scene, table, receiver, strata, vis, stats);
+                } else {
+                    direct_light_chosen(scene, table, receiver, floor, vis, stats);
+                }
+                stats.merge(&centre_stats);
+            }
+            None if options.takes(FastPath::StrataLoops) => {
+                direct_light_strata(scene, floor, visibility, shadow_walls, stats)
+            }
+            None => direct_light_points(scene, floor, visibility, stats),
+        }
+    }
+    // Every pass's path samples, arc by arc over all of them.
+    let mut sums = std::mem::take(&mut batch.sums);
+    sums.clear();
+    sums.extend(contexts.iter().map(|c| Sums::new(c.pass.middle)));
+    match culled {
+        Some(culled) => {
+            // Unchecked, a sample that is not finite makes the sum not
+            // finite; then the pixel's samples are taken again, each
+            // checked (a rare case: no test per sample in the common one).
+            let before = *stats;
+            culled_samples::<false>(contexts, &pixel, culled, &mut sums, stats);
+            if !sums.iter().all(|s| s.all.is_finite()) {
+                *stats = before;
+                for (sum, context) in sums.iter_mut().zip(contexts) {
+                    *sum = Sums::new(context.pass.middle);
+                }
+                checked_culled_samples(contexts, &pixel, culled, &mut sums, stats);
+            }
+        }
+        None => {
+            let all = first.pass.samples.start..last.pass.samples.end;
+            for (_, of_arc) in sample_order(pixel.arc_offset, all) {
+                for sample in of_arc {
+                    let pass = pass_of(contexts, sample);
+                    let value = sample_with(&contexts[pass], &pixel, sample, stats);
+                    add_sample::<true>(&mut sums[pass], value, (x, y, sample), stats);
+                }
+            }
+        }
+    }
+    for (context, sum) in contexts.iter().zip(&sums) {
+        let pass_sums = pass_sums(
+            context,
+            *sum,
+            (x, y),
+            &batch.floor.values,
+            points.start,
+            stats,
+        );
+        total = Some(match total {
+            None => pass_sums,
+            Some(t) => crate::passes::fold(t, pass_sums),
+        });
+    }
+    batch.sums = sums;
+    total.unwrap_or_default()
+}
+
+/// The pass of `contexts` (consecutive passes of the schedule) that takes
+/// `sample`.
+#[inline(always)]
+pub(crate) fn pass_of(contexts: &[Context], sample: u32) -> usize {
+    let first = contexts.first().map_or(0, |c| c.pass.index);
+    (crate::passes::pass_index(sample).saturating_sub(first) as usize)
+        .min(contexts.len().saturating_sub(1))
+}
+
+/// One pass's sums for one pixel: its path samples' `sums`, its direct
+/// light from its own floor points (among `values`, filled from point
+/// `first_point` on), and its caustic pass's light on the floor.
+#[inline(always)]
+pub(crate) fn pass_sums(
+    context: &Context,
+    sums: Sums,
+    (x, y): (u32, u32),
+    values: &[Rgb],
+    first_point: u32,
+    stats: &mut Stats,
+) -> PixelSums {
+    let pass = context.pass;
+    // Each half's estimates, and the whole's.
+    let (mut halves, mut whole) = ((Rgb::ZERO, Rgb::ZERO), Rgb::ZERO);
+    if context.floor_memo && !pass.points.is_empty() {
+        let from = (pass.points.start - first_point) as usize;
+        let to = (pass.points.end - first_point) as usize;
+        if let Some(values) = values.get(from..to) {
+            let (first, second, all) = strata_halves(values, (x, y), stats);
+            (halves, whole) = ((first, second), all);
+        }
+        stats.work.floor_memo_reuses += pass.count() as u64;
+    }
+    // The caustic pass's light on the floor, from each half of its
+    // photons.
+    if let Some(caustics) = context.trace.caustics {
+        let k = (y * context.size.0 + x) as usize;
+        let (first, second) = caustics.floor_halves(k);
+        halves = (halves.0 + first, halves.1 + second);
+        whole += caustics.floor_at(k);
+    }
+    // A pass of one sample has no halves: its points and photons all
+    // count, for the whole.
+    let mut pixel_sums = match pass.count() {
+        1 => PixelSums {
+            all: whole,
+            first: Rgb::ZERO,
+        },
+        _ => pass.weigh_halves(halves),
+    };
+    pixel_sums.all += sums.all;
+    pixel_sums.first += sums.first;
+    pixel_sums
+}
+
+/// The means of a pass's floor points over the first and the second half
+/// of them (two estimates of the pixel's direct light, each over the
+/// whole pixel; the mean of all, twice, for a single point), and over all.
+/// Points that are not finite count as zero, and are reported (as sample
+/// `u32::MAX` of pixel `(x, y)`).
+pub(crate) fn strata_halves(
+    values: &[Rgb],
+    (x, y): (u32, u32),
+    stats: &mut Stats,
+) -> (Rgb, Rgb, Rgb) {
+    let middle = values.len() / 2;
+    let mut sums = [Rgb::ZERO; 2];
+    for (k, &value) in values.iter().enumerate() {
+        if value.is_finite() {
+            sums[(k >= middle) as usize] += value;
+        } else {
+            stats.record_nonfinite(x, y, u32::MAX);
+        }
+    }
+    let all = (sums[0] + sums[1]) / values.len().max(1) as f64;
+    if middle == 0 {
+        return (all, all, all);
+    }
+    (
+        sums[0] / middle as f64,
+        sums[1] / (values.len() - middle) as f64,
+        all,
+    )
+}
+
+/// A pixel's position, stream key, size and the turn of its samples'
+/// arcs, computed once for all its samples.
+pub(crate) struct Pixel {
+    pub(crate) position: DVec2,
+    pub(crate) key: StreamKey,
+    pub(crate) step: DVec2,
+    /// Uniform in `0..ARCS`: see [`sample_arc`].
+    pub(crate) arc_offset: usize,
+}
+
+impl Pixel {
+    pub(crate) fn new(scene: &Scene, size: (u32, u32), x: u32, y: u32, seed: u64) -> Pixel {
+        let index = y as u64 * size.0 as u64 + x as u64;
+        let key = StreamKey::new(seed, index);
+        // Exact: 64 times a multiple of 2^-53 below 1.
+        let arc_offset = (key.stream(ARC_OFFSET_STREAM).uniform() * ARCS as f64) as usize;
+        Pixel {
+            position: DVec2::new(x as f64, y as f64),
+            key,
+            step: pixel_size(scene, size),
+            arc_offset,
+        }
+    }
+}
+
+impl Pixel {
+    /// A sample's receiver point, jittered uniformly inside the pixel (the
+    /// box filter): the first pair of numbers of the sample's stream.
+    /// [`arc_in_lanes`] computes the same, component by component.
+    #[inline(always)]
+    pub(crate) fn receiver(&self, scene: &Scene, stream: &mut Stream) -> DVec2 {
+        let (jx, jy) = stream.uniform_pair();
+        let jitter = DVec2::new(jx, jy);
+        scene.canvas.origin + (self.position + jitter) * self.step
+    }
+}
+
+/// The stream sample index that draws a pixel's [`Pixel::arc_offset`],
+/// apart from every path sample's and the floor memo's.
+pub(crate) const ARC_OFFSET_STREAM: u64 = 1 << 41;
+
+/// One sample of a pixel: the receiver is jittered uniformly inside the
+/// pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
+pub(crate) fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats) -> Rgb {
+    let trace = &context.trace;
+    let scene = trace.scene;
+    let mut stream = pixel.key.stream(sample as u64);
+    let p = pixel.receiver(scene, &mut stream);
+    stats.physics.camera_samples += 1;
+    let arc = sample_arc(pixel.arc_offset, sample);
+    if context.one_bounce_memo.is_none() {
+        return path_sample(trace, p, arc, sample, &mut stream, stats);
+    }
+    // `path_sample`, with the one-bounce shortcut tried first.
+    let begun = path_begin(trace, p, arc, None, &mut stream, stats);
+    let Some(ray) = begun.ray else {
+        return begun.fluence;
+    };
+    let hit = scene.segments.closest_hit(&ray, f64::INFINITY, Skip::NONE);
+    finish(
+        context,
+        begun.fluence,
+        ray,
+        hit,
+        (None, sample),
+        &mut stream,
+        stats,
+    )
+}
+
+/// [`path_finish`], after the one-bounce shortcut where the render takes
+/// it: the same value.
+#[inline(always)]
+pub(crate) fn finish(
+    context: &Context,
+    fluence: Rgb,
+    ray: Ray,
+    hit: Option<(u32, Hit)>,
+    (line_walls, sample): (Option<&[u32]>, u32),
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    if let (Some(memo), Some((index, h))) = (context.one_bounce_memo, hit)
+        && let Some(value) = memo_bounce(&context.trace, memo, fluence, index, h.u, ray.dir, stats)
+    {
+        return value;
+    }
+    path_finish(
+        &context.trace,
+        fluence,
+        ray,
+        hit,
+        line_walls,
+        sample,
+        stream,
+        stats,
+    )
+}
+
+/// The order in which a pixel's samples `samples` are taken and summed,
+/// whether culled or not: chunk by chunk of [`CHUNK`] samples (from a
+/// multiple of it to the next), in each arc by arc (see [`sample_arc`]),
+/// in each by index. Yields each arc that has samples in the chunk, with
+/// them (at most [`LANES`]). The samples of any pass are taken in the
+/// same order whether it is rendered alone or with others.
+pub(crate) fn sample_order(
+    offset: usize,
+    samples: Range<u32>,
+) -> impl Iterator<Item = (usize, ArcSamples)> {
+    SampleOrder {
+        offset,
+        first: samples.start,
+        last: chunk_end(samples.start, samples.end),
+        end: samples.end,
+        arc: 0,
+    }
+}
+
+/// Where the chunk that holds sample `first` ends, within `end`.
+#[inline(always)]
+pub(crate) fn chunk_end(first: u32, end: u32) -> u32 {
+    (first / CHUNK as u32 + 1)
+        .saturating_mul(CHUNK as u32)
+        .min(end)
+}
+
+/// [`sample_order`]'s state: the chunk `first..last` of the samples up to
+/// `end`, and the next arc to look at in it.
+pub(crate) struct SampleOrder {
+    pub(crate) offset: usize,
+    pub(crate) first: u32,
+    pub(crate) last: u32,
+    pub(crate) end: u32,
+    pub(crate) arc: usize,
+}
+
+impl Iterator for SampleOrder {
+    type Item = (usize, ArcSamples);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(usize, ArcSamples)> {
+        while self.first < self.end {
+            while self.arc < ARCS {
+                let arc = self.arc;
+                self.arc += 1;
+                // The arc's first sample from `first` on: its samples are
+                // `ARCS` apart. A chunk of fewer samples than arcs leaves
+                // arcs empty.
+                let residue = first_sample_of_arc(self.offset, arc);
+                let start = self.first + (residue.wrapping_sub(self.first) & (ARCS as u32 - 1));
+                if start < self.last {
+                    let count = (self.last - start - 1) / ARCS as u32 + 1;
+                    return Some((arc, ArcSamples { next: start, count }));
+                }
+            }
+            self.first = self.last;
+            self.last = chunk_end(self.first, self.end);
+            self.arc = 0;
+        }
+        None
+    }
+}
+
+/// The samples of one arc in one chunk: `count` of them from `next`,
+/// [`ARCS`] apart.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ArcSamples {
+    pub(crate) next: u32,
+    pub(crate) count: u32,
+}
+
+impl Iterator for ArcSamples {
+    type Item = u32;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<u32> {
+        (self.count > 0).then(|| {
+            let sample = self.next;
+            self.next = self.next.wrapping_add(ARCS as u32);
+            self.count -= 1;
+            sample
+        })
+    }
+
+    #[inline(always)]
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.count as usize, Some(self.count as usize))
+    }
+}
+
+impl ExactSizeIterator for ArcSamples {}
+
+/// The samples of a pixel's passes `contexts` whose floor rays are culled
+/// by direction, in [`sample_order`] over all of them: the samples of one
+/// arc test the same walls and their paths branch alike. Each value is
+/// exactly what [`sample_with`] gives with its pass's fills, added to its
+/// pass's sum in `sums` in the same order as without culling.
+///
+/// Without the floor's direct light in the paths (the memo holds it), a
+/// path whose first ray escapes adds exactly nothing: where an arc meets
+/// no wall, its samples are known to be zero and are not drawn at all.
+#[inline(always)]
+pub(crate) fn culled_samples<const CHECKED: bool>(
+    contexts: &[Context],
+    pixel: &Pixel,
+    culled: &BlockCulling,
+    sums: &mut [Sums],
+    stats: &mut Stats,
+) {
+    let (Some(first), Some(last)) = (contexts.first(), contexts.last()) else {
+        return;
+    };
+    let trace = &first.trace;
+    let scene = trace.scene;
+    let samples = first.pass.samples.start..last.pass.samples.end;
+    let (arcs, shadow_walls) = (&culled.arcs, Some(&culled.shadows[..]));
+    let empty_arcs_add_nothing = !trace.floor_direct && !trace.force;
+    stats.physics.camera_samples += samples.len() as u64;
+    let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
+    for (arc, of_arc) in sample_order(pixel.arc_offset, samples) {
+        let walls = arcs.arc(arc);
+        stats.work.culled_rays += of_arc.len() as u64;
+        if empty_arcs_add_nothing {
+            // Paths start with nothing and leave the floor at once.
+            if walls.is_empty() {
+                stats.work.culled_empty += of_arc.len() as u64;
+                stats.physics.paths_escaped += of_arc.len() as u64;
+                continue;
+            }
+            // As many lanes as the arc has samples, rounded up to a power
+            // of two: few samples per arc draw no idle lanes.
+            let count = of_arc.len();
+            let args = (contexts, pixel, arc, walls, of_arc);
+            match count {
+                1 => arc_in_lanes::<CHECKED, 1>(args, sums, stats),
+                2 => arc_in_lanes::<CHECKED, 2>(args, sums, stats),
+                3 | 4 => arc_in_lanes::<CHECKED, 4>(args, sums, stats),
+                _ => arc_in_lanes::<CHECKED, LANES>(args, sums, stats),
+            }
+            continue;
+        }
+        for sample in of_arc {
+            let pass = pass_of(contexts, sample);
+            let context = &contexts[pass];
+            let trace = &context.trace;
+            let mut stream = pixel.key.stream(sample as u64);
+            let p = pixel.receiver(scene, &mut stream);
+            let begun = path_begin(trace, p, arc, shadow_walls, &mut stream, stats);
+            // The plan culls only when paths bounce: every sample has a ray.
+            let value = match begun.ray {
+                Some(ray) => {
+                    let walls = Some(walls).filter(|w| w.len() <= LONG_LIST);
+                    stats.work.culled_walls_tested += walls.map_or(0, |w| w.len() as u64);
+                    let hit =
+                        scene
+                            .segments
+                            .closest_hit_within(&ray, f64::INFINITY, Skip::NONE, walls);
+                    finish(
+                        context,
+                        begun.fluence,
+                        ray,
+                        hit,
+                        (walls, sample),
+                        &mut stream,
+                        stats,
+                    )
+                }
+                None => begun.fluence,
+            };
+            add_sample::<CHECKED>(&mut sums[pass], value, (x, y, sample), stats);
+        }
+    }
+}
+
+/// [`culled_samples`] with every sample checked, out of line: for the
+/// rare pixel whose unchecked sums are not all finite.
+#[inline(never)]
+pub(crate) fn checked_culled_samples(
+    contexts: &[Context],
+    pixel: &Pixel,
+    culled: &BlockCulling,
+    sums: &mut [Sums],
+    stats: &mut Stats,
+) {
+    culled_samples::<true>(contexts, pixel, culled, sums, stats);
+}
+
+/// Adds a sample's value to its pixel's sum. `CHECKED`, a value that is
+/// not finite is left out and reported; unchecked, it is added (and the
+/// sum is no longer finite: the caller checks the sum).
+#[inline(always)]
+pub(crate) fn add_sample<const CHECKED: bool>(
+    sum: &mut Sums,
+    value: Rgb,
+    (x, y, sample): (u32, u32, u32),
+    stats: &mut Stats,
+) {
+    if !CHECKED || value.is_finite() {
+        sum.add(sample, value);
+    } else {
+        stats.record_nonfinite(x, y, sample);
+    }
+}
+
+/// The samples `of_arc` (at most `N`, of [`LANES`] at most), all of arc
+/// `arc`, whose paths start with nothing (no floor light of their own):
+/// drawn, their first rays built and tested against `walls` in `N` lanes,
+/// one lane per sample, then each path finished alone, with its pass's
+/// fills, and added to its pass's sum in order. The same values as [`sample_with`] gives.
+#[inline(always)]
+pub(crate) fn arc_in_lanes<const CHECKED: bool, const N: usize>(
+    (contexts, pixel, arc, walls, of_arc): (&[Context], &Pixel, usize, &[u32], ArcSamples),
+    sums: &mut [Sums],
+    stats: &mut Stats,
+) {
+    let Some(context) = contexts.first() else {
+        return;
+    };
+    let scene = context.trace.scene;
+    let count = of_arc.len();
+    // Every lane is drawn, those past the chunk's end for samples that
+    // are not taken: the loops below have a fixed length.
+    let Some(start) = of_arc.clone().next() else {
+        return;
+    };
+    let mut streams: [Stream; N] =
+        std::array::from_fn(|k| pixel.key.stream(start as u64 + (k * ARCS) as u64));
+    let (mut jx, mut jy, mut fractions) = ([0.0; N], [0.0; N], [0.0; N]);
+    for (k, stream) in streams.iter_mut().enumerate() {
+        // In the order `sample_with` draws them: jitter, then direction.
+        (jx[k], jy[k]) = stream.uniform_pair();
+        fractions[k] = stream.uniform();
+    }
+    let (origin, position, step) = (scene.canvas.origin, pixel.position, pixel.step);
+    let mut rays = RayLanes {
+        ox: [0.0; N],
+        oy: [0.0; N],
+        dx: [0.0; N],
+        dy: [0.0; N],
+    };
+    for k in 0..N {
+        // `origin + (position + jitter) * step`, component by component.
+        rays.ox[k] = origin.x + (position.x + jx[k]) * step.x;
+        rays.oy[k] = origin.y + (position.y + jy[k]) * step.y;
+    }
+    (rays.dx, rays.dy) = arc_points(arc, &fractions);
+    let hits = if walls.len() <= LONG_LIST {
+        stats.work.culled_walls_tested += (walls.len() * count) as u64;
+        if N == 1 && walls.len() >= WIDE_LIST {
+            // One sample of the arc: its walls in lanes instead.
+            let hit = scene.segments.closest_hit_among_wide(&rays.ray(0), walls);
+            HitLanes {
+                index: [hit.index[0]; N],
+                t: [hit.t[0]; N],
+                u: [hit.u[0]; N],
+            }
+        } else {
+            scene.segments.closest_hits_among(&rays, walls)
+        }
+    } else {
+        // A long list costs more than the BVH: each lane asks the BVH.
+        let mut hits = HitLanes {
+            index: [u32::MAX; N],
+            t: [f64::INFINITY; N],
+            u: [0.0; N],
+        };
+        for k in 0..count.min(N) {
+            if let Some((index, hit)) =
+                scene
+                    .segments
+                    .closest_hit(&rays.ray(k), f64::INFINITY, Skip::NONE)
+            {
+                (hits.index[k], hits.t[k], hits.u[k]) = (index, hit.t, hit.u);
+            }
+        }
+        hits
+    };
+    let walls = Some(walls).filter(|w| w.len() <= LONG_LIST);
+    let (x, y) = (pixel.position.x as u32, pixel.position.y as u32);
+    for ((k, sample), stream) in of_arc.enumerate().zip(&mut streams) {
+        let pass = pass_of(contexts, sample);
+        let trace = &contexts[pass].trace;
+        // `path_finish`'s common case first, from the lanes as they are.
+        let dir = DVec2::new(rays.dx[k], rays.dy[k]);
+        let shortcut = context.one_bounce_memo.and_then(|memo| {
+            memo_bounce(trace, memo, Rgb::ZERO, hits.index[k], hits.u[k], dir, stats)
+        });
+        let value = match shortcut {
+            Some(value) => value,
+            None => path_finish(
+                trace,
+                Rgb::ZERO,
+                rays.ray(k),
+                hits.hit(k),
+                walls,
+                sample,
+                stream,
+                stats,
+            ),
+        };
+        add_sample::<CHECKED>(&mut sums[pass], value, (x, y, sample), stats);
+    }
+}
+
+/// A ray alone in its arc whose list holds at least this many walls tests
+/// them four at a time (`SegmentSet::closest_hit_among_wide`); a shorter
+/// list costs less one wall at a time.
+pub(crate) const WIDE_LIST: usize = 4;
+
+/// Samples of one arc in one chunk, at most: [`arc_in_lanes`] takes them
+/// in this many lanes.
+pub(crate) const LANES: usize = CHUNK / ARCS;
+
+/// The samples of one stretch of [`sample_order`]: a whole number of runs
+/// of [`ARCS`], so that each arc holds the same number of them, and as
+/// many as [`arc_in_lanes`] takes in one go.
+pub(crate) const CHUNK: usize = 8 * ARCS;
+
+
+/// The size of one pixel in world units, in x and y.
+pub(crate) fn pixel_size(scene: &Scene, (width, height): (u32, u32)) -> DVec2 {
+    DVec2::new(
+        scene.canvas.width as f64 / width as f64,
+        scene.canvas.height as f64 / height as f64,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strata_that_are_not_finite_are_left_out_and_counted() {
+        let v = |x: f64| Rgb::new(x, 1.0, 2.0);
+        let mut stats = Stats::default();
+        let finite = [v(1.0), v(3.0), v(2.0), v(6.0)];
+        assert_eq!(
+            strata_halves(&finite, (4, 5), &mut stats),
+            (
+                Rgb::new(2.0, 1.0, 2.0),
+                Rgb::new(4.0, 1.0, 2.0),
+                Rgb::new(3.0, 1.0, 2.0)
+            )
+        );
+        assert_eq!(stats.physics.nonfinite_samples, 0);
+        // An infinity and a NaN count as zero, and are counted.
+        let mixed = [v(1.0), v(3.0), v(f64::INFINITY), v(f64::NAN)];
+        assert_eq!(
+            strata_halves(&mixed, (4, 5), &mut stats),
+            (Rgb::new(2.0, 1.0, 2.0), Rgb::ZERO, Rgb::new(1.0, 0.5, 1.0))
+        );
+        assert_eq!(stats.physics.nonfinite_samples, 2);
+        assert_eq!(stats.physics.first_nonfinite, Some((4, 5, u32::MAX)));
+        // One point: its value, for both halves.
+        let one = strata_halves(&finite[..1], (4, 5), &mut stats);
+        assert_eq!(one, (v(1.0), v(1.0), v(1.0)));
+    }
+}
