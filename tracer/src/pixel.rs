@@ -17,7 +17,7 @@ use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::film::PixelSums;
 use crate::light::{direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::lights::{Receiver, Visibility};
-use crate::options::{FastPath, LONG_LIST, RenderOptions};
+use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
 use crate::path::{Trace, path_begin, path_finish, path_sample};
 use crate::sampling::{
@@ -42,6 +42,9 @@ pub(crate) struct Context<'a> {
     /// (`shortcut.rs`: one bounce, the memo, not the reference).
     pub(crate) one_bounce_memo: Option<&'a WallMemo>,
     /// [`render_pixel`], compiled for this processor.
+    /// Whether the floor memo's points are taken light by light
+    /// (`accel::strata`).
+    pub(crate) strata_loops: bool,
     pub(crate) render_pixel: PixelFn,
 }
 
@@ -235,7 +238,7 @@ pub(crate) fn render_pixel(
                     }
                     visibility[light]
                 };
-                if options.takes(FastPath::StrataLoops) {
+                if first.strata_loops {
                     let strata = (floor, &mut batch.weights);
                     direct_light_chosen_strata(scene, table, receiver, strata, vis, stats);
                 } else {
@@ -243,7 +246,7 @@ pub(crate) fn render_pixel(
                 }
                 stats.merge(&centre_stats);
             }
-            None if options.takes(FastPath::StrataLoops) => {
+            None if first.strata_loops => {
                 direct_light_strata(scene, floor, visibility, shadow_walls, stats)
             }
             None => direct_light_points(scene, floor, visibility, stats),
@@ -799,7 +802,6 @@ pub(crate) const LANES: usize = CHUNK / ARCS;
 /// of [`ARCS`], so that each arc holds the same number of them, and as
 /// many as [`arc_in_lanes`] takes in one go.
 pub(crate) const CHUNK: usize = 8 * ARCS;
-
 
 /// The size of one pixel in world units, in x and y.
 pub(crate) fn pixel_size(scene: &Scene, (width, height): (u32, u32)) -> DVec2 {

@@ -18,7 +18,7 @@ use crate::lights::choice::LightTable;
 use crate::memo::build_wall_memo;
 use crate::memo::{Onward, OnwardMemo};
 use crate::options::MemoOptions;
-use crate::options::{CULL_BLOCK, FINE_CULLING_SAMPLES, FastPath, RenderOptions, TILE, image_size};
+use crate::options::{CULL_BLOCK, FINE_CULLING_SAMPLES, RenderOptions, TILE, image_size};
 use crate::passes::Pass;
 use crate::path::{MirrorWalls, Trace};
 use crate::pixel::{Context, Pixel, pixel_fn, pixel_size, render_pixel, sample_with};
@@ -178,10 +178,9 @@ pub(crate) fn path_passes(
                         .map(|memo| Onward::of(memo, pass.middle)),
                 ),
             ),
-            one_bounce_memo: shared.memo.as_ref().filter(|_| {
-                plan.indirect && options.bounces == 1 && options.takes(FastPath::Shortcut)
-            }),
-            render_pixel: if options.takes(FastPath::Avx) {
+            one_bounce_memo: shared.memo.as_ref().filter(|_| plan.fast.shortcut.runs),
+            strata_loops: plan.fast.strata_loops.runs,
+            render_pixel: if plan.fast.avx.runs {
                 pixel_fn()
             } else {
                 render_pixel
@@ -341,7 +340,7 @@ pub(crate) fn light_table_for(
         .light_table
         .then(|| LightTable::build(scene, options.scale, options.seed, plan.shadows))
         .flatten()?;
-    if plan.shadows && options.takes(FastPath::DarkCells) {
+    if plan.fast.dark_cells.runs {
         table.set_dark(crate::accel::dark::dark_cells(scene, &table));
     }
     Some(table)
@@ -395,7 +394,7 @@ pub(crate) fn trace_with<'a>(
         mirror_emission: plan.mirror_emission,
         last_leg_sides: last_leg_sides.filter(|_| plan.last_legs),
         force,
-        tables: options.takes(FastPath::Tables),
+        tables: plan.fast.tables.runs,
         caustics,
         mirror_arcs,
         light_table,
@@ -447,6 +446,7 @@ pub fn pixel_sample(
             None,
         ),
         one_bounce_memo: None,
+        strata_loops: false,
         render_pixel,
     };
     sample_with(

@@ -63,7 +63,7 @@ pub(crate) enum Coherence {
 /// The kinds of light whose boundaries [`FloorCoherence::build`] knows how
 /// to draw: points, spots, suns and lines. For any other kind every pixel
 /// traces its strata, as without the masks.
-pub(crate) fn supports(shape: &LightShape) -> bool {
+pub(crate) fn draws(shape: &LightShape) -> bool {
     match shape {
         LightShape::Point { .. }
         | LightShape::Spot { .. }
@@ -148,7 +148,7 @@ fn light_states(
 ) -> Option<Vec<Coherence>> {
     let light = &scene.lights[index];
     let to_pixels = |p: DVec2| (p - scene.canvas.origin) / step;
-    if !supports(&light.shape) {
+    if !draws(&light.shape) {
         // Every pixel traces its strata for this light.
         return None;
     }
@@ -586,6 +586,36 @@ pub(crate) fn centre_transmittance(
             Rgb::ZERO
         }
     }
+}
+
+/// Where the masks pay: the floor memo casts shadow rays, and drawing the
+/// shadow edges of every wall-light pair into every pixel-light cell fits
+/// its budgets.
+pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
+    use crate::accel::Decision;
+    use crate::options::FastPath;
+    if !facts.floor_memo {
+        return Decision::skipped("no floor cache");
+    }
+    if !facts.shadows {
+        return Decision::skipped("no shadow rays");
+    }
+    if let Some(no) = Decision::allowed(facts.options, FastPath::Coherence, "coherence") {
+        return no;
+    }
+    if facts.pairs > MAX_PAIRS {
+        return Decision::skipped(format!(
+            "{} wall-light pairs, over {MAX_PAIRS}: drawing the shadow edges would cost more than it saves",
+            facts.pairs
+        ));
+    }
+    if facts.mask_cells > MAX_CELLS {
+        return Decision::skipped(format!(
+            "{} pixel-light cells, over its budget of {MAX_CELLS}",
+            facts.mask_cells
+        ));
+    }
+    Decision::runs("one shadow ray per light where no shadow edge crosses the pixel")
 }
 
 #[cfg(test)]

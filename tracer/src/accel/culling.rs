@@ -157,3 +157,54 @@ impl Sums {
         }
     }
 }
+
+/// Where the culling lists pay: path tracing with indirect rays, walls
+/// to cull and not so many that the BVH alone answers best.
+pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
+    use crate::accel::Decision;
+    use crate::accel::mirror::{GATHER_PIECE, MIRROR_PIECE};
+    use crate::options::{CULL_BLOCK, FINE_CULLING_SAMPLES, FastPath, MAX_CULLED_WALLS, TILE};
+    if facts.tracing_light {
+        return Decision::skipped("light tracing casts none");
+    }
+    if !facts.indirect {
+        return Decision::skipped("no indirect light is traced");
+    }
+    if facts.walls == 0 {
+        return Decision::skipped("no walls");
+    }
+    if facts.walls > MAX_CULLED_WALLS {
+        return Decision::skipped(format!(
+            "more than {MAX_CULLED_WALLS} walls: the BVH answers every ray"
+        ));
+    }
+    if let Some(no) = Decision::allowed(facts.options, FastPath::Culling, "culling") {
+        return no;
+    }
+    let off_mirrors = if facts.mirrors > 0 {
+        format!(", and so for rays off mirrors per {MIRROR_PIECE} pixels of mirror")
+    } else {
+        String::new()
+    };
+    let gathers = if facts.onward {
+        format!(", and for the onward memo's gathers per {GATHER_PIECE} pixels of wall")
+    } else {
+        String::new()
+    };
+    let shadow_lists = if !facts.shadows {
+        String::new()
+    } else if facts.light_table && facts.lights * facts.walls <= TILE_SHADOW_TESTS {
+        format!(
+            "; the chosen lights' shadow rays, only the walls between the {TILE}x{TILE} tile and the light"
+        )
+    } else if facts.light_table {
+        format!(
+            "; the shadow rays of the lights a {TILE}x{TILE} tile's cells take most, only the walls between the tile and the light (at most {TILE_SHADOW_TESTS} wall tests a tile)"
+        )
+    } else {
+        "; the floor cache's shadow rays, only the walls between the pixels and the light".into()
+    };
+    Decision::runs(format!(
+        "per {CULL_BLOCK}x{CULL_BLOCK} pixels (per {TILE}x{TILE} below {FINE_CULLING_SAMPLES} samples) and 1/{ARCS} turn, only the walls such rays can meet before an opaque one{off_mirrors}{gathers}; a ray whose list holds more than {LONG_LIST} asks the whole set{shadow_lists}"
+    ))
+}

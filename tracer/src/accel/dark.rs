@@ -123,6 +123,23 @@ fn crosses_inside(wall: &Segment, q: DVec2, to: DVec2, sun: bool) -> bool {
     along >= room && along <= length - room
 }
 
+/// Where next-event estimation takes the light table's lights and casts
+/// shadow rays.
+pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
+    use crate::accel::Decision;
+    use crate::options::FastPath;
+    if !facts.light_table {
+        return Decision::skipped("no light table");
+    }
+    if !facts.shadows {
+        return Decision::skipped("no shadow rays");
+    }
+    if let Some(no) = Decision::allowed(facts.options, FastPath::DarkCells, "dark-cells") {
+        return no;
+    }
+    Decision::runs("no shadow ray to a chosen light that a wall hides from the whole cell")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -57,3 +57,22 @@ pub(crate) fn memo_bounce(
     }
     Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
 }
+
+/// One bounce with the wall memo: most paths then end at their first wall.
+pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
+    use crate::accel::Decision;
+    use crate::options::FastPath;
+    if !facts.indirect {
+        return Decision::skipped("no indirect light is traced");
+    }
+    if facts.options.bounces != 1 {
+        return Decision::skipped("only for one bounce");
+    }
+    if !facts.wall_memo {
+        return Decision::skipped("no wall cache");
+    }
+    if let Some(no) = Decision::allowed(facts.options, FastPath::Shortcut, "shortcut") {
+        return no;
+    }
+    Decision::runs("a path that ends at its first diffuse wall reads it from the wall cache")
+}

@@ -237,6 +237,20 @@ pub(crate) fn direct_light_chosen_strata(
     }
 }
 
+/// The floor memo's points taken light by light wherever there is a floor
+/// memo: the same values as point by point.
+pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
+    use crate::accel::Decision;
+    use crate::options::FastPath;
+    if !facts.floor_memo {
+        return Decision::skipped("no floor cache");
+    }
+    if let Some(no) = Decision::allowed(facts.options, FastPath::StrataLoops, "strata-loops") {
+        return no;
+    }
+    Decision::runs("the floor cache's points light by light, line lights' samples in lanes")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,7 +6,9 @@
 
 mod wording;
 
-use crate::options::{FastPath, FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
+use crate::accel::Facts;
+pub use crate::accel::{Decision, FastDecisions};
+use crate::options::{FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
 use crate::scene::{LightShape, Material, Scene};
 use crate::{Floor, Rgb};
 
@@ -131,6 +133,8 @@ pub struct Plan {
     pub floor_ray_culling: bool,
     /// The fast paths the settings allow (`reference` aside).
     pub fast_paths: FastPaths,
+    /// Where each fast path runs, and why, as it declares.
+    pub fast: FastDecisions,
     /// The light choice as given.
     pub light_choice: LightChoice,
     /// Next-event estimation takes the lights a table of cells chooses
@@ -233,19 +237,29 @@ impl Plan {
                 LightChoice::Every => false,
                 LightChoice::Table => !no_lights,
             };
-        // With a table too: a pixel's points then trace a shared
-        // transmittance once, when one of them first takes that light.
-        let floor_coherence = floor_memo
-            && shadows
-            && options.takes(FastPath::Coherence)
-            && pairs <= crate::accel::coherence::MAX_PAIRS
-            && mask_cells <= crate::accel::coherence::MAX_CELLS;
-        let floor_ray_culling = !tracing_light
-            && indirect
-            && !scene.walls.is_empty()
-            && scene.walls.len() <= crate::options::MAX_CULLED_WALLS
-            && options.takes(FastPath::Culling);
+        // Each fast path says where it runs (`accel`). With a light table
+        // too, a pixel's points trace a shared transmittance once, when
+        // one of them first takes that light.
+        let fast = FastDecisions::of(&Facts {
+            options,
+            walls: scene.walls.len(),
+            lights: scene.lights.len(),
+            mirrors: inventory.mirrors,
+            floor_albedo_walls: inventory.floor_albedo_walls,
+            tracing_light,
+            indirect,
+            shadows,
+            floor_memo,
+            wall_memo,
+            onward,
+            light_table,
+            pairs,
+            mask_cells,
+        });
+        let floor_coherence = fast.coherence.runs;
+        let floor_ray_culling = fast.culling.runs;
         Plan {
+            fast,
             fast_paths: options.fast_paths,
             light_choice: options.light_choice,
             light_table,

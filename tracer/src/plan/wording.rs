@@ -4,13 +4,8 @@
 use std::fmt;
 
 use super::{Inventory, Plan};
-use crate::accel::mirror::{GATHER_PIECE, MIRROR_PIECE};
-use crate::options::{
-    CULL_BLOCK, FINE_CULLING_SAMPLES, LONG_LIST, MAX_CULLED_WALLS, TILE, TILE_SHADOW_TESTS,
-};
-use crate::options::{FastPath, LightChoice, MANY_LIGHTS};
+use crate::options::{LightChoice, MANY_LIGHTS};
 use crate::run::ROULETTE_FROM;
-use crate::sampling::ARCS;
 
 /// One effect: whether it runs, and a reason in plain words.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -22,9 +17,14 @@ pub struct Effect {
 
 /// Effects that say how the work is done rather than what is simulated:
 /// printed only in the verbose plan.
-const INTERNAL: [&str; 3] = [
+const INTERNAL: [&str; 8] = [
     "cache: floor strata share shadow rays",
     "floor rays: walls culled by direction",
+    "cache: floor points light by light",
+    "one bounce read from the wall cache",
+    "floor albedo along walls from a table",
+    "pixel loop compiled for AVX2",
+    "light table: dark cells",
     "ray queries",
 ];
 
@@ -71,8 +71,6 @@ impl Plan {
             ref bin_length,
             floor_points,
             wall_memo_fits,
-            pairs,
-            mask_cells,
             shadows,
             indirect,
             mirror_emission,
@@ -86,7 +84,7 @@ impl Plan {
             floor_ray_culling,
             light_choice,
             light_table,
-            fast_paths,
+            ref fast,
             ..
         } = *self;
         let force = reference;
@@ -147,7 +145,7 @@ impl Plan {
             } else if no_lights {
                 "no light in the scene".into()
             } else if light_table {
-                let dark = shadows && !reference && fast_paths.contains(FastPath::DarkCells);
+                let dark = fast.dark_cells.runs;
                 format!(
                     "{}: at each point, the up to {} brightest there (estimated per cell of the plan), and at most one more drawn at random by what each brings{}",
                     n(lights, "light"),
@@ -355,27 +353,7 @@ impl Plan {
         add(
             "cache: floor strata share shadow rays",
             floor_coherence,
-            if !floor_memo {
-                "no floor cache".into()
-            } else if !shadows {
-                "no shadow rays".into()
-            } else if reference {
-                "the reference model runs no fast path".into()
-            } else if !fast_paths.contains(FastPath::Coherence) {
-                "left out (--without coherence)".into()
-            } else if pairs > crate::accel::coherence::MAX_PAIRS {
-                format!(
-                    "{pairs} wall-light pairs, over {}: drawing the shadow edges would cost more than it saves",
-                    crate::accel::coherence::MAX_PAIRS
-                )
-            } else if mask_cells > crate::accel::coherence::MAX_CELLS {
-                format!(
-                    "{mask_cells} pixel-light cells, over its budget of {}",
-                    crate::accel::coherence::MAX_CELLS
-                )
-            } else {
-                "one shadow ray per light where no shadow edge crosses the pixel".into()
-            },
+            fast.coherence.why.clone(),
         );
         add(
             "points, spots and sun seen in mirrors or glass",
@@ -433,48 +411,17 @@ impl Plan {
         add(
             "floor rays: walls culled by direction",
             floor_ray_culling,
-            if tracing_light {
-                "light tracing casts none".into()
-            } else if !indirect {
-                "no indirect light is traced".into()
-            } else if walls == 0 {
-                "no walls".into()
-            } else if walls > MAX_CULLED_WALLS {
-                format!("more than {MAX_CULLED_WALLS} walls: the BVH answers every ray")
-            } else if reference {
-                "the reference model runs no fast path".into()
-            } else if !fast_paths.contains(FastPath::Culling) {
-                "left out (--without culling)".into()
-            } else {
-                let off_mirrors = if mirrors > 0 {
-                    format!(", and so for rays off mirrors per {MIRROR_PIECE} pixels of mirror")
-                } else {
-                    String::new()
-                };
-                let gathers = if onward {
-                    format!(", and for the onward memo's gathers per {GATHER_PIECE} pixels of wall")
-                } else {
-                    String::new()
-                };
-                let off_mirrors = off_mirrors + &gathers;
-                let shadow_lists = if !shadows {
-                    String::new()
-                } else if light_table && lights * walls <= TILE_SHADOW_TESTS {
-                    format!(
-                        "; the chosen lights' shadow rays, only the walls between the {TILE}x{TILE} tile and the light"
-                    )
-                } else if light_table {
-                    format!(
-                        "; the shadow rays of the lights a {TILE}x{TILE} tile's cells take most, only the walls between the tile and the light (at most {TILE_SHADOW_TESTS} wall tests a tile)"
-                    )
-                } else {
-                    "; the floor cache's shadow rays, only the walls between the pixels and the light".into()
-                };
-                format!(
-                    "per {CULL_BLOCK}x{CULL_BLOCK} pixels (per {TILE}x{TILE} below {FINE_CULLING_SAMPLES} samples) and 1/{ARCS} turn, only the walls such rays can meet before an opaque one{off_mirrors}; a ray whose list holds more than {LONG_LIST} asks the whole set{shadow_lists}"
-                )
-            },
+            fast.culling.why.clone(),
         );
+        for (name, decision) in [
+            ("cache: floor points light by light", &fast.strata_loops),
+            ("one bounce read from the wall cache", &fast.shortcut),
+            ("floor albedo along walls from a table", &fast.tables),
+            ("pixel loop compiled for AVX2", &fast.avx),
+            ("light table: dark cells", &fast.dark_cells),
+        ] {
+            add(name, decision.runs, decision.why.clone());
+        }
         add(
             "ray queries",
             walls > 0,
