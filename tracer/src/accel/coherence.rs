@@ -36,7 +36,8 @@
 use flatray_geometry::{DVec2, Ray, Segment, Skip, clip_to_box, cross};
 use rayon::prelude::*;
 
-use crate::scene::{LightShape, Scene};
+use crate::lights::Emitter;
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Above this many (wall, light) pairs every pixel traces its strata.
@@ -63,13 +64,10 @@ pub(crate) enum Coherence {
 /// The kinds of light whose boundaries [`FloorCoherence::build`] knows how
 /// to draw: points, spots, suns and lines. For any other kind every pixel
 /// traces its strata, as without the masks.
-pub(crate) fn draws(shape: &LightShape) -> bool {
-    match shape {
-        LightShape::Point { .. }
-        | LightShape::Spot { .. }
-        | LightShape::Directional { .. }
-        | LightShape::Line { .. } => true,
-        LightShape::Circle { .. } => false,
+pub(crate) fn draws(emitter: Emitter) -> bool {
+    match emitter {
+        Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Segment { .. } => true,
+        Emitter::Disk { .. } => false,
     }
 }
 
@@ -147,8 +145,9 @@ fn light_states(
     step: DVec2,
 ) -> Option<Vec<Coherence>> {
     let light = &scene.lights[index];
+    let emitter = light.shape.emitter();
     let to_pixels = |p: DVec2| (p - scene.canvas.origin) / step;
-    if !draws(&light.shape) {
+    if !draws(emitter) {
         // Every pixel traces its strata for this light.
         return None;
     }
@@ -176,8 +175,8 @@ fn light_states(
         }
         for (end, hider) in [wall.a, wall.b].into_iter().zip(hiders) {
             let e = to_pixels(end);
-            match light.shape {
-                LightShape::Point { at } | LightShape::Spot { at, .. } => {
+            match emitter {
+                Emitter::Point { at, .. } => {
                     // A wall that all but touches the light leaves
                     // its shadow rays' `t < 1` test to rounding.
                     complete &= !near(at, &wall);
@@ -186,14 +185,14 @@ fn light_states(
                         mask.mark(e, e - to_pixels(at), 0.0, end_t);
                     }
                 }
-                LightShape::Directional { direction } => {
+                Emitter::Direction(direction) => {
                     if hider.is_none() {
                         let end_t = umbra_entry(scene, own, end, direction, step);
                         mask.mark(e, direction / step, 0.0, end_t);
                     }
                 }
-                LightShape::Circle { .. } => {}
-                LightShape::Line { segment, .. } => {
+                Emitter::Disk { .. } => {}
+                Emitter::Segment { segment, .. } => {
                     // A wall that touches an end of the light cuts
                     // every triangle: the centre test below says
                     // so, and no boundary is needed.
@@ -207,11 +206,11 @@ fn light_states(
             }
         }
     }
-    if let LightShape::Line { segment, .. } = light.shape {
+    if let Emitter::Segment { segment, .. } = emitter {
         let (a, b) = (to_pixels(segment.a), to_pixels(segment.b));
         mask.mark(a, b - a, f64::NEG_INFINITY, f64::INFINITY);
     }
-    if let LightShape::Point { at } | LightShape::Spot { at, .. } = light.shape {
+    if let Emitter::Point { at, .. } = emitter {
         // The light's own pixel, where no direction is defined.
         let p = to_pixels(at);
         mask.mark(p, DVec2::ZERO, 0.0, 0.0);
@@ -222,12 +221,12 @@ fn light_states(
     // A wall that touches the light's ends (or the light, its
     // ends) leaves its rays' `t < 1` test to rounding: then every
     // pixel traces the line light.
-    let far_walls: Option<Vec<Segment>> = match light.shape {
-        LightShape::Line { segment, .. } => {
+    let far_walls: Option<Vec<Segment>> = match emitter {
+        Emitter::Segment { segment, .. } => {
             let all: Vec<Segment> = walls().collect();
             (!all.iter().any(|w| near_light(w, &segment))).then_some(all)
         }
-        _ => None,
+        Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Disk { .. } => None,
     };
     // Rows in parallel: a line light tests every wall at every
     // unmarked pixel.
@@ -239,20 +238,15 @@ fn light_states(
                 if marked[y * width + x] {
                     return Coherence::Varies;
                 }
-                match (light.shape, far_walls) {
-                    (LightShape::Line { segment, .. }, Some(walls)) => {
+                match (emitter, far_walls) {
+                    (Emitter::Segment { segment, .. }, Some(walls)) => {
                         let centre =
                             scene.canvas.origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
                         line_coherence(walls, centre, &segment)
                     }
-                    (LightShape::Line { .. }, None) => Coherence::Varies,
-                    (
-                        LightShape::Point { .. }
-                        | LightShape::Spot { .. }
-                        | LightShape::Directional { .. },
-                        _,
-                    ) => Coherence::Same,
-                    (LightShape::Circle { .. }, _) => Coherence::Varies,
+                    (Emitter::Segment { .. }, None) => Coherence::Varies,
+                    (Emitter::Point { .. } | Emitter::Direction(_), _) => Coherence::Same,
+                    (Emitter::Disk { .. }, _) => Coherence::Varies,
                 }
             })
         })
@@ -563,8 +557,8 @@ pub(crate) fn centre_transmittance(
             stats,
         );
     }
-    match *shape {
-        LightShape::Line { segment, .. } => crate::lights::transmittance(
+    match shape.emitter() {
+        Emitter::Segment { segment, .. } => crate::lights::transmittance(
             scene,
             &Ray::new(centre, segment.point_at(0.5) - centre),
             1.0,
@@ -572,8 +566,8 @@ pub(crate) fn centre_transmittance(
             walls,
             stats,
         ),
-        // Not supported (`supports`): no pixel of it is `Same`.
-        LightShape::Circle { at, .. } => crate::lights::transmittance(
+        // Not drawn (`draws`): no pixel of it is `Same`.
+        Emitter::Disk { at, .. } => crate::lights::transmittance(
             scene,
             &Ray::new(centre, at - centre),
             1.0,
@@ -582,9 +576,7 @@ pub(crate) fn centre_transmittance(
             stats,
         ),
         // Lights with a source were answered above.
-        LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
-            Rgb::ZERO
-        }
+        Emitter::Point { .. } | Emitter::Direction(_) => Rgb::ZERO,
     }
 }
 

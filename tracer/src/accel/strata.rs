@@ -7,12 +7,13 @@
 use flatray_geometry::{DVec2, Ray};
 
 use crate::light::{Strata, direct_light_chosen};
+use crate::lights::Emitter;
 use crate::lights::choice::{LightTable, NUMBERS};
 use crate::lights::{
     Receiver, Visibility, arriving, light_contribution, point_incident, transmittance,
 };
 use crate::sampling::angle_sample_lanes;
-use crate::scene::{EMITTING_SIDE, Light, LightShape, Scene};
+use crate::scene::{EMITTING_SIDE, Light, Scene};
 use crate::{Rgb, Stats};
 
 /// The floor strata a line light's angle samples take at once.
@@ -64,16 +65,17 @@ pub(crate) fn direct_light_strata(
             // exactly +0, a zero transmittance times a finite value.
             continue;
         }
-        match (light.shape, vis) {
-            (LightShape::Point { at }, Visibility::Known(known)) => {
+        match (light.shape.emitter(), vis) {
+            (
+                Emitter::Point {
+                    at,
+                    windowed: false,
+                },
+                Visibility::Known(known),
+            ) => {
                 add_point_known(light, at, known, points, values, r0);
             }
-            (
-                LightShape::Line {
-                    segment, one_sided, ..
-                },
-                _,
-            ) => {
+            (Emitter::Segment { segment, one_sided }, _) => {
                 // As `light_contribution` computes it for the floor, with
                 // the angle samples drawn in lanes of points; a test holds
                 // the two to the same bits.
@@ -117,7 +119,7 @@ pub(crate) fn direct_light_strata(
                     }
                 }
             }
-            _ => {
+            (Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Disk { .. }, _) => {
                 let takes = light.shape.numbers() > 0;
                 for (k, (value, &x)) in values.iter_mut().zip(points.iter()).enumerate() {
                     let u = if takes {
@@ -201,11 +203,23 @@ pub(crate) fn direct_light_chosen_strata(
     for (k, index) in table.always(cell).enumerate() {
         let light = &scene.lights[index];
         let v = vis(index);
-        match (light.shape, v) {
-            (LightShape::Point { at }, Visibility::Known(known)) => {
+        match (light.shape.emitter(), v) {
+            (
+                Emitter::Point {
+                    at,
+                    windowed: false,
+                },
+                Visibility::Known(known),
+            ) => {
                 add_point_known(light, at, known, points, values, r0);
             }
-            _ => {
+            (
+                Emitter::Point { .. }
+                | Emitter::Direction(_)
+                | Emitter::Segment { .. }
+                | Emitter::Disk { .. },
+                _,
+            ) => {
                 for (value, (&x, numbers)) in values
                     .iter_mut()
                     .zip(points.iter().zip(numbers.chunks_exact(NUMBERS)))
@@ -257,7 +271,7 @@ mod tests {
     use crate::light::direct_light_points;
     use crate::sampling::Stream;
     use crate::scene::Material;
-    use crate::scene::{Canvas, Falloff, Floor, Light, Wall};
+    use crate::scene::{Canvas, Falloff, Floor, Light, LightShape, Wall};
     use flatray_geometry::Segment;
 
     /// Walls, and a light of every kind: points, lines, a spot, a sun, a

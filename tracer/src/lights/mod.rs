@@ -467,7 +467,86 @@ impl Source {
     }
 }
 
+/// Where a light's light comes from, as the fast paths may know it: the
+/// geometry they specialise on (the coherence masks draw its shadow
+/// edges, the strata loops sample it in lanes). Matched exhaustively
+/// outside this module, so that a new kind of light is mapped here to one
+/// of these, or a new one that the compiler then asks every fast path
+/// about.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Emitter {
+    /// From one point; `windowed` where the light is a spot, whose
+    /// intensity depends on the direction.
+    Point { at: DVec2, windowed: bool },
+    /// From one direction of travel, without end (the sun).
+    Direction(DVec2),
+    /// From a segment, on one side or both.
+    Segment { segment: Segment, one_sided: bool },
+    /// From the rim of a disk.
+    Disk { at: DVec2, radius: f64 },
+}
+
+/// How many lights of each kind a scene holds: what the plan counts and
+/// names.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct LightCounts {
+    pub points: usize,
+    pub spots: usize,
+    pub lines: usize,
+    pub circles: usize,
+    pub suns: usize,
+    /// Lights of one direction per point (points, spots, suns): the
+    /// caustic pass aims their photons at mirrors and glass.
+    pub aimed: usize,
+}
+
+impl LightCounts {
+    pub(crate) fn of(lights: &[Light]) -> LightCounts {
+        let mut counts = LightCounts::default();
+        for light in lights {
+            match light.shape {
+                LightShape::Point { .. } => counts.points += 1,
+                LightShape::Spot { .. } => counts.spots += 1,
+                LightShape::Line { .. } => counts.lines += 1,
+                LightShape::Circle { .. } => counts.circles += 1,
+                LightShape::Directional { .. } => counts.suns += 1,
+            }
+            counts.aimed += usize::from(light.shape.aims_photons());
+        }
+        counts
+    }
+}
+
 impl LightShape {
+    /// Where the light comes from, for the fast paths ([`Emitter`]).
+    #[inline]
+    pub(crate) fn emitter(&self) -> Emitter {
+        match *self {
+            LightShape::Point { at } => Emitter::Point {
+                at,
+                windowed: false,
+            },
+            LightShape::Spot { at, .. } => Emitter::Point { at, windowed: true },
+            LightShape::Directional { direction } => Emitter::Direction(direction),
+            LightShape::Line {
+                segment, one_sided, ..
+            } => Emitter::Segment { segment, one_sided },
+            LightShape::Circle { at, radius } => Emitter::Disk { at, radius },
+        }
+    }
+
+    /// Whether the light sends one direction per point, so that the
+    /// caustic pass can aim its photons at a wall ([`LightShape::aperture`]).
+    #[inline]
+    pub(crate) fn aims_photons(&self) -> bool {
+        match self {
+            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
+                true
+            }
+            LightShape::Line { .. } | LightShape::Circle { .. } => false,
+        }
+    }
+
     /// The one place this light's shadow rays all go, if it has one.
     pub(crate) fn source(&self) -> Option<Source> {
         match *self {

@@ -8,8 +8,9 @@ mod wording;
 
 use crate::accel::Facts;
 pub use crate::accel::{Decision, FastDecisions};
+use crate::lights::LightCounts;
 use crate::options::{FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
-use crate::scene::{LightShape, Material, Scene};
+use crate::scene::{Material, Scene};
 use crate::{Floor, Rgb};
 
 pub use wording::Effect;
@@ -22,6 +23,9 @@ pub struct Inventory {
     pub lines: usize,
     pub circles: usize,
     pub suns: usize,
+    /// Lights of one direction per point (points, spots, suns), whose
+    /// photons the caustic pass aims at mirrors and glass.
+    pub aimed: usize,
     /// Lights a path ray can meet (lines and circles): path tracing sees
     /// them in mirrors.
     pub areas: usize,
@@ -49,18 +53,18 @@ pub struct Inventory {
 
 impl Inventory {
     pub fn of(scene: &Scene) -> Inventory {
-        let lights =
-            |f: &dyn Fn(&LightShape) -> bool| scene.lights.iter().filter(|l| f(&l.shape)).count();
+        let counts = LightCounts::of(&scene.lights);
         let walls =
             |f: &dyn Fn(&Material) -> bool| scene.walls.iter().filter(|w| f(&w.material)).count();
         let floor_black = matches!(scene.floor, Floor::Color(c) if c == Rgb::ZERO);
         Inventory {
-            points: lights(&|s| matches!(s, LightShape::Point { .. })),
-            spots: lights(&|s| matches!(s, LightShape::Spot { .. })),
-            lines: lights(&|s| matches!(s, LightShape::Line { .. })),
-            circles: lights(&|s| matches!(s, LightShape::Circle { .. })),
-            suns: lights(&|s| matches!(s, LightShape::Directional { .. })),
-            areas: lights(&|s| s.has_area()),
+            points: counts.points,
+            spots: counts.spots,
+            lines: counts.lines,
+            circles: counts.circles,
+            suns: counts.suns,
+            aimed: counts.aimed,
+            areas: scene.lights.iter().filter(|l| l.shape.has_area()).count(),
             lights: scene.lights.len(),
             walls: scene.walls.len(),
             mirrors: walls(&Material::is_mirror),
@@ -149,9 +153,7 @@ impl Plan {
     pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
         let inventory = Inventory::of(scene);
         let Inventory {
-            points,
-            spots,
-            suns,
+            aimed,
             areas,
             rough_mirrors,
             glass_edges,
@@ -186,11 +188,8 @@ impl Plan {
         let last_legs = indirect && specular_paths && areas > 0;
         // Path tracing cannot find their light after a mirror or glass:
         // the caustic pass does, wherever both are in the scene.
-        let caustics = options.caustics
-            && !tracing_light
-            && specular_paths
-            && !no_lights
-            && points + spots + suns > 0;
+        let caustics =
+            options.caustics && !tracing_light && specular_paths && !no_lights && aimed > 0;
         let wall_memo_wanted = !tracing_light
             && indirect
             && options.bounces > 0

@@ -45,6 +45,7 @@ impl Plan {
             lines,
             circles,
             suns,
+            aimed,
             areas,
             lights,
             walls,
@@ -357,14 +358,10 @@ impl Plan {
         );
         add(
             "points, spots and sun seen in mirrors or glass",
-            caustics
-                || (tracing_light
-                    && specular_limit > 0
-                    && specular > 0
-                    && points + spots + suns > 0),
+            caustics || (tracing_light && specular_limit > 0 && specular > 0 && aimed > 0),
             if specular == 0 {
                 "no mirror or glass in the scene".into()
-            } else if points + spots + suns == 0 {
+            } else if aimed == 0 {
                 "no point, spot or directional light in the scene".into()
             } else if specular_limit == 0 {
                 "specular = 0: light stops at mirrors and glass".into()
@@ -377,7 +374,7 @@ impl Plan {
             } else {
                 format!(
                     "a photon pass from {} towards {} (the parts walls do not hide): their light on the floor by track length, on diffuse walls in bins; fewer photons where these take under a quarter of the lights' power",
-                    n(points + spots + suns, "point, spot or directional light"),
+                    n(aimed, "point, spot or directional light"),
                     n(specular, "mirror or glass edge")
                 )
             },
