@@ -229,6 +229,15 @@ impl WallDeposits for WallBins {
             *value += power * found.3;
         }
     }
+
+    /// After the bins' values, where a buffer holds a second set.
+    fn add_late(&self, values: &mut [Rgb], (wall, side, u): (u32, Side, f64), power: Rgb) {
+        if let Some(found) = self.locate(wall, u)
+            && let Some(value) = values.get_mut(self.len + Self::index(found, side))
+        {
+            *value += power * found.3;
+        }
+    }
 }
 
 /// What the caustic pass measured: the fluence on the floor per pixel,
@@ -262,6 +271,24 @@ impl Caustics {
         self.bins
             .locate(wall, u)
             .and_then(|found| self.walls.get(WallBins::index(found, side)))
+            .copied()
+            .unwrap_or(Rgb::ZERO)
+    }
+
+    /// Whether the pass kept light that took a glossy reflection after a
+    /// mirror or glass on its way to a diffuse wall ([`Caustics::wall_late`]).
+    pub fn has_late(&self) -> bool {
+        self.walls.len() > self.bins.len
+    }
+
+    /// The irradiance on side `side` of diffuse wall `wall` at `u` of
+    /// light that took one glossy reflection on its way there: it counts
+    /// one reflection more than [`Caustics::wall`]'s, so a path reads it
+    /// only where it has a reflection left.
+    pub fn wall_late(&self, wall: u32, side: Side, u: f64) -> Rgb {
+        self.bins
+            .locate(wall, u)
+            .and_then(|found| self.walls.get(self.bins.len + WallBins::index(found, side)))
             .copied()
             .unwrap_or(Rgb::ZERO)
     }
@@ -360,6 +387,9 @@ struct CausticPass<'a> {
     per_chunk: u64,
     grid: Grid,
     bins: WallBins,
+    /// The length of a chunk's buffer of the bins' values: the bins, and
+    /// again for late light where it can come.
+    values: usize,
     /// The seed of the photons: the render pass's.
     seed: u64,
 }
@@ -375,7 +405,10 @@ pub(crate) fn trace_caustics(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Option<Caustics> {
     let targets: Vec<u32> = (0..scene.walls.len() as u32)
-        .filter(|&i| scene.walls[i as usize].material.turns_specularly())
+        .filter(|&i| {
+            let material = &scene.walls[i as usize].material;
+            material.turns_specularly() || (material.is_glossy() && options.bounces > 0)
+        })
         .collect();
     let emitters: Vec<Emitter> = scene
         .lights
@@ -433,7 +466,11 @@ pub(crate) fn trace_caustics(
         options.memo.bin_length / options.scale,
         limits.bounces > 0,
     );
-    let chunk_bytes = (pixels + bins.len) * 24;
+    // A second set of the bins' values, for light off a rough mirror
+    // after a mirror or glass, where one can come.
+    let late = limits.bounces >= 2 && scene.walls.iter().any(|w| w.material.is_glossy());
+    let values = bins.len * (1 + usize::from(late));
+    let chunk_bytes = (pixels + values) * 24;
     // As many chunks as the budget holds, but not so many that a chunk's
     // buffers cost more to clear and merge than its photons to trace.
     let by_photons = (photons / MIN_CHUNK_PHOTONS) as usize;
@@ -452,6 +489,7 @@ pub(crate) fn trace_caustics(
         per_chunk: photons.div_ceil(chunks as u64),
         grid: Grid::new(scene, options.scale, width, height),
         bins,
+        values,
         seed: pass.seed,
     };
     let outcome = run(&pass, Stats::default(), progress);
@@ -478,7 +516,7 @@ impl Estimator for CausticPass<'_> {
     ) -> Part {
         let scene = self.scene;
         let mut floor = vec![Rgb::ZERO; self.size.0 as usize * self.size.1 as usize];
-        let mut walls = vec![Rgb::ZERO; self.bins.len];
+        let mut walls = vec![Rgb::ZERO; self.values];
         let first = chunk as u64 * self.per_chunk;
         let last = ((chunk as u64 + 1) * self.per_chunk).min(self.photons);
         let weight = self.total / self.photons as f64;
@@ -549,7 +587,7 @@ impl Estimator for CausticPass<'_> {
             film.fluence
         };
         let walls = if film.walls.is_empty() {
-            vec![Rgb::ZERO; self.bins.len]
+            vec![Rgb::ZERO; self.values]
         } else {
             film.walls
         };

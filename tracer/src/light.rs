@@ -41,15 +41,14 @@ pub(crate) fn direct_light(
 /// is weighed against the BSDF's own samples by the power heuristic; the
 /// path loop gives a BSDF sample that meets it the other share
 /// ([`glossy_emission_weight`]). A sample where `f` is zero casts no shadow
-/// ray.
-#[allow(clippy::too_many_arguments)]
+/// ray. With `aimed_by_photons`, the lights whose photons the caustic pass
+/// aims ([`crate::scene::LightShape::aims_photons`]) are left to it.
 pub(crate) fn direct_light_glossy(
     scene: &Scene,
     x: DVec2,
     (receiver, n): (Receiver, DVec2),
-    bsdf: &Bsdf,
-    wo: DVec2,
-    shadows: bool,
+    (bsdf, wo): (&Bsdf, DVec2),
+    (shadows, aimed_by_photons): (bool, bool),
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
@@ -58,6 +57,9 @@ pub(crate) fn direct_light_glossy(
     for index in 0..scene.lights.len() {
         let light = &scene.lights[index];
         let u = light_number(light, stream);
+        if aimed_by_photons && light.shape.aims_photons() {
+            continue;
+        }
         let area = light.shape.has_area();
         sum += weighed_contribution(scene, index, x, receiver, u, vis, stats, |s, v| {
             let wi = s.dir();

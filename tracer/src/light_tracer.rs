@@ -212,6 +212,11 @@ pub(crate) trait WallDeposits: Sync {
     /// Adds `power`, arriving at the point `u` of wall `wall` from `side`,
     /// to `values`.
     fn add(&self, values: &mut [Rgb], at: (u32, flatray_geometry::Side, f64), power: Rgb);
+
+    /// Adds `power` that took one glossy reflection on its way (off a
+    /// rough mirror, after a mirror or glass): kept apart, as it counts
+    /// one reflection more.
+    fn add_late(&self, values: &mut [Rgb], at: (u32, flatray_geometry::Side, f64), power: Rgb);
 }
 
 /// Where a photon's light goes: the floor's pixels, and for the caustic
@@ -252,6 +257,13 @@ pub(crate) fn follow_photon(
     let mut diffuse = 0;
     let mut run = Run::new(power);
     let caustic = deposits.walls.is_some();
+    // In the caustic pass: whether the photon took its one glossy
+    // reflection (off a rough mirror), after which its flights light the
+    // floor until its next non-specular wall.
+    let mut glossy = false;
+    // Whether a specular event came before that reflection: then no path
+    // finds the light it brings to a diffuse wall, which is binned there.
+    let mut specular_then_glossy = false;
     let mut glass = GlassState::default();
     loop {
         stats.work.bounce_rays += 1;
@@ -268,7 +280,7 @@ pub(crate) fn follow_photon(
             None => glass.inside,
         };
         let absorb = absorption(scene, body);
-        if !caustic || run.specular() {
+        if !caustic || run.specular() || glossy {
             deposits.grid.deposit(
                 &ray,
                 t_end,
@@ -302,20 +314,33 @@ pub(crate) fn follow_photon(
         if bsdf.is_straight() {
             stats.physics.transparent_passes += 1;
         }
+        let takes_lobe = bsdf.is_glossy() && !glossy && limits.bounces > 0;
         if let Some((bins, values)) = &mut deposits.walls
             && !bsdf.is_specular()
+            && !takes_lobe
         {
-            // The caustic pass ends at the first non-specular wall: what
-            // arrives at a diffuse one after specular events is binned,
-            // for the path tracer's next-event estimation to read (a
-            // glossy wall's outgoing light depends on where light came
-            // from, which bins of irradiance do not keep).
+            // The caustic pass ends at the first non-specular wall but
+            // for one glossy reflection (which it carries on to the
+            // floor: the path tracer leaves a point, spot or sun at a
+            // path's first glossy vertex to it). What arrives at a
+            // diffuse wall after specular events only is binned, for the
+            // path tracer's next-event estimation to read; a glossy
+            // wall's outgoing light depends on where light came from,
+            // which bins of irradiance do not keep.
             stats.physics.paths_to_walls += 1;
-            if run.specular() && bsdf.lambertian().is_some() {
+            if bsdf.lambertian().is_some() {
                 let arriving = power * kernel.factor(travelled, r0);
-                bins.add(values, (index, side, h.u), arriving);
+                if !glossy && run.specular() {
+                    bins.add(values, (index, side, h.u), arriving);
+                } else if glossy && specular_then_glossy && limits.bounces >= 2 {
+                    bins.add_late(values, (index, side, h.u), arriving);
+                }
             }
             return;
+        }
+        if caustic && takes_lobe {
+            glossy = true;
+            specular_then_glossy = run.specular();
         }
         if !bsdf.is_specular() {
             if diffuse == limits.bounces {

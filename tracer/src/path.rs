@@ -336,6 +336,9 @@ pub(crate) fn follow(
             };
             if let Some(caustics) = trace.caustics {
                 irradiance += caustics.wall(index, side, h.u);
+                if diffuse < bounces && caustics.has_late() {
+                    irradiance += caustics.wall_late(index, side, h.u);
+                }
             }
             fluence += throughput * rho * 0.5 * irradiance;
             if diffuse == bounces {
@@ -370,14 +373,16 @@ pub(crate) fn follow(
                 shadow_walls: None,
             };
             let wo = -ray.dir;
+            // At a path's first non-specular vertex, the caustic pass
+            // brings the light of points, spots and suns off the lobe.
+            let aimed_by_photons = trace.caustics.is_some() && diffuse == 1;
             fluence += throughput
                 * direct_light_glossy(
                     scene,
                     x,
                     (receiver, normal()),
-                    &bsdf,
-                    wo,
-                    shadows,
+                    (&bsdf, wo),
+                    (shadows, aimed_by_photons),
                     stream,
                     stats,
                 );

@@ -186,10 +186,15 @@ impl Plan {
         // Past its last diffuse bounce a path goes on only where such a
         // light could be met; not forced, as it would find none.
         let last_legs = indirect && specular_paths && areas > 0;
-        // Path tracing cannot find their light after a mirror or glass:
-        // the caustic pass does, wherever both are in the scene.
-        let caustics =
-            options.caustics && !tracing_light && specular_paths && !no_lights && aimed > 0;
+        // Path tracing cannot find their light after a mirror or glass,
+        // and leaves it to photons off a rough mirror at a path's first
+        // bounce (where a narrow lobe makes paths noisy): the caustic pass
+        // does, wherever both are in the scene.
+        let caustics = options.caustics
+            && !tracing_light
+            && (specular_paths || glossy_paths)
+            && !no_lights
+            && aimed > 0;
         let wall_memo_wanted = !tracing_light
             && indirect
             && options.bounces > 0
