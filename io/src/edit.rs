@@ -70,6 +70,8 @@ impl End {
 pub enum MaterialKind {
     Diffuse,
     Mirror,
+    /// A rough mirror of the format's default roughness.
+    Rough,
     Transparent,
 }
 
@@ -110,6 +112,7 @@ pub fn apply(
             match material {
                 MaterialKind::Diffuse => "Diffuse()",
                 MaterialKind::Mirror => "Mirror()",
+                MaterialKind::Rough => "Rough()",
                 MaterialKind::Transparent => "Transparent()",
             }
             .to_string(),

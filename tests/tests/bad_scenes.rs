@@ -425,3 +425,17 @@ fn the_render_block_takes_caustics_lights_and_the_cache_modes() {
         "{run:?}"
     );
 }
+
+#[test]
+fn a_rough_mirror_out_of_range() {
+    check_rejected(
+        "Scene(canvas: (10, 10), floor: Tiles(size: 2), walls: [\n  Wall(a: (1, 1), b: (9, 1)),\n  Wall(a: (1, 5), b: (9, 5), material: Rough(roughness: 1.5)),\n])",
+        3,
+        "roughness",
+    );
+    check_rejected(
+        "Scene(canvas: (10, 10), floor: Tiles(size: 2), walls: [\n  Wall(a: (1, 5), b: (9, 5), material: Rough(roughness: -0.1)),\n])",
+        2,
+        "from 0 (a mirror) to 1",
+    );
+}

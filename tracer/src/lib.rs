@@ -8,19 +8,20 @@
 //! number of threads.
 //!
 //! The model, which reads like `docs/model.md`: the lights (`lights/`, a
-//! module per kind), the materials (`bsdf.rs`), next-event estimation
+//! module per kind), the materials (`material/`), next-event estimation
 //! (`light.rs`), the path tracer (`path.rs`), the light tracer
 //! (`light_tracer.rs`), the caustic pass (`caustics.rs`) and the one
-//! render loop (`film.rs`). Beside it, fast paths that compute the same
-//! bits (`tests/tests/identity.rs`): the memo (`memo.rs`), shared shadow
-//! rays (`coherence.rs`), culled rays (`mirror.rs`, `render.rs`), lanes,
-//! tables; `RenderOptions::reference` turns them all off.
+//! render loop (`film.rs`). Above it, fast paths that compute the same
+//! bits (`accel/`, one file each, `tests/tests/identity.rs`): culled rays,
+//! shared shadow rays, lanes, tables; `RenderOptions::reference` turns
+//! them all off. The memos (`memo.rs`, `onward.rs`) are estimators of
+//! their own.
 //!
 //! What it never does: read or write files, parse text, or print. Scenes
 //! come in as plain data ([`Scene`]); images go out as linear floats
 //! ([`Image`]); progress goes out through a callback. Its one `unsafe`
 //! block calls the pixel loop compiled with AVX2, after checking that the
-//! processor has it (`render.rs::pixel_fn`).
+//! processor has it (`pixel.rs::pixel_fn`).
 
 mod accel;
 mod caustics;

@@ -118,19 +118,19 @@ pub enum FastPath {
     /// arc of directions can meet, where the walls are few.
     Culling,
     /// The floor memo's strata share one shadow ray per light where no
-    /// shadow edge crosses their pixel (`coherence.rs`).
+    /// shadow edge crosses their pixel (`accel/coherence.rs`).
     Coherence,
     /// The floor memo's light-by-light loops, with line lights' angle
     /// samples in lanes (`light::direct_light_strata`).
     StrataLoops,
-    /// One bounce read straight from the wall memo (`shortcut.rs`).
+    /// One bounce read straight from the wall memo (`accel/shortcut.rs`).
     Shortcut,
     /// The floor's albedo along walls read from a table.
     Tables,
     /// The pixel loop compiled a second time with AVX2.
     Avx,
     /// No shadow ray to a chosen light that a wall hides from the whole
-    /// cell of the light table (`dark.rs`).
+    /// cell of the light table (`accel/dark.rs`).
     DarkCells,
 }
 

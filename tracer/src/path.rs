@@ -467,7 +467,7 @@ pub(crate) fn follow(
 
 /// The walls that a ray leaving wall `wall` (a mirror, or a diffuse wall
 /// the onward memo gathers from) at `u` in direction `dir` can meet, in
-/// index order, where a fast path knows them (`mirror.rs`); the path loop
+/// index order, where a fast path knows them (`accel/mirror.rs`); the path loop
 /// then tests only those. `None`: every wall.
 pub(crate) trait MirrorWalls: Sync {
     fn walls(&self, wall: u32, u: f64, dir: DVec2) -> Option<&[u32]>;
@@ -514,7 +514,7 @@ pub(crate) struct Trace<'a> {
     pub tables: bool,
     /// The walls that rays leaving each mirror (and diffuse wall, for the
     /// onward memo's gathers) can meet, when the plan culls rays by
-    /// direction (a fast path: `mirror.rs`).
+    /// direction (a fast path: `accel/mirror.rs`).
     pub mirror_arcs: Option<&'a dyn MirrorWalls>,
     /// The lights each receiver's next-event estimation takes, where the
     /// plan chooses them (`lights::choice`); `None`: every light.

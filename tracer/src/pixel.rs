@@ -39,7 +39,7 @@ pub(crate) struct Context<'a> {
     pub(crate) culling: bool,
     pub(crate) trace: Trace<'a>,
     /// The wall memo, where paths take the one-bounce shortcut
-    /// (`shortcut.rs`: one bounce, the memo, not the reference).
+    /// (`accel/shortcut.rs`: one bounce, the memo, not the reference).
     pub(crate) one_bounce_memo: Option<&'a WallMemo>,
     /// [`render_pixel`], compiled for this processor.
     /// Whether the floor memo's points are taken light by light

@@ -99,7 +99,7 @@ pub struct Work {
     /// part of `shadow_rays`).
     pub chosen_lights: u64,
     /// Of those, lights that a wall hides from the point's whole cell:
-    /// no shadow ray cast (`dark.rs`).
+    /// no shadow ray cast (`accel/dark.rs`).
     pub chosen_dark: u64,
     /// Bytes held by the light table, and the shadow rays its probes cast
     /// (not in `shadow_rays`).
@@ -112,7 +112,7 @@ pub struct Work {
     pub onward_rays: u64,
     pub onward_bytes: u64,
     /// Gathers whose first ray tested only its wall piece's list
-    /// (`mirror.rs`).
+    /// (`accel/mirror.rs`).
     pub onward_listed_rays: u64,
 }
 

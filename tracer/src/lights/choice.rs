@@ -32,7 +32,7 @@
 //! number of lights.
 //!
 //! Most lights chosen by their defensive share lie in other rooms. Beside
-//! the model, a fast path (`dark.rs`) marks per cell the lights that one
+//! the model, a fast path (`accel/dark.rs`) marks per cell the lights that one
 //! opaque wall hides from the whole cell ([`LightTable::set_dark`]): such
 //! a light brings exactly nothing, and a point that chooses it casts no
 //! ray. The choice and its probabilities stay as they are, so the image
@@ -235,7 +235,7 @@ impl LightTable {
         self.lights.div_ceil(64)
     }
 
-    /// Cell `cell`'s box, closed: where `dark.rs` proves a light dark.
+    /// Cell `cell`'s box, closed: where `accel/dark.rs` proves a light dark.
     pub(crate) fn cell_box(&self, cell: usize) -> (DVec2, DVec2) {
         let columns = self.columns as usize;
         let lo =
@@ -244,7 +244,7 @@ impl LightTable {
     }
 
     /// Takes the marks of the lights that one opaque wall hides from the
-    /// whole of each cell (`dark.rs`: a bit per light, cell by cell, as
+    /// whole of each cell (`accel/dark.rs`: a bit per light, cell by cell, as
     /// [`LightTable::dark_words`] words a cell), and the rays cast to
     /// find them. [`LightTable::chosen_light`] then casts no shadow ray
     /// to such a light: its contribution is exactly 0.

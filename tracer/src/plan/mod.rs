@@ -130,7 +130,7 @@ pub struct Plan {
     /// The floor half of the memo: direct light once per pixel.
     pub floor_memo: bool,
     /// The floor memo's strata share one shadow ray per light where no
-    /// shadow edge crosses their pixel (`coherence.rs`).
+    /// shadow edge crosses their pixel (`accel/coherence.rs`).
     pub floor_coherence: bool,
     /// The floor's rays test only the walls that rays from their block of
     /// pixels, in their arc of directions, can meet (`ArcCandidates`).
