@@ -9,7 +9,7 @@
 //!
 //! The model, which reads like `docs/model.md`: the lights (`lights/`, a
 //! module per kind), the materials (`material/`), next-event estimation
-//! (`light.rs`), the path tracer (`path.rs`), the light tracer
+//! (`direct.rs`), the path tracer (`path.rs`), the light tracer
 //! (`light_tracer.rs`), the caustic pass (`caustics.rs`) and the one
 //! render loop (`film.rs`). Above it, fast paths that compute the same
 //! bits (`accel/`, one file each, `tests/tests/identity.rs`): culled rays,
@@ -25,8 +25,8 @@
 
 mod accel;
 mod caustics;
+mod direct;
 mod film;
-mod light;
 mod light_tracer;
 mod lights;
 mod material;

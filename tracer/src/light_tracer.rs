@@ -7,7 +7,7 @@ use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
 use crate::film::PixelSums;
 use crate::film::{Estimator, Film, Part, run};
-use crate::lights::{Kernel, Photon};
+use crate::lights::{Photon, PhotonKernel};
 use crate::material::glass::{GlassState, absorption, transmit};
 use crate::material::{Bsdf, Sampling, Transport};
 use crate::options::{RenderOptions, image_size};
@@ -374,7 +374,7 @@ pub(crate) fn follow_photon(
             // Power arriving at the wall, with the kernel's share: the
             // kernel applies up to the first diffuse reflection.
             power *= kernel.factor(travelled, r0) * scattered.weight;
-            kernel = Kernel::None;
+            kernel = PhotonKernel::None;
             run = Run::new(power);
         }
         ray = Ray::new(x, scattered.dir);
@@ -435,7 +435,7 @@ impl Grid {
         ray: &Ray,
         t_end: f64,
         power: Rgb,
-        kernel: Kernel,
+        kernel: PhotonKernel,
         offset: f64,
         absorb: Rgb,
         r0: f64,

@@ -1,6 +1,8 @@
-//! Filling and reading the direct-light memo (`flatray-cache`): wall
-//! irradiance per (wall, side, bin), summed over the lights, and the
-//! floor's direct fluence once per pixel.
+//! The wall memo (`flatray-cache`): filling it with each diffuse wall's
+//! direct irradiance per (wall, side, bin), summed over the lights, and
+//! the onward memo's tables as paths read them (`onward.rs` fills them).
+//! The floor memo, the floor's direct light once per pixel over its
+//! points, is the pixel loop's (`pixel.rs`, `accel/strata.rs`).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 

@@ -7,7 +7,7 @@ use flatray_cache::{Key, WallMemo};
 use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
 
 use crate::caustics::Caustics;
-use crate::light::{direct_light, direct_light_glossy, glossy_emission_weight};
+use crate::direct::{direct_light, direct_light_glossy, glossy_emission_weight};
 use crate::lights::Receiver;
 use crate::lights::choice::LightTable;
 use crate::material::glass::{GlassState, absorption, transmit};

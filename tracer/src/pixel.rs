@@ -14,8 +14,8 @@ use crate::accel::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::accel::culling::{Batch, BlockCulling, Sums};
 use crate::accel::shortcut::memo_bounce;
 use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
+use crate::direct::{direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::film::PixelSums;
-use crate::light::{direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::lights::{Receiver, Visibility};
 use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
@@ -328,7 +328,7 @@ pub(crate) fn pass_sums(
         let from = (pass.points.start - first_point) as usize;
         let to = (pass.points.end - first_point) as usize;
         if let Some(values) = values.get(from..to) {
-            let (first, second, all) = strata_halves(values, (x, y), stats);
+            let (first, second, all) = noise_halves(values, (x, y), stats);
             (halves, whole) = ((first, second), all);
         }
         stats.work.floor_memo_reuses += pass.count() as u64;
@@ -360,7 +360,7 @@ pub(crate) fn pass_sums(
 /// whole pixel; the mean of all, twice, for a single point), and over all.
 /// Points that are not finite count as zero, and are reported (as sample
 /// `u32::MAX` of pixel `(x, y)`).
-pub(crate) fn strata_halves(
+pub(crate) fn noise_halves(
     values: &[Rgb],
     (x, y): (u32, u32),
     stats: &mut Stats,
@@ -821,7 +821,7 @@ mod tests {
         let mut stats = Stats::default();
         let finite = [v(1.0), v(3.0), v(2.0), v(6.0)];
         assert_eq!(
-            strata_halves(&finite, (4, 5), &mut stats),
+            noise_halves(&finite, (4, 5), &mut stats),
             (
                 Rgb::new(2.0, 1.0, 2.0),
                 Rgb::new(4.0, 1.0, 2.0),
@@ -832,13 +832,13 @@ mod tests {
         // An infinity and a NaN count as zero, and are counted.
         let mixed = [v(1.0), v(3.0), v(f64::INFINITY), v(f64::NAN)];
         assert_eq!(
-            strata_halves(&mixed, (4, 5), &mut stats),
+            noise_halves(&mixed, (4, 5), &mut stats),
             (Rgb::new(2.0, 1.0, 2.0), Rgb::ZERO, Rgb::new(1.0, 0.5, 1.0))
         );
         assert_eq!(stats.physics.nonfinite_samples, 2);
         assert_eq!(stats.physics.first_nonfinite, Some((4, 5, u32::MAX)));
         // One point: its value, for both halves.
-        let one = strata_halves(&finite[..1], (4, 5), &mut stats);
+        let one = noise_halves(&finite[..1], (4, 5), &mut stats);
         assert_eq!(one, (v(1.0), v(1.0), v(1.0)));
     }
 }

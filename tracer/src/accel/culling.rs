@@ -6,7 +6,7 @@
 use flatray_geometry::{ArcCandidates, DVec2, hull_candidates};
 
 use crate::Rgb;
-use crate::light::Strata;
+use crate::direct::Strata;
 use crate::lights::Visibility;
 use crate::lights::choice::LightTable;
 use crate::options::{LONG_LIST, TILE_SHADOW_TESTS};

@@ -3,7 +3,7 @@
 //! options it supports. Each is one file; none is imported by the model
 //! below it, which they reach through the interfaces it defines (the
 //! walls' ray queries with lists, `path::MirrorWalls`, the light
-//! interface, `light::Strata`).
+//! interface, `direct::Strata`).
 //!
 //! - `culling`: per block of pixels and arc of directions, the walls the
 //!   floor's rays can meet, and per light the walls its shadow rays can

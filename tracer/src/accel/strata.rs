@@ -1,12 +1,12 @@
 //! A fast path beside the model: the floor memo's direct light computed
 //! light by light over all of a pixel's strata (point lights whose
 //! visibility is known in one loop, line lights' angle samples in lanes
-//! of points), each value exactly as `light::direct_light_points`
+//! of points), each value exactly as `direct::direct_light_points`
 //! computes it, point by point.
 
 use flatray_geometry::{DVec2, Ray};
 
-use crate::light::{Strata, direct_light_chosen};
+use crate::direct::{Strata, direct_light_chosen};
 use crate::lights::Emitter;
 use crate::lights::choice::{LightTable, NUMBERS};
 use crate::lights::{
@@ -268,7 +268,7 @@ pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::light::direct_light_points;
+    use crate::direct::direct_light_points;
     use crate::sampling::Stream;
     use crate::scene::Material;
     use crate::scene::{Canvas, Falloff, Floor, Light, LightShape, Wall};

@@ -330,7 +330,7 @@ impl LightTable {
     }
 
     /// Light from `scene`'s lights arriving at `x` (see
-    /// [`crate::light::direct_light_with`]), estimated by the cell's
+    /// [`crate::direct::direct_light_with`]), estimated by the cell's
     /// choice, with the [`NUMBERS`] numbers in `numbers`.
     #[inline]
     pub(crate) fn direct_light(

@@ -8,7 +8,7 @@ use std::f64::consts::TAU;
 
 use flatray_geometry::{DVec2, Ray, Skip};
 
-use super::Kernel;
+use super::PhotonKernel;
 use super::{Incident, Photon};
 use crate::sampling::{Stream, cosine_half_circle};
 use crate::scene::Light;
@@ -75,7 +75,7 @@ pub(super) fn emit(at: DVec2, radius: f64, light: &Light, stream: &mut Stream) -
         origin: at + normal * radius,
         dir: cosine_half_circle(normal, stream.uniform()),
         scale: 1.0,
-        kernel: Kernel::Line(light.falloff),
+        kernel: PhotonKernel::Line(light.falloff),
         skip: Skip::NONE,
     }
 }

@@ -1,7 +1,7 @@
 //! What one light gives a receiver: the light interface's sample
 //! ([`crate::scene::LightShape::incident`]) times the receiver's cosine,
 //! and the transmittance of the shadow ray between them. Direct light over
-//! all lights (`light.rs`), the memos and the light table build on it.
+//! all lights (`direct.rs`), the memos and the light table build on it.
 
 use flatray_geometry::{DVec2, Ray, Skip, Strategy};
 

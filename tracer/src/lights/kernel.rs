@@ -9,19 +9,19 @@ use crate::scene::Falloff;
 /// per-radian term of `Falloff::per_radian`. Both are 1 for `Flatland`
 /// beyond `r0`.
 #[derive(Clone, Copy, Debug)]
-pub(crate) enum Kernel {
+pub(crate) enum PhotonKernel {
     None,
     Point(Falloff),
     Line(Falloff),
 }
 
-impl Kernel {
+impl PhotonKernel {
     #[inline]
     pub(crate) fn factor(self, r: f64, r0: f64) -> f64 {
         match self {
-            Kernel::None => 1.0,
-            Kernel::Point(falloff) => falloff.g(r, r0) * r,
-            Kernel::Line(falloff) => falloff.per_radian(r, r0),
+            PhotonKernel::None => 1.0,
+            PhotonKernel::Point(falloff) => falloff.g(r, r0) * r,
+            PhotonKernel::Line(falloff) => falloff.per_radian(r, r0),
         }
     }
 
@@ -29,8 +29,8 @@ impl Kernel {
     /// per-pixel evaluation there.
     pub(crate) fn is_flat_beyond_r0(self) -> bool {
         match self {
-            Kernel::None => true,
-            Kernel::Point(f) | Kernel::Line(f) => f == Falloff::Flatland,
+            PhotonKernel::None => true,
+            PhotonKernel::Point(f) | PhotonKernel::Line(f) => f == Falloff::Flatland,
         }
     }
 
@@ -45,14 +45,14 @@ impl Kernel {
     /// `(1 - s / R)^2 s` up to the window's range `R`, or `s`.
     pub(crate) fn integral(self, s0: f64, s1: f64, r0: f64) -> f64 {
         let falloff = match self {
-            Kernel::None => return s1 - s0,
-            Kernel::Point(f) | Kernel::Line(f) => f,
+            PhotonKernel::None => return s1 - s0,
+            PhotonKernel::Point(f) | PhotonKernel::Line(f) => f,
         };
         let mut sum = 0.0;
         let (a, b) = (s0, s1.min(r0));
         if b > a {
             sum += match self {
-                Kernel::Point(_) => falloff.g(r0, r0) * (b - a) * (0.5 * (a + b)),
+                PhotonKernel::Point(_) => falloff.g(r0, r0) * (b - a) * (0.5 * (a + b)),
                 _ => falloff.per_radian(r0, r0) * (b - a),
             };
         }
@@ -108,7 +108,11 @@ mod tests {
             (1e6, 1e6 + 0.7),
         ];
         for falloff in falloffs {
-            for kernel in [Kernel::Point(falloff), Kernel::Line(falloff), Kernel::None] {
+            for kernel in [
+                PhotonKernel::Point(falloff),
+                PhotonKernel::Line(falloff),
+                PhotonKernel::None,
+            ] {
                 for (s0, s1) in spans {
                     let n = 200_000;
                     let h = (s1 - s0) / n as f64;

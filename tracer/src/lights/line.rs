@@ -4,7 +4,7 @@
 
 use flatray_geometry::{DVec2, Ray, Segment, Side, Skip, intersect};
 
-use super::Kernel;
+use super::PhotonKernel;
 use super::{Incident, Photon};
 use crate::sampling::{Stream, cosine_half_circle, sample_subtended_angle, subtended_angle};
 use crate::scene::{EMITTING_SIDE, Light, lies_on_line};
@@ -76,7 +76,7 @@ pub(super) fn emit(
         origin,
         dir: cosine_half_circle(segment.normal_on(side), stream.uniform()),
         scale: 1.0,
-        kernel: Kernel::Line(light.falloff),
+        kernel: PhotonKernel::Line(light.falloff),
         skip: wall.map_or(Skip::NONE, Skip::one),
     }
 }

@@ -23,7 +23,7 @@
 //! exhaustive, so a new kind of light is a compiler error in this file
 //! until every function is given, and nowhere else in the model.
 //! Fast paths that treat a kind specially name the kinds they support
-//! (`coherence::supports`, `light::direct_light_strata`) and fall back to
+//! (`coherence::supports`, `direct::direct_light_strata`) and fall back to
 //! these functions for every other.
 
 mod contribution;
@@ -31,7 +31,7 @@ mod kernel;
 pub(crate) use contribution::{
     Receiver, Visibility, light_contribution, transmittance, weighed_contribution,
 };
-pub(crate) use kernel::Kernel;
+pub(crate) use kernel::PhotonKernel;
 pub(crate) mod choice;
 mod circle;
 mod line;
@@ -62,7 +62,7 @@ pub(crate) struct Incident {
     pub length: f64,
     /// What arrives per unit intensity: per radian of direction for a
     /// light with an area (a line, a circle), in total for a point, a
-    /// spot or the sun. Kernel and spot window included.
+    /// spot or the sun. The kernel and the spot window included.
     pub value: f64,
     /// The probability density of the sampled direction, per radian; 1
     /// for a light of one direction (a point, a spot, the sun), whose
@@ -100,7 +100,7 @@ pub(crate) struct Photon {
     pub origin: DVec2,
     pub dir: DVec2,
     pub scale: f64,
-    pub kernel: Kernel,
+    pub kernel: PhotonKernel,
     pub skip: Skip,
 }
 
@@ -599,11 +599,15 @@ impl LightShape {
     }
 
     /// The kernel a photon of this light carries on its first flight.
-    pub(crate) fn kernel(&self, light: &Light) -> Kernel {
+    pub(crate) fn kernel(&self, light: &Light) -> PhotonKernel {
         match self {
-            LightShape::Point { .. } | LightShape::Spot { .. } => Kernel::Point(light.falloff),
-            LightShape::Line { .. } | LightShape::Circle { .. } => Kernel::Line(light.falloff),
-            LightShape::Directional { .. } => Kernel::None,
+            LightShape::Point { .. } | LightShape::Spot { .. } => {
+                PhotonKernel::Point(light.falloff)
+            }
+            LightShape::Line { .. } | LightShape::Circle { .. } => {
+                PhotonKernel::Line(light.falloff)
+            }
+            LightShape::Directional { .. } => PhotonKernel::None,
         }
     }
 }

@@ -5,7 +5,7 @@ use std::f64::consts::TAU;
 
 use flatray_geometry::{DVec2, Segment, Skip};
 
-use super::Kernel;
+use super::PhotonKernel;
 use super::{Incident, Photon};
 use crate::sampling::{Stream, uniform_circle};
 use crate::scene::{Light, lies_on_line};
@@ -45,7 +45,7 @@ pub(super) fn emit(at: DVec2, light: &Light, stream: &mut Stream) -> Photon {
         origin: at,
         dir: uniform_circle(stream),
         scale: 1.0,
-        kernel: Kernel::Point(light.falloff),
+        kernel: PhotonKernel::Point(light.falloff),
         skip: Skip::NONE,
     }
 }

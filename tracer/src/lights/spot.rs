@@ -3,7 +3,7 @@
 
 use flatray_geometry::{DVec2, Skip};
 
-use super::Kernel;
+use super::PhotonKernel;
 use super::{Incident, Photon};
 use crate::sampling::Stream;
 use crate::scene::{Light, smooth_window};
@@ -48,7 +48,7 @@ pub(super) fn emit(
         dir: direction * c + direction.perp() * s,
         scale: smooth_window(theta.abs(), cone, softness) * 2.0 * cone
             / spot_integral(cone, softness),
-        kernel: Kernel::Point(light.falloff),
+        kernel: PhotonKernel::Point(light.falloff),
         skip: Skip::NONE,
     }
 }

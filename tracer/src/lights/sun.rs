@@ -4,7 +4,7 @@
 
 use flatray_geometry::{DVec2, Segment, Skip};
 
-use super::Kernel;
+use super::PhotonKernel;
 use super::{Incident, Photon};
 use crate::sampling::Stream;
 use crate::scene::Scene;
@@ -57,7 +57,7 @@ pub(super) fn emit(scene: &Scene, direction: DVec2, stream: &mut Stream) -> Phot
         origin: start + across * (width * stream.uniform()),
         dir: direction,
         scale: 1.0,
-        kernel: Kernel::None,
+        kernel: PhotonKernel::None,
         skip: Skip::NONE,
     }
 }

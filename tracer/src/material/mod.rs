@@ -17,7 +17,7 @@
 //! it is `f` times the irradiance, which the wall memo and the caustic
 //! pass store; elsewhere (a glossy lobe) each light's sample is weighed by
 //! `eval` and, against the lobe's own samples, by [`Bsdf::pdf`] (multiple
-//! importance sampling, `light::direct_light_glossy`).
+//! importance sampling, `direct::direct_light_glossy`).
 
 pub(crate) mod glass;
 mod rough;
