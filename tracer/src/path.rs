@@ -185,12 +185,9 @@ pub(crate) fn follow(
         bounces,
         specular,
         integrator,
-        memo,
-        shadows,
         mirror_emission,
         last_leg_sides,
         force,
-        light_table,
         ..
     } = *trace;
     let mut fluence = fluence;
@@ -273,16 +270,7 @@ pub(crate) fn follow(
         if (after_mirror || glossy_from.is_some())
             && let Some(light) = scene.light_of_wall(index)
         {
-            let light = &scene.lights[light as usize];
-            let emitted = line_emission(light, side, unfolded, scene.small_radius);
-            fluence += throughput
-                * match glossy_from {
-                    Some(from) => {
-                        emitted
-                            * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf)
-                    }
-                    None => emitted,
-                };
+            fluence += throughput * wall_emission(scene, light, side, unfolded, glossy_from);
         }
 
         let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), trace.tables, stats);
@@ -304,42 +292,13 @@ pub(crate) fn follow(
             // Next-event estimation, at the one non-specular BSDF: f E,
             // with f = rho / 2 and 2pi already in the throughput. The memo
             // holds E on each side of a diffuse wall.
-            let mut irradiance = match memo {
-                Some(memo) => {
-                    stats.work.memo_lookups += 1;
-                    let read = memo_irradiance(memo, index, side, h.u);
-                    if trace.memo_checks && flatray_cache::checked(index, h.u) {
-                        // The memo's error, estimated where a hash of the
-                        // hit picks it: unbiased, so the memo's bias (its
-                        // bins, its fixed line-light points) falls out.
-                        stats.work.memo_checks += 1;
-                        let receiver = Receiver {
-                            normal: Some(normal()),
-                            wall: Some(index),
-                            shadow_walls: None,
-                        };
-                        let direct =
-                            direct_light(scene, x, receiver, shadows, light_table, stream, stats);
-                        read + (direct - read) * flatray_cache::CHECK_RATE as f64
-                    } else {
-                        read
-                    }
-                }
-                None => {
-                    let receiver = Receiver {
-                        normal: Some(normal()),
-                        wall: Some(index),
-                        shadow_walls: None,
-                    };
-                    direct_light(scene, x, receiver, shadows, light_table, stream, stats)
-                }
+            let at = WallPoint {
+                index,
+                side,
+                u: h.u,
+                x,
             };
-            if let Some(caustics) = trace.caustics {
-                irradiance += caustics.wall(index, side, h.u);
-                if diffuse < bounces && caustics.has_late() {
-                    irradiance += caustics.wall_late(index, side, h.u);
-                }
-            }
+            let irradiance = wall_irradiance(trace, at, &normal, diffuse, stream, stats);
             fluence += throughput * rho * 0.5 * irradiance;
             if diffuse == bounces {
                 if !last_leg_sides.is_some_and(|sides| {
@@ -367,25 +326,9 @@ pub(crate) fn follow(
         if bsdf.is_glossy() {
             // Next-event estimation through the lobe, each light weighed
             // against the lobe's own sample below.
-            let receiver = Receiver {
-                normal: Some(normal()),
-                wall: Some(index),
-                shadow_walls: None,
-            };
-            let wo = -ray.dir;
-            // At a path's first non-specular vertex, the caustic pass
-            // brings the light of points, spots and suns off the lobe.
-            let aimed_by_photons = trace.caustics.is_some() && diffuse == 1;
-            fluence += throughput
-                * direct_light_glossy(
-                    scene,
-                    x,
-                    (receiver, normal()),
-                    (&bsdf, wo),
-                    (shadows, aimed_by_photons),
-                    stream,
-                    stats,
-                );
+            let at = (index, x, normal());
+            fluence +=
+                throughput * glossy_direct(trace, at, (&bsdf, -ray.dir), diffuse, stream, stats);
             if diffuse == bounces {
                 if !mirror_emission {
                     stats.physics.paths_bounce_limit += 1;
@@ -548,6 +491,120 @@ fn emission_crossed(scene: &Scene, ray: &Ray, t_max: f64, unfolded: f64) -> Rgb 
         }
     }
     sum
+}
+
+/// A point where a path meets a wall: the wall, the side it arrived on,
+/// the position along it and the point.
+#[derive(Clone, Copy, Debug)]
+struct WallPoint {
+    index: u32,
+    side: Side,
+    u: f64,
+    x: DVec2,
+}
+
+/// The irradiance that next-event estimation gives a path at diffuse wall
+/// point `at` (unit normal on its side from `normal`), after `diffuse`
+/// reflections: the wall memo's read (one in `CHECK_RATE` checked by
+/// shadow rays), or shadow rays, and the caustic pass's bins.
+#[inline(always)]
+fn wall_irradiance(
+    trace: &Trace,
+    at: WallPoint,
+    normal: &impl Fn() -> DVec2,
+    diffuse: u32,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    let Trace {
+        scene,
+        memo,
+        shadows,
+        light_table,
+        bounces,
+        ..
+    } = *trace;
+    let WallPoint { index, side, u, x } = at;
+    let receiver = || Receiver {
+        normal: Some(normal()),
+        wall: Some(index),
+        shadow_walls: None,
+    };
+    let mut irradiance = match memo {
+        Some(memo) => {
+            stats.work.memo_lookups += 1;
+            let read = memo_irradiance(memo, index, side, u);
+            if trace.memo_checks && flatray_cache::checked(index, u) {
+                // The memo's error, estimated where a hash of the hit
+                // picks it: unbiased, so the memo's bias (its bins, its
+                // fixed line-light points) falls out.
+                stats.work.memo_checks += 1;
+                let direct =
+                    direct_light(scene, x, receiver(), shadows, light_table, stream, stats);
+                read + (direct - read) * flatray_cache::CHECK_RATE as f64
+            } else {
+                read
+            }
+        }
+        None => direct_light(scene, x, receiver(), shadows, light_table, stream, stats),
+    };
+    if let Some(caustics) = trace.caustics {
+        irradiance += caustics.wall(index, side, u);
+        if diffuse < bounces && caustics.has_late() {
+            irradiance += caustics.wall_late(index, side, u);
+        }
+    }
+    irradiance
+}
+
+/// The light a glossy wall point sends towards `wo` by next-event
+/// estimation through its BSDF (`direct::direct_light_glossy`), at wall
+/// `index`, point `x`, unit normal `n` on the path's side. At a path's
+/// first non-specular vertex the caustic pass brings the light of points,
+/// spots and suns off the lobe, and they are left out here.
+#[inline(always)]
+fn glossy_direct(
+    trace: &Trace,
+    (index, x, n): (u32, DVec2, DVec2),
+    (bsdf, wo): (&Bsdf, DVec2),
+    diffuse: u32,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    let receiver = Receiver {
+        normal: Some(n),
+        wall: Some(index),
+        shadow_walls: None,
+    };
+    let aimed_by_photons = trace.caustics.is_some() && diffuse == 1;
+    direct_light_glossy(
+        trace.scene,
+        x,
+        (receiver, n),
+        (bsdf, wo),
+        (trace.shadows, aimed_by_photons),
+        stream,
+        stats,
+    )
+}
+
+/// What a path ray meeting line light `light`'s wall from `side` at
+/// total distance `r` adds, per unit throughput: all of it after a
+/// mirror, its share against next-event estimation after a glossy wall.
+#[inline]
+fn wall_emission(
+    scene: &Scene,
+    light: u32,
+    side: Side,
+    r: f64,
+    glossy_from: Option<GlossyStart>,
+) -> Rgb {
+    let light = &scene.lights[light as usize];
+    let emitted = line_emission(light, side, r, scene.small_radius);
+    match glossy_from {
+        Some(from) => emitted * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf),
+        None => emitted,
+    }
 }
 
 /// [`emission_crossed`] for a ray that left a glossy wall: each light
