@@ -4,25 +4,31 @@
 //! pale cyan, emitting walls warm yellow).
 
 use flatray_geometry::DVec2;
-use flatray_tracer::{Material, Scene};
+use flatray_tracer::Scene;
 
 /// The colour (sRGB, 0 to 1) a wall is drawn in.
 fn wall_colour(scene: &Scene, index: usize) -> [f64; 3] {
     if scene.light_of_wall(index as u32).is_some() {
         return [1.0, 0.85, 0.3];
     }
-    match scene.walls[index].material {
-        Material::Diffuse { albedo: Some(a) } => {
+    let material = &scene.walls[index].material;
+    if let Some(albedo) = material.diffuse_albedo() {
+        return match albedo {
             // Darkened a little, so that a white wall shows on a white floor.
-            [a.x, a.y, a.z].map(|c| (0.15 + 0.7 * c).clamp(0.0, 1.0))
-        }
-        Material::Diffuse { albedo: None } => [0.9, 0.9, 0.88],
-        Material::Mirror { .. } => [0.7, 0.82, 1.0],
-        Material::Rough { .. } => [0.62, 0.7, 0.85],
-        Material::Transparent { tint } => {
-            [0.3 + 0.5 * tint.x, 0.5 + 0.5 * tint.y, 0.55 + 0.45 * tint.z]
-        }
-        Material::Glass { .. } => [0.6, 0.95, 0.95],
+            Some(a) => [a.x, a.y, a.z].map(|c| (0.15 + 0.7 * c).clamp(0.0, 1.0)),
+            None => [0.9, 0.9, 0.88],
+        };
+    }
+    if let Some(tint) = material.pane_tint() {
+        return [0.3 + 0.5 * tint.x, 0.5 + 0.5 * tint.y, 0.55 + 0.45 * tint.z];
+    }
+    if material.is_mirror() {
+        [0.7, 0.82, 1.0]
+    } else if material.is_glossy() {
+        [0.62, 0.7, 0.85]
+    } else {
+        // Glass.
+        [0.6, 0.95, 0.95]
     }
 }
 
@@ -117,7 +123,7 @@ fn draw(
 mod tests {
     use super::*;
     use flatray_geometry::Segment;
-    use flatray_tracer::{Canvas, Floor, Rgb, Wall};
+    use flatray_tracer::{Canvas, Floor, Material, Rgb, Wall};
 
     #[test]
     fn a_wall_is_drawn_along_its_line_and_nowhere_else() {
