@@ -417,8 +417,13 @@ impl Pixel {
     #[inline(always)]
     pub(crate) fn receiver(&self, scene: &Scene, stream: &mut Stream) -> DVec2 {
         let (jx, jy) = stream.uniform_pair();
-        let jitter = DVec2::new(jx, jy);
-        scene.canvas.origin + (self.position + jitter) * self.step
+        self.point(scene, (jx, jy))
+    }
+
+    /// The point at `jitter` (each in `[0, 1)`) across the pixel's square.
+    #[inline(always)]
+    pub(crate) fn point(&self, scene: &Scene, (jx, jy): (f64, f64)) -> DVec2 {
+        scene.canvas.origin + (self.position + DVec2::new(jx, jy)) * self.step
     }
 }
 
@@ -718,7 +723,6 @@ pub(crate) fn arc_in_lanes<const CHECKED: bool, const N: usize>(
         (jx[k], jy[k]) = stream.uniform_pair();
         fractions[k] = stream.uniform();
     }
-    let (origin, position, step) = (scene.canvas.origin, pixel.position, pixel.step);
     let mut rays = RayLanes {
         ox: [0.0; N],
         oy: [0.0; N],
@@ -726,9 +730,8 @@ pub(crate) fn arc_in_lanes<const CHECKED: bool, const N: usize>(
         dy: [0.0; N],
     };
     for k in 0..N {
-        // `origin + (position + jitter) * step`, component by component.
-        rays.ox[k] = origin.x + (position.x + jx[k]) * step.x;
-        rays.oy[k] = origin.y + (position.y + jy[k]) * step.y;
+        let p = pixel.point(scene, (jx[k], jy[k]));
+        (rays.ox[k], rays.oy[k]) = (p.x, p.y);
     }
     (rays.dx, rays.dy) = arc_points(arc, &fractions);
     let hits = if walls.len() <= LONG_LIST {

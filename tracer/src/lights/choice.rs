@@ -453,10 +453,13 @@ impl LightTable {
             let light = &scene.lights[s.light as usize];
             match light.shape {
                 LightShape::Point { at } => {
+                    // `LightShape::reach` of a point light, at a point,
+                    // with the kind looked at once for all the points (a
+                    // point light's falloff is finite and positive past
+                    // `r0`: `usable` would change nothing).
                     let falloff = light.falloff;
-                    // `LightShape::reach` of a point light, at a point.
                     for (w, &x) in column.iter_mut().zip(points) {
-                        *w = s.scale * falloff.g((at.clamp(x, x) - at).length(), r0);
+                        *w = s.scale * super::point::reach(at, falloff, (x, x), r0);
                     }
                 }
                 _ => {

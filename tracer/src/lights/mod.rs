@@ -281,7 +281,7 @@ impl LightShape {
         let distance = |p: DVec2| (p.clamp(lo, hi) - p).length();
         let falloff = light.falloff;
         let value = match *self {
-            LightShape::Point { at } => falloff.g(distance(at), r0),
+            LightShape::Point { at } => point::reach(at, falloff, (lo, hi), r0),
             LightShape::Spot { at, .. } => {
                 // At a point (a box of no size), the spot's window there.
                 let window = if lo == hi && lo != at {
@@ -308,11 +308,7 @@ impl LightShape {
             }
             LightShape::Directional { .. } => 1.0,
         };
-        if value.is_finite() {
-            value.max(0.0)
-        } else {
-            0.0
-        }
+        usable(value)
     }
 
     /// Points whose convex hull holds every point a shadow ray towards the
@@ -324,6 +320,17 @@ impl LightShape {
             LightShape::Directional { .. } => None,
             LightShape::Circle { at, radius } => Some(circle::hull(at, radius)),
         }
+    }
+}
+
+/// A reach as the light table uses it: not below 0, and 0 where it is not
+/// a number.
+#[inline(always)]
+pub(crate) fn usable(value: f64) -> f64 {
+    if value.is_finite() {
+        value.max(0.0)
+    } else {
+        0.0
     }
 }
 

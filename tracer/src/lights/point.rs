@@ -8,7 +8,7 @@ use flatray_geometry::{DVec2, Segment, Skip};
 use super::PhotonKernel;
 use super::{Incident, Photon};
 use crate::sampling::{Stream, uniform_circle};
-use crate::scene::{Light, lies_on_line};
+use crate::scene::{Falloff, Light, lies_on_line};
 
 /// The light at `at` seen from `x`: one direction, `G(r)` per unit
 /// intensity (the kernel clamped at `r0`).
@@ -29,6 +29,14 @@ pub(crate) fn incident(at: DVec2, light: &Light, x: DVec2, r0: f64) -> Incident 
 /// grazing incidence, cosine zero. Computed, its shadow ray would run
 /// along the wall through the corner, where rounding decides whether it
 /// crosses the next wall.
+/// What a point light at `at` could bring the box `[lo, hi]` per unit
+/// intensity, without shadows: its falloff at the box's nearest point
+/// (`LightShape::reach`).
+#[inline(always)]
+pub(super) fn reach(at: DVec2, falloff: Falloff, (lo, hi): (DVec2, DVec2), r0: f64) -> f64 {
+    falloff.g((at.clamp(lo, hi) - at).length(), r0)
+}
+
 pub(super) fn grazes(at: DVec2, wall: &Segment) -> bool {
     lies_on_line(at, wall)
 }
