@@ -299,7 +299,7 @@ pub(crate) fn follow(
                 x,
             };
             let irradiance = wall_irradiance(trace, at, &normal, diffuse, stream, stats);
-            fluence += throughput * rho * 0.5 * irradiance;
+            fluence += lambertian_light(throughput, rho, irradiance);
             if diffuse == bounces {
                 if !last_leg_sides.is_some_and(|sides| {
                     sides.get(2 * index as usize + side.index()) == Some(&true)
@@ -521,7 +521,6 @@ fn wall_irradiance(
         memo,
         shadows,
         light_table,
-        bounces,
         ..
     } = *trace;
     let WallPoint { index, side, u, x } = at;
@@ -530,7 +529,7 @@ fn wall_irradiance(
         wall: Some(index),
         shadow_walls: None,
     };
-    let mut irradiance = match memo {
+    let irradiance = match memo {
         Some(memo) => {
             stats.work.memo_lookups += 1;
             let read = memo_irradiance(memo, index, side, u);
@@ -548,13 +547,35 @@ fn wall_irradiance(
         }
         None => direct_light(scene, x, receiver(), shadows, light_table, stream, stats),
     };
+    add_caustics(trace, irradiance, (index, side, u), diffuse)
+}
+
+/// `irradiance` at a diffuse wall point, with what the caustic pass
+/// binned there: all of it that a path can take after `diffuse`
+/// reflections (light that took a glossy reflection on its way counts one
+/// more, `Caustics::wall_late`).
+#[inline(always)]
+pub(crate) fn add_caustics(
+    trace: &Trace,
+    mut irradiance: Rgb,
+    (index, side, u): (u32, Side, f64),
+    diffuse: u32,
+) -> Rgb {
     if let Some(caustics) = trace.caustics {
         irradiance += caustics.wall(index, side, u);
-        if diffuse < bounces && caustics.has_late() {
+        if diffuse < trace.bounces && caustics.has_late() {
             irradiance += caustics.wall_late(index, side, u);
         }
     }
     irradiance
+}
+
+/// What a Lambertian wall of albedo `rho` under `irradiance` sends along
+/// a path of `throughput`: `f E` with `f = rho / 2` (the path's `2 pi`
+/// from the floor already in the throughput).
+#[inline(always)]
+pub(crate) fn lambertian_light(throughput: Rgb, rho: Rgb, irradiance: Rgb) -> Rgb {
+    throughput * rho * 0.5 * irradiance
 }
 
 /// The light a glossy wall point sends towards `wo` by next-event

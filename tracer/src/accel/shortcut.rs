@@ -1,9 +1,10 @@
 //! A fast path beside the model: the one-bounce shortcut. Where a render
 //! has one bounce and the wall memo, most paths go from the floor to one
 //! diffuse wall and stop there (no line or circle light can come back to
-//! that side of it by a mirror: `run::last_leg_sides`); this reads that case straight from the memo,
-//! with the same operations as the path loop, and leaves every other case
-//! to it (`path::path_finish`).
+//! that side of it by a mirror: `run::last_leg_sides`); this reads that
+//! case straight from the memo, through the path loop's own functions
+//! (`path::add_caustics`, `path::lambertian_light`), and leaves every other
+//! case to it (`path::path_finish`).
 
 use std::f64::consts::TAU;
 
@@ -11,7 +12,7 @@ use flatray_cache::WallMemo;
 use flatray_geometry::DVec2;
 
 use crate::material::diffuse_albedo;
-use crate::path::{Trace, memo_irradiance};
+use crate::path::{Trace, add_caustics, lambertian_light, memo_irradiance};
 use crate::{Rgb, Stats};
 
 /// The common case of `path::path_finish`, straight: one bounce, the first
@@ -51,11 +52,14 @@ pub(crate) fn memo_bounce(
     stats.physics.paths_bounce_limit += 1;
     let x = wall.segment.point_at(u);
     let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
-    let mut irradiance = memo_irradiance(memo, index, side, u);
-    if let Some(caustics) = trace.caustics {
-        irradiance += caustics.wall(index, side, u);
-    }
-    Some(fluence + Rgb::splat(TAU) * rho * 0.5 * irradiance)
+    // The path loop's own steps: the memo's read, the caustic bins, f E.
+    let irradiance = add_caustics(
+        trace,
+        memo_irradiance(memo, index, side, u),
+        (index, side, u),
+        1,
+    );
+    Some(fluence + lambertian_light(Rgb::splat(TAU), rho, irradiance))
 }
 
 /// One bounce with the wall memo: most paths then end at their first wall.
