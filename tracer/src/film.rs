@@ -149,10 +149,7 @@ pub(crate) fn pixel_scale(
     (x, y): (u32, u32),
     exposure: f64,
 ) -> Rgb {
-    let step = flatray_geometry::DVec2::new(
-        scene.canvas.width as f64 / width as f64,
-        scene.canvas.height as f64 / height as f64,
-    );
+    let step = scene.canvas.pixel_step((width, height));
     let lo = scene.canvas.origin + flatray_geometry::DVec2::new(x as f64, y as f64) * step;
     scene.floor.mean_albedo(&scene.canvas, lo, lo + step) * exposure
 }

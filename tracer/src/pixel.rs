@@ -404,7 +404,7 @@ impl Pixel {
         Pixel {
             position: DVec2::new(x as f64, y as f64),
             key,
-            step: pixel_size(scene, size),
+            step: scene.canvas.pixel_step(size),
             arc_offset,
         }
     }
@@ -805,14 +805,6 @@ pub(crate) const LANES: usize = CHUNK / ARCS;
 /// of [`ARCS`], so that each arc holds the same number of them, and as
 /// many as [`arc_in_lanes`] takes in one go.
 pub(crate) const CHUNK: usize = 8 * ARCS;
-
-/// The size of one pixel in world units, in x and y.
-pub(crate) fn pixel_size(scene: &Scene, (width, height): (u32, u32)) -> DVec2 {
-    DVec2::new(
-        scene.canvas.width as f64 / width as f64,
-        scene.canvas.height as f64 / height as f64,
-    )
-}
 
 #[cfg(test)]
 mod tests {

@@ -19,6 +19,16 @@ pub struct Canvas {
 }
 
 impl Canvas {
+    /// The size of one pixel, in world units along x and y, of an image
+    /// of `width` x `height` pixels covering the canvas.
+    #[inline]
+    pub fn pixel_step(&self, (width, height): (u32, u32)) -> DVec2 {
+        DVec2::new(
+            self.width as f64 / width as f64,
+            self.height as f64 / height as f64,
+        )
+    }
+
     /// Whether `p` lies in the canvas rectangle `[origin, origin + size)`.
     pub fn contains(&self, p: DVec2) -> bool {
         let q = p - self.origin;

@@ -21,7 +21,7 @@ use crate::options::MemoOptions;
 use crate::options::{CULL_BLOCK, FINE_CULLING_SAMPLES, RenderOptions, TILE, image_size};
 use crate::passes::Pass;
 use crate::path::{MirrorWalls, Trace};
-use crate::pixel::{Context, Pixel, pixel_fn, pixel_size, render_pixel, sample_with};
+use crate::pixel::{Context, Pixel, pixel_fn, render_pixel, sample_with};
 use crate::plan::Plan;
 use crate::run::Limits;
 use crate::sampling::ARCS;
@@ -233,7 +233,7 @@ impl Estimator for PixelEstimator<'_> {
         };
         let scene = context.trace.scene;
         let (width, height) = context.size;
-        let step = pixel_size(scene, (width, height));
+        let step = scene.canvas.pixel_step((width, height));
         let (tx, ty) = self.tiles[unit];
         let x0 = tx * TILE;
         let y0 = ty * TILE;

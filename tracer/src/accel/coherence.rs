@@ -90,10 +90,7 @@ impl FloorCoherence {
         {
             return None;
         }
-        let step = DVec2::new(
-            scene.canvas.width as f64 / size.0 as f64,
-            scene.canvas.height as f64 / size.1 as f64,
-        );
+        let step = scene.canvas.pixel_step(size);
         let mut cells = vec![Coherence::Varies; width * height * lights];
         // A few lights at a time, one per thread (each light's drawing is
         // serial), each holding its pixels' states until they are
