@@ -180,7 +180,7 @@ pub(crate) struct Strata {
     pub values: Vec<Rgb>,
 }
 
-/// What `strata::direct_light_strata` computes, the plain way: each point alone,
+/// What `accel::strata::direct_light_strata` computes, the plain way: each point alone,
 /// every light through [`light_contribution`] in the lights' order, with
 /// the numbers the strata drew. The reference model's floor memo.
 pub(crate) fn direct_light_points(

@@ -121,7 +121,7 @@ pub enum FastPath {
     /// shadow edge crosses their pixel (`accel/coherence.rs`).
     Coherence,
     /// The floor memo's light-by-light loops, with line lights' angle
-    /// samples in lanes (`direct::direct_light_strata`).
+    /// samples in lanes (`accel::strata::direct_light_strata`).
     StrataLoops,
     /// One bounce read straight from the wall memo (`accel/shortcut.rs`).
     Shortcut,

@@ -22,9 +22,10 @@
 //! The methods on [`LightShape`] below dispatch to them; each `match` is
 //! exhaustive, so a new kind of light is a compiler error in this file
 //! until every function is given, and nowhere else in the model.
-//! Fast paths that treat a kind specially name the kinds they support
-//! (`coherence::supports`, `direct::direct_light_strata`) and fall back to
-//! these functions for every other.
+//! Fast paths that treat a light specially ask where its light comes
+//! from ([`Emitter`]: the coherence masks' `draws`, the strata loops'
+//! point and line lanes), matching it exhaustively, and fall back to these
+//! functions for every other.
 
 mod contribution;
 mod kernel;
