@@ -7,13 +7,13 @@
 use flatray_geometry::{DVec2, Ray};
 
 use crate::direct::{Strata, direct_light_chosen};
-use crate::lights::Emitter;
 use crate::lights::choice::{LightTable, NUMBERS};
+use crate::lights::{Emitter, line};
 use crate::lights::{
     Receiver, Visibility, arriving, light_contribution, point_incident, transmittance,
 };
 use crate::sampling::angle_sample_lanes;
-use crate::scene::{EMITTING_SIDE, Light, Scene};
+use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
 
 /// The floor strata a line light's angle samples take at once.
@@ -77,8 +77,9 @@ pub(crate) fn direct_light_strata(
             }
             (Emitter::Segment { segment, one_sided }, _) => {
                 // As `light_contribution` computes it for the floor, with
-                // the angle samples drawn in lanes of points; a test holds
-                // the two to the same bits.
+                // the angle samples drawn in lanes of points and the line
+                // light's own functions (`lights::line`); a test holds the
+                // two to the same bits.
                 let skip = receiver.skip(scene.light_wall[index]);
                 let count = points.len();
                 for first in (0..count).step_by(ANGLE_LANES) {
@@ -90,17 +91,18 @@ pub(crate) fn direct_light_strata(
                     let lanes = angle_sample_lanes::<ANGLE_LANES>(&px, &py, &us, &segment);
                     for k in 0..ANGLE_LANES.min(count - first) {
                         let (x, value) = (points[first + k], &mut values[first + k]);
-                        let lit = !one_sided || segment.side_of(x) == Some(EMITTING_SIDE);
-                        if !(lit && lanes.valid[k]) {
+                        if !(line::lights(&segment, one_sided, x) && lanes.valid[k]) {
                             continue;
                         }
-                        let distance = lanes.distance[k];
-                        let v = arriving(
-                            light.intensity,
-                            light.falloff.per_radian(distance, r0),
-                            1.0,
-                            1.0 / lanes.subtended[k],
+                        // The line light's own incident sample, from the
+                        // lane's angle sample.
+                        let sample = (
+                            DVec2::new(lanes.x[k], lanes.y[k]),
+                            lanes.distance[k],
+                            lanes.subtended[k],
                         );
+                        let s = line::incident_of(light, x, sample, r0);
+                        let v = arriving(light.intensity, s.value, 1.0, s.pdf);
                         if v == 0.0 {
                             continue;
                         }
@@ -108,8 +110,8 @@ pub(crate) fn direct_light_strata(
                             Visibility::Known(known) => known,
                             Visibility::Trace => transmittance(
                                 scene,
-                                &Ray::new(x, DVec2::new(lanes.x[k], lanes.y[k]) - x),
-                                1.0,
+                                &Ray::new(x, s.to),
+                                s.t_max,
                                 skip,
                                 receiver.walls_towards(index),
                                 stats,

@@ -20,17 +20,42 @@ pub(super) fn incident(
     u: f64,
     r0: f64,
 ) -> Option<Incident> {
-    if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
+    if !lights(segment, one_sided, x) {
         return None;
     }
     let s = sample_subtended_angle(x, segment, u)?;
-    Some(Incident {
-        to: s.point - x,
+    Some(incident_of(
+        light,
+        x,
+        (s.point, s.distance, s.subtended),
+        r0,
+    ))
+}
+
+/// Whether the segment sends light to `x`: both sides, or the emitting
+/// one.
+#[inline(always)]
+pub(crate) fn lights(segment: &Segment, one_sided: bool, x: DVec2) -> bool {
+    !one_sided || segment.side_of(x) == Some(EMITTING_SIDE)
+}
+
+/// [`incident`] for the angle sample at `point`, `distance` from `x`, of
+/// a segment that subtends `subtended` there: also what the floor memo's
+/// lanes of angle samples take (`accel::strata`).
+#[inline(always)]
+pub(crate) fn incident_of(
+    light: &Light,
+    x: DVec2,
+    (point, distance, subtended): (DVec2, f64, f64),
+    r0: f64,
+) -> Incident {
+    Incident {
+        to: point - x,
         t_max: 1.0,
-        length: s.distance,
-        value: light.falloff.per_radian(s.distance, r0),
-        pdf: 1.0 / s.subtended,
-    })
+        length: distance,
+        value: light.falloff.per_radian(distance, r0),
+        pdf: 1.0 / subtended,
+    }
 }
 
 /// The density per radian of [`incident`]'s directions from `x`: one

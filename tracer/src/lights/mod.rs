@@ -35,7 +35,7 @@ pub(crate) use contribution::{
 pub(crate) use kernel::PhotonKernel;
 pub(crate) mod choice;
 mod circle;
-mod line;
+pub(crate) mod line;
 mod point;
 mod spot;
 mod sun;
