@@ -225,7 +225,13 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
         if text != std::fs::read_to_string(&room).unwrap() {
             break text;
         }
-        assert!(started.elapsed() < Duration::from_secs(60), "not saved");
+        if started.elapsed() > Duration::from_secs(60) {
+            let said = tab
+                .find_element("#message")
+                .and_then(|m| m.get_inner_text())
+                .unwrap_or_default();
+            panic!("not saved; the page says {said:?}");
+        }
         std::thread::sleep(Duration::from_millis(100));
     };
     let lamp = saved
