@@ -229,16 +229,9 @@ pub(crate) fn follow(
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
         if mirror_emission && (after_mirror || force || glossy_from.is_some()) {
             stats.work.emission_tests += 1;
-            match glossy_from {
-                Some(from) => {
-                    fluence += throughput * emission_crossed_weighed(scene, &ray, hit_t, from);
-                }
-                None => {
-                    let emitted = emission_crossed(scene, &ray, hit_t, unfolded);
-                    if after_mirror {
-                        fluence += throughput * emitted;
-                    }
-                }
+            let emitted = emission_crossed(scene, &ray, hit_t, unfolded, glossy_from);
+            if after_mirror || glossy_from.is_some() {
+                fluence += throughput * emitted;
             }
         }
         let Some((index, h)) = hit else {
@@ -480,14 +473,28 @@ pub(crate) fn memo_irradiance(memo: &WallMemo, index: u32, side: Side, u: f64) -
 
 /// What the lights that are not walls emit towards `ray` where it meets
 /// them before `t_max`, seen from `unfolded` further back: per radian,
-/// `I G(r') r'` at the total distance `r` (`Falloff::per_radian`).
-fn emission_crossed(scene: &Scene, ray: &Ray, t_max: f64, unfolded: f64) -> Rgb {
+/// `I G(r') r'` at the total distance `r` (`Falloff::per_radian`). For a
+/// ray that left a glossy wall (`glossy_from`), each light's share
+/// against next-event estimation there.
+fn emission_crossed(
+    scene: &Scene,
+    ray: &Ray,
+    t_max: f64,
+    unfolded: f64,
+    glossy_from: Option<GlossyStart>,
+) -> Rgb {
     let mut sum = Rgb::ZERO;
     for light in &scene.lights {
         if let Some(t) = light.shape.met_by(ray, t_max) {
             let r = unfolded + t;
-            sum +=
-                light.color * (light.intensity * light.falloff.per_radian(r, scene.small_radius));
+            let v = light.intensity * light.falloff.per_radian(r, scene.small_radius);
+            let v = match glossy_from {
+                Some(from) => {
+                    v * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf)
+                }
+                None => v,
+            };
+            sum += light.color * v;
         }
     }
     sum
@@ -626,20 +633,6 @@ fn wall_emission(
         Some(from) => emitted * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf),
         None => emitted,
     }
-}
-
-/// [`emission_crossed`] for a ray that left a glossy wall: each light
-/// it meets weighed against next-event estimation there.
-fn emission_crossed_weighed(scene: &Scene, ray: &Ray, t_max: f64, from: GlossyStart) -> Rgb {
-    let mut sum = Rgb::ZERO;
-    for light in &scene.lights {
-        if let Some(t) = light.shape.met_by(ray, t_max) {
-            let weight = glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf);
-            sum += light.color
-                * (light.intensity * light.falloff.per_radian(t, scene.small_radius) * weight);
-        }
-    }
-    sum
 }
 
 /// Where a path's ray left a glossy wall: the point, the wall, and the
