@@ -15,7 +15,7 @@ use std::path::Path;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use flatray_benches::{Inputs, maze, room_walls};
 use flatray_geometry::{ArcCandidates, DVec2, Kernel, Ray, Segment, SegmentSet, Skip, Strategy};
-use flatray_tracer::{LightChoice, MemoOptions, RenderOptions};
+use flatray_tracer::LightChoice;
 
 /// Nanoseconds per query: `rays` closest-hit queries against `set`.
 fn bench_set(
@@ -157,14 +157,13 @@ fn room_render(c: &mut Criterion) {
     let mut group = c.benchmark_group("room_render");
     group.sample_size(10);
     for memo in [true, false] {
-        let options = RenderOptions {
-            samples: 32,
-            scale: 0.2,
-            memo: MemoOptions {
-                enabled: memo,
-                ..loaded.options.memo
-            },
-            ..loaded.options
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 32;
+            options.scale = 0.2;
+            options.memo = loaded.options.memo;
+            options.memo.enabled = memo;
+            options
         };
         // Throughput in rays (shadow, bounce and memo-filling rays), so that
         // criterion reports rays per second of a whole render.
@@ -200,10 +199,11 @@ fn plan(c: &mut Criterion) {
             Err(e) => panic!("{e}"),
         };
         for force in [false, true] {
-            let options = RenderOptions {
-                samples: 16,
-                reference: force,
-                ..loaded.options
+            let options = {
+                let mut options = loaded.options;
+                options.samples = 16;
+                options = options.with_reference(force);
+                options
             };
             let label = if force { "reference" } else { "planned" };
             group.bench_function(BenchmarkId::new(name, label), |b| {
@@ -231,12 +231,13 @@ fn many_lights(c: &mut Criterion) {
             Ok(l) => l,
             Err(e) => panic!("{e}"),
         };
-        let lights = loaded.scene.lights.len();
+        let lights = loaded.scene.lights().len();
         for choice in [LightChoice::Every, LightChoice::Table] {
-            let options = RenderOptions {
-                scale: 0.25,
-                light_choice: choice,
-                ..loaded.options
+            let options = {
+                let mut options = loaded.options;
+                options.scale = 0.25;
+                options.light_choice = choice;
+                options
             };
             let label = format!("{lights}-lights");
             let name = if choice == LightChoice::Every {

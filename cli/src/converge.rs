@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use flatray_io::report::{ReferenceInfo, StudyRow, slope, write_study};
 use flatray_tracer::metrics::compare;
-use flatray_tracer::{Image, Integrator, MemoOptions, RenderOptions, Scene};
+use flatray_tracer::{Image, Integrator, RenderOptions, Scene};
 
 use crate::{Failure, checked_size, load, progress_bar};
 
@@ -44,13 +44,12 @@ impl Config {
             Config::Original => (Integrator::Original, false),
             Config::Light => (Integrator::Light, false),
         };
-        RenderOptions {
-            integrator,
-            memo: MemoOptions {
-                enabled: memo,
-                ..base.memo
-            },
-            ..*base
+        {
+            let mut options = *base;
+            options.integrator = integrator;
+            options.memo = base.memo;
+            options.memo.enabled = memo;
+            options
         }
     }
 }
@@ -114,11 +113,12 @@ pub(crate) fn converge(
         )));
     }
     let loaded = load(&args.scene)?;
-    let base = RenderOptions {
-        scale: args.scale,
-        bounces: args.bounces.unwrap_or(loaded.options.bounces),
-        specular: args.specular.unwrap_or(loaded.options.specular),
-        ..loaded.options
+    let base = {
+        let mut options = loaded.options;
+        options.scale = args.scale;
+        options.bounces = args.bounces.unwrap_or(loaded.options.bounces);
+        options.specular = args.specular.unwrap_or(loaded.options.specular);
+        options
     };
     let (width, height) = checked_size(&loaded, base.scale)?;
     let pixels = width as u64 * height as u64;
@@ -197,12 +197,13 @@ pub(crate) fn converge(
                 bar.inc(samples as u64 * pixels);
                 continue;
             }
-            let options = RenderOptions {
-                samples,
-                seed: base
+            let options = {
+                let mut options = config.options(&base);
+                options.samples = samples;
+                options.seed = base
                     .seed
-                    .wrapping_add(1 + 7919 * (k as u64 * 64 + samples as u64)),
-                ..config.options(&base)
+                    .wrapping_add(1 + 7919 * (k as u64 * 64 + samples as u64));
+                options
             };
             let started = Instant::now();
             let rendered = flatray_tracer::render(&loaded.scene, &options, &progress);
@@ -341,10 +342,11 @@ fn reference(
         ));
     }
     let half = |seed: u64| {
-        let options = RenderOptions {
-            samples: samples / 2,
-            seed,
-            ..Config::Path.options(base)
+        let options = {
+            let mut options = Config::Path.options(base);
+            options.samples = samples / 2;
+            options.seed = seed;
+            options
         };
         flatray_tracer::render(scene, &options, progress).image
     };

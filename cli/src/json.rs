@@ -33,7 +33,7 @@ pub(crate) fn checked(path: &Path, loaded: &Loaded) -> Value {
         "emitting_walls": c.emitting_walls,
         "lights": c.lights,
         "glass": c.glass,
-        "canvas": [loaded.scene.canvas.width, loaded.scene.canvas.height],
+        "canvas": [loaded.scene.canvas().width, loaded.scene.canvas().height],
         "warnings": warnings(&loaded.warnings),
     })
 }
@@ -85,46 +85,5 @@ pub(crate) fn plan(plan: &Plan, options: &RenderOptions) -> Value {
 /// A render's counts: what was simulated (`physics`), the work it took
 /// (`work`), and the estimated noise.
 pub(crate) fn stats(stats: &Stats) -> Value {
-    let p = &stats.physics;
-    let w = &stats.work;
-    json!({
-        "noise": {
-            "relative": stats.noise.relative(),
-            "relative_per_channel": stats.noise.relative_per_channel(),
-            "pixels": stats.noise.pixels,
-        },
-        "physics": {
-            "camera_samples": p.camera_samples,
-            "light_paths": p.light_paths,
-            "caustic_photons": p.caustic_photons,
-            "paths_to_walls": p.paths_to_walls,
-            "paths_escaped": p.paths_escaped,
-            "paths_bounce_limit": p.paths_bounce_limit,
-            "paths_roulette": p.paths_roulette,
-            "paths_onward": p.paths_onward,
-            "paths_absorbed": p.paths_absorbed,
-            "mirror_reflections": p.mirror_reflections,
-            "transparent_passes": p.transparent_passes,
-            "glass_events": p.glass_events,
-            "nonfinite_samples": p.nonfinite_samples,
-        },
-        "work": {
-            "rays": stats.rays(),
-            "shadow_rays": w.shadow_rays,
-            "bounce_rays": w.bounce_rays,
-            "culled_rays": w.culled_rays,
-            "memo_entries": w.memo_entries,
-            "memo_bytes": w.memo_bytes,
-            "memo_fill_rays": w.memo_fill_rays,
-            "memo_lookups": w.memo_lookups,
-            "memo_checks": w.memo_checks,
-            "floor_memo_reuses": w.floor_memo_reuses,
-            "floor_shared_visibility": w.floor_shared_visibility,
-            "chosen_lights": w.chosen_lights,
-            "light_table_bytes": w.light_table_bytes,
-            "onward_lookups": w.onward_lookups,
-            "onward_rays": w.onward_rays,
-            "onward_bytes": w.onward_bytes,
-        },
-    })
+    flatray_io::report::stats_json(stats)
 }

@@ -358,21 +358,24 @@ impl CacheArg {
     fn memo(cache: Option<CacheArg>, base: MemoOptions) -> MemoOptions {
         match cache {
             None => base,
-            Some(CacheArg::On) => MemoOptions {
-                enabled: true,
-                onward: true,
-                ..base
-            },
-            Some(CacheArg::Off) => MemoOptions {
-                enabled: false,
-                onward: true,
-                ..base
-            },
-            Some(CacheArg::Direct) => MemoOptions {
-                enabled: true,
-                onward: false,
-                ..base
-            },
+            Some(CacheArg::On) => {
+                let mut memo = base;
+                memo.enabled = true;
+                memo.onward = true;
+                memo
+            }
+            Some(CacheArg::Off) => {
+                let mut memo = base;
+                memo.enabled = false;
+                memo.onward = true;
+                memo
+            }
+            Some(CacheArg::Direct) => {
+                let mut memo = base;
+                memo.enabled = true;
+                memo.onward = false;
+                memo
+            }
         }
     }
 }
@@ -735,8 +738,8 @@ fn check(
             flatray_io::counted(counts.walls, "wall", "walls"),
             flatray_io::counted(counts.lights, "light", "lights"),
             flatray_io::counted(counts.glass, "glass body", "glass bodies"),
-            loaded.scene.canvas.width,
-            loaded.scene.canvas.height
+            loaded.scene.canvas().width,
+            loaded.scene.canvas().height
         );
     }
     if json {
@@ -770,14 +773,16 @@ fn plan(
     if !as_json {
         warn(scene, &loaded, err);
     }
-    let options = RenderOptions {
-        bounces: bounces.unwrap_or(loaded.options.bounces),
-        specular: specular.unwrap_or(loaded.options.specular),
-        integrator: integrator.map_or(loaded.options.integrator, IntegratorArg::integrator),
-        memo: CacheArg::memo(cache, loaded.options.memo),
-        caustics: caustics.map_or(loaded.options.caustics, Switch::on),
-        light_choice: lights.map_or(loaded.options.light_choice, LightsArg::choice),
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.bounces = bounces.unwrap_or(loaded.options.bounces);
+        options.specular = specular.unwrap_or(loaded.options.specular);
+        options.integrator =
+            integrator.map_or(loaded.options.integrator, IntegratorArg::integrator);
+        options.memo = CacheArg::memo(cache, loaded.options.memo);
+        options.caustics = caustics.map_or(loaded.options.caustics, Switch::on);
+        options.light_choice = lights.map_or(loaded.options.light_choice, LightsArg::choice);
+        options
     };
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
     if as_json {
@@ -862,26 +867,29 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     let loaded = load(&args.scene)?;
     warn(&args.scene, &loaded, err);
     check_output(&output, &loaded.inputs, "render")?;
-    let options = RenderOptions {
-        samples: args.spp.unwrap_or(loaded.options.samples),
-        bounces: args.bounces.unwrap_or(loaded.options.bounces),
-        specular: args.specular.unwrap_or(loaded.options.specular),
-        seed: args.seed.unwrap_or(loaded.options.seed),
-        exposure: args.exposure.unwrap_or(loaded.options.exposure),
-        scale: args.scale,
-        integrator: args
+    let options = {
+        let mut options = RenderOptions::default();
+        options.samples = args.spp.unwrap_or(loaded.options.samples);
+        options.bounces = args.bounces.unwrap_or(loaded.options.bounces);
+        options.specular = args.specular.unwrap_or(loaded.options.specular);
+        options.seed = args.seed.unwrap_or(loaded.options.seed);
+        options.exposure = args.exposure.unwrap_or(loaded.options.exposure);
+        options.scale = args.scale;
+        options.integrator = args
             .integrator
-            .map_or(loaded.options.integrator, IntegratorArg::integrator),
-        memo: CacheArg::memo(args.cache, loaded.options.memo),
-        caustics: args.caustics.map_or(loaded.options.caustics, Switch::on),
-        reference: args.reference,
-        fast_paths: args
-            .without
-            .iter()
-            .fold(FastPaths::ALL, |paths, p| paths.without(p.path())),
-        light_choice: args
+            .map_or(loaded.options.integrator, IntegratorArg::integrator);
+        options.memo = CacheArg::memo(args.cache, loaded.options.memo);
+        options.caustics = args.caustics.map_or(loaded.options.caustics, Switch::on);
+        options = options.with_reference(args.reference);
+        options = options.with_fast_paths(
+            args.without
+                .iter()
+                .fold(FastPaths::ALL, |paths, p| paths.without(p.path())),
+        );
+        options.light_choice = args
             .lights
-            .map_or(loaded.options.light_choice, LightsArg::choice),
+            .map_or(loaded.options.light_choice, LightsArg::choice);
+        options
     };
     let (width, height) = checked_size(&loaded, options.scale)?;
     let pixels = width as u64 * height as u64;
@@ -969,7 +977,15 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
                 }
             };
             let samples = progressive.samples();
-            (rendered, RenderOptions { samples, ..options }, passes)
+            (
+                rendered,
+                {
+                    let mut options = options;
+                    options.samples = samples;
+                    options
+                },
+                passes,
+            )
         }
     };
     let rendered_at = Instant::now();

@@ -203,7 +203,7 @@ pub struct LightItem {
 pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let file = crate::load::scene_file(text).map_err(|e| e.to_string())?;
-    let canvas = loaded.scene.canvas;
+    let canvas = loaded.scene.canvas();
     let walls = file
         .walls
         .iter()

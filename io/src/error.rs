@@ -29,13 +29,24 @@ pub enum SceneError {
         column: usize,
         message: String,
     },
+    /// Scene values given in code (`name` names them) are not a valid
+    /// scene: `at` is the path of the value, as `lights[2].Spot.cone`
+    /// (empty for the whole), and `message` says what was expected.
+    #[error("{name}: {}{message}", if at.is_empty() { String::new() } else { format!("{at}: ") })]
+    Value {
+        name: String,
+        at: String,
+        message: String,
+    },
 }
 
 impl SceneError {
     /// The (line, column) the error points at, when it points anywhere.
     pub fn location(&self) -> Option<(usize, usize)> {
         match self {
-            SceneError::Read { .. } | SceneError::NotAScene { .. } => None,
+            SceneError::Read { .. } | SceneError::NotAScene { .. } | SceneError::Value { .. } => {
+                None
+            }
             SceneError::Invalid { line, column, .. } => Some((*line, *column)),
         }
     }

@@ -8,10 +8,10 @@
 
 use serde::Deserialize;
 
-/// Largest canvas side, in pixels.
-pub const MAX_CANVAS_SIDE: u32 = 32_768;
-/// Largest canvas area, in pixels (about 2 GB of f32 RGB at most).
-pub const MAX_CANVAS_PIXELS: u64 = 1 << 27;
+use flatray_tracer::scene::checks;
+pub use flatray_tracer::scene::{
+    MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MAX_COORDINATE, MAX_INTENSITY, SMALL_RADIUS_RANGE,
+};
 /// Most samples per pixel a scene may ask for.
 pub const MAX_SAMPLES: u32 = 1 << 20;
 /// Most bounces a scene may ask for.
@@ -25,11 +25,7 @@ pub struct Finite(pub f64);
 impl TryFrom<f64> for Finite {
     type Error = String;
     fn try_from(v: f64) -> Result<Finite, String> {
-        if v.is_finite() {
-            Ok(Finite(v))
-        } else {
-            Err(format!("expected a finite number, found {v}"))
-        }
+        checks::finite(v).map(|()| Finite(v))
     }
 }
 
@@ -41,11 +37,7 @@ pub struct NonNegative(pub f64);
 impl TryFrom<f64> for NonNegative {
     type Error = String;
     fn try_from(v: f64) -> Result<NonNegative, String> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(NonNegative(v))
-        } else {
-            Err(format!("expected a finite number >= 0, found {v}"))
-        }
+        checks::non_negative(v).map(|()| NonNegative(v))
     }
 }
 
@@ -57,22 +49,9 @@ pub struct Positive(pub f64);
 impl TryFrom<f64> for Positive {
     type Error = String;
     fn try_from(v: f64) -> Result<Positive, String> {
-        if v.is_finite() && v > 0.0 {
-            Ok(Positive(v))
-        } else {
-            Err(format!("expected a finite number > 0, found {v}"))
-        }
+        checks::positive(v).map(|()| Positive(v))
     }
 }
-
-/// Largest coordinate magnitude, in world units: far beyond any floor
-/// plan, and small enough that products of coordinates stay finite.
-pub const MAX_COORDINATE: f64 = 1e15;
-/// Largest light intensity and exposure: their product with the largest
-/// falloff (`1 / small_radius^2`) stays finite in a 32-bit image.
-pub const MAX_INTENSITY: f64 = 1e9;
-/// Smallest and largest `small_radius`.
-pub const SMALL_RADIUS_RANGE: (f64, f64) = (1e-6, 1e6);
 
 /// A point `(x, y)` of finite numbers within [`MAX_COORDINATE`].
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -82,14 +61,7 @@ pub struct Point(pub f64, pub f64);
 impl TryFrom<(Finite, Finite)> for Point {
     type Error = String;
     fn try_from((x, y): (Finite, Finite)) -> Result<Point, String> {
-        if x.0.abs() <= MAX_COORDINATE && y.0.abs() <= MAX_COORDINATE {
-            Ok(Point(x.0, y.0))
-        } else {
-            Err(format!(
-                "expected coordinates within ±{MAX_COORDINATE:e}, found ({}, {})",
-                x.0, y.0
-            ))
-        }
+        checks::point(x.0, y.0).map(|()| Point(x.0, y.0))
     }
 }
 
@@ -101,13 +73,7 @@ pub struct Intensity(pub f64);
 impl TryFrom<f64> for Intensity {
     type Error = String;
     fn try_from(v: f64) -> Result<Intensity, String> {
-        if (0.0..=MAX_INTENSITY).contains(&v) {
-            Ok(Intensity(v))
-        } else {
-            Err(format!(
-                "expected an intensity from 0 to {MAX_INTENSITY:e}, found {v}"
-            ))
-        }
+        checks::intensity(v).map(|()| Intensity(v))
     }
 }
 
@@ -119,13 +85,7 @@ pub struct Exposure(pub f64);
 impl TryFrom<f64> for Exposure {
     type Error = String;
     fn try_from(v: f64) -> Result<Exposure, String> {
-        if v > 0.0 && v <= MAX_INTENSITY {
-            Ok(Exposure(v))
-        } else {
-            Err(format!(
-                "expected an exposure > 0 and at most {MAX_INTENSITY:e}, found {v}"
-            ))
-        }
+        checks::exposure(v).map(|()| Exposure(v))
     }
 }
 
@@ -137,14 +97,7 @@ pub struct SmallRadius(pub f64);
 impl TryFrom<f64> for SmallRadius {
     type Error = String;
     fn try_from(v: f64) -> Result<SmallRadius, String> {
-        let (low, high) = SMALL_RADIUS_RANGE;
-        if (low..=high).contains(&v) {
-            Ok(SmallRadius(v))
-        } else {
-            Err(format!(
-                "expected a small radius from {low:e} to {high:e}, found {v}"
-            ))
-        }
+        checks::small_radius(v).map(|()| SmallRadius(v))
     }
 }
 
@@ -177,14 +130,7 @@ impl Color {
 impl TryFrom<(f64, f64, f64)> for Color {
     type Error = String;
     fn try_from((r, g, b): (f64, f64, f64)) -> Result<Color, String> {
-        for v in [r, g, b] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(format!(
-                    "expected a colour (r, g, b) with each component in [0, 1], found {v}"
-                ));
-            }
-        }
-        Ok(Color(r, g, b))
+        checks::color(flatray_tracer::Rgb::new(r, g, b)).map(|()| Color(r, g, b))
     }
 }
 
@@ -209,17 +155,7 @@ pub struct CanvasSize(pub u32, pub u32);
 impl TryFrom<(u32, u32)> for CanvasSize {
     type Error = String;
     fn try_from((w, h): (u32, u32)) -> Result<CanvasSize, String> {
-        if w == 0 || h == 0 || w > MAX_CANVAS_SIDE || h > MAX_CANVAS_SIDE {
-            return Err(format!(
-                "expected a canvas of 1 to {MAX_CANVAS_SIDE} pixels each way, found {w} x {h}"
-            ));
-        }
-        if w as u64 * h as u64 > MAX_CANVAS_PIXELS {
-            return Err(format!(
-                "expected a canvas of at most {MAX_CANVAS_PIXELS} pixels, found {w} x {h}"
-            ));
-        }
-        Ok(CanvasSize(w, h))
+        checks::canvas_size(w, h).map(|()| CanvasSize(w, h))
     }
 }
 
@@ -279,13 +215,7 @@ pub struct Ior(pub f64);
 impl TryFrom<f64> for Ior {
     type Error = String;
     fn try_from(v: f64) -> Result<Ior, String> {
-        if (1.0..=4.0).contains(&v) {
-            Ok(Ior(v))
-        } else {
-            Err(format!(
-                "expected an index of refraction from 1 to 4, found {v}"
-            ))
-        }
+        checks::ior(v).map(|()| Ior(v))
     }
 }
 
@@ -339,11 +269,7 @@ pub struct Fraction(pub f64);
 impl TryFrom<f64> for Fraction {
     type Error = String;
     fn try_from(v: f64) -> Result<Fraction, String> {
-        if (0.0..=1.0).contains(&v) {
-            Ok(Fraction(v))
-        } else {
-            Err(format!("expected a number in [0, 1], found {v}"))
-        }
+        checks::fraction(v).map(|()| Fraction(v))
     }
 }
 

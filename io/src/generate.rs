@@ -282,10 +282,10 @@ mod tests {
                     std::path::Path::new("."),
                 )
                 .unwrap_or_else(|e| panic!("{e}\n{text}"));
-                let walls = loaded.scene.walls.len();
+                let walls = loaded.scene.walls().len();
                 // At least the rooms' sides and two stubs each.
                 assert!(walls >= 4 * rooms as usize, "{rooms} rooms: {walls} walls");
-                assert_eq!(loaded.scene.lights.len(), rooms as usize + 1);
+                assert_eq!(loaded.scene.lights().len(), rooms as usize + 1);
                 // The same settings, the same text.
                 assert_eq!(text, plan.to_ron());
             }

@@ -28,7 +28,7 @@ pub mod report;
 pub use error::{SceneError, WriteError};
 pub use format::ToneMap;
 pub use input::{MAX_INPUT_BYTES, read_within};
-pub use load::{Counts, Loaded, Warning, load, parse};
+pub use load::{Counts, Loaded, Warning, from_json, load, parse};
 pub use output::{
     Format, exr_bytes, linear_to_srgb, png_bytes, read_exr, remove_pending_files, srgb_to_linear,
     to_srgb8, tone_map, write_bytes, write_exr, write_image, write_png, write_png_with_walls,

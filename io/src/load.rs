@@ -4,9 +4,9 @@ use std::path::{Path, PathBuf};
 
 use flatray_geometry::{DVec2, Segment, Side};
 use flatray_tracer::scene::{
-    Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall,
+    Canvas, Falloff, Floor, GlassBody, Item, Light, LightShape, Material, Scene, Wall,
 };
-use flatray_tracer::{FastPaths, Integrator, LightChoice, MemoOptions, RenderOptions, Rgb};
+use flatray_tracer::{Integrator, LightChoice, RenderOptions, Rgb};
 use ron::extensions::Extensions;
 
 use crate::error::SceneError;
@@ -128,6 +128,22 @@ pub(crate) fn scene_file(text: &str) -> Result<SceneFile, ron::error::SpannedErr
 
 /// Parses and validates scene `text`; `path` names it in messages and
 /// `base` is the folder that relative paths resolve against.
+///
+/// ```
+/// use std::path::Path;
+///
+/// let text = "Scene(canvas: (40, 30), floor: Color((0.8, 0.8, 0.8)),
+///     lights: [Point(at: (20, 15))], render: (samples: 4))";
+/// let loaded = flatray_io::parse(text, Path::new("mine.ron"), Path::new("."))?;
+/// let rendered = flatray_tracer::render(&loaded.scene, &loaded.options, &|_| {});
+/// assert_eq!(rendered.image.width, 40);
+///
+/// let bad = "Scene(canvas: (40, 30), floor: Color((0.8, 0.8, 2)))";
+/// let error = flatray_io::parse(bad, Path::new("bad.ron"), Path::new(".")).unwrap_err();
+/// assert_eq!(error.location(), Some((1, 50))); // where the colour ends
+/// assert!(error.to_string().contains("each component in [0, 1], found 2"));
+/// # Ok::<(), flatray_io::SceneError>(())
+/// ```
 pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError> {
     // A UTF-8 byte-order mark is no part of the scene.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
@@ -141,21 +157,98 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             message,
         }
     })?;
-    // A validation error at byte `offset` of the text.
-    let error_at = |offset: usize, message: String| {
-        let (line, column) = locate::position(text, offset);
-        SceneError::Invalid {
-            path: path.to_path_buf(),
-            line,
-            column,
-            message,
-        }
-    };
-    let floor_at = locate::field_value(text, "floor").unwrap_or(0);
-    let light_items = locate::list_items(text, "lights");
-    let light_at = |k: usize| light_items.get(k).copied().unwrap_or(0);
-    let glass_items = locate::list_items(text, "glass");
+    build(file, &Source::Text { text, path }, base)
+}
 
+/// Validates scene values given in code rather than in a file (from JSON
+/// text, as a binding passes them: the scene file's fields and variants
+/// in JSON's syntax); `name` names them in messages and `base` is the
+/// folder that relative paths resolve against. Errors point at the value
+/// by its path, as `lights[2].Spot.cone`. Values carry no warnings.
+pub fn from_json(json: &str, name: &str, base: &Path) -> Result<Loaded, SceneError> {
+    let mut deserializer = serde_json::Deserializer::from_str(json);
+    let file: SceneFile = serde_path_to_error::deserialize(&mut deserializer).map_err(|e| {
+        let at = e.path().to_string();
+        let inner = e.into_inner();
+        // The values' path says where; the JSON text's own line and
+        // column are the binding's, not the caller's.
+        let message = inner.to_string();
+        let suffix = format!(" at line {} column {}", inner.line(), inner.column());
+        SceneError::Value {
+            name: name.to_string(),
+            at: if at == "." { String::new() } else { at },
+            message: message
+                .strip_suffix(&suffix)
+                .unwrap_or(&message)
+                .to_string(),
+        }
+    })?;
+    build(file, &Source::Values { name }, base)
+}
+
+/// Where the scene being built comes from, for its messages.
+enum Source<'a> {
+    Text { text: &'a str, path: &'a Path },
+    Values { name: &'a str },
+}
+
+/// What a message is about.
+#[derive(Clone, Copy)]
+enum Place {
+    Floor,
+    Wall(usize),
+    /// A field of a wall's material.
+    WallField(usize, &'static str),
+    Light(usize),
+    Glass(usize),
+    Top,
+}
+
+impl Source<'_> {
+    /// An error about `place`: at its line and column in scene text, or
+    /// at its path among values.
+    fn error(&self, place: Place, message: String) -> SceneError {
+        match *self {
+            Source::Text { text, path } => {
+                let item = |list, k: usize| locate::list_items(text, list).get(k).copied();
+                let offset = match place {
+                    Place::Floor => locate::field_value(text, "floor"),
+                    Place::Wall(k) => item("walls", k),
+                    Place::WallField(k, field) => locate::item_range(text, "walls", k)
+                        .map(|(start, end)| {
+                            text[start..end].find(field).map_or(start, |i| start + i)
+                        })
+                        .or_else(|| item("walls", k)),
+                    Place::Light(k) => item("lights", k),
+                    Place::Glass(k) => item("glass", k),
+                    Place::Top => None,
+                };
+                let (line, column) = locate::position(text, offset.unwrap_or(0));
+                SceneError::Invalid {
+                    path: path.to_path_buf(),
+                    line,
+                    column,
+                    message,
+                }
+            }
+            Source::Values { name } => SceneError::Value {
+                name: name.to_string(),
+                at: match place {
+                    Place::Floor => "floor".to_string(),
+                    Place::Wall(k) => format!("walls[{k}]"),
+                    Place::WallField(k, field) => format!("walls[{k}].material.{field}"),
+                    Place::Light(k) => format!("lights[{k}]"),
+                    Place::Glass(k) => format!("glass[{k}]"),
+                    Place::Top => String::new(),
+                },
+                message,
+            },
+        }
+    }
+}
+
+/// The scene and render settings of `file`, validated.
+fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneError> {
     let mut inputs = Vec::new();
     let floor = match &file.floor {
         FloorSpec::Color(c) => Floor::Color(rgb(*c)),
@@ -175,7 +268,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         FloorSpec::Image(relative) => {
             let image_path = base.join(relative);
             inputs.push(image_path.clone());
-            load_floor_image(&image_path).map_err(|reason| error_at(floor_at, reason))?
+            load_floor_image(&image_path).map_err(|reason| source.error(Place::Floor, reason))?
         }
     };
 
@@ -186,16 +279,16 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 || *height > MAX_CANVAS_SIDE
                 || *width as u64 * *height as u64 > MAX_CANVAS_PIXELS
             {
-                return Err(error_at(
-                    floor_at,
+                return Err(source.error(
+                    Place::Floor,
                     format!("the floor image is {width} x {height}, too large for a canvas"),
                 ));
             }
             (*width, *height)
         }
         (None, _) => {
-            return Err(error_at(
-                floor_at,
+            return Err(source.error(
+                Place::Floor,
                 "expected a `canvas: (width, height)`: only an image floor gives its own size"
                     .to_string(),
             ));
@@ -211,7 +304,6 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
     let default_falloff = falloff(file.falloff);
     let mut walls = Vec::with_capacity(file.walls.len());
     let mut lights = Vec::with_capacity(file.lights.len());
-    let wall_items = locate::list_items(text, "walls");
     for (wall_index, wall) in file.walls.iter().enumerate() {
         let segment = Segment::new(
             DVec2::new(wall.a.0, wall.a.1),
@@ -224,21 +316,10 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             },
             MaterialSpec::Mirror { tint } => Material::Mirror { tint: rgb(tint) },
             MaterialSpec::Rough { roughness, tint } => {
-                if !(0.0..=1.0).contains(&roughness) {
-                    let at = locate::item_range(text, "walls", wall_index).map_or(
-                        wall_items.get(wall_index).copied().unwrap_or(0),
-                        |(start, end)| {
-                            text[start..end]
-                                .find("roughness")
-                                .map_or(start, |k| start + k)
-                        },
-                    );
-                    return Err(error_at(
-                        at,
-                        format!(
-                            "wall {wall_index}: a rough mirror's `roughness` is from 0 (a mirror) \
-                             to 1 (a broad lobe), not {roughness}"
-                        ),
+                if let Err(message) = flatray_tracer::scene::checks::roughness(roughness) {
+                    return Err(source.error(
+                        Place::WallField(wall_index, "roughness"),
+                        format!("wall {wall_index}: {message}"),
                     ));
                 }
                 Material::rough(roughness, rgb(tint))
@@ -290,8 +371,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 falloff: f,
             } => {
                 if cone.0 > 180.0 || softness.0 > cone.0 {
-                    return Err(error_at(
-                        light_at(k),
+                    return Err(source.error(
+                        Place::Light(k),
                         format!(
                             "expected 0 < cone <= 180 and softness <= cone (degrees), found cone {} and softness {}",
                             cone.0, softness.0
@@ -320,8 +401,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 falloff: f,
             } => {
                 if a == b {
-                    return Err(error_at(
-                        light_at(k),
+                    return Err(source.error(
+                        Place::Light(k),
                         format!(
                             "a line light needs two different endpoints, found ({}, {}) twice; use a Point light",
                             a.0, a.1
@@ -359,8 +440,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
                 falloff: f,
             } => {
                 if radius.0 > MAX_COORDINATE {
-                    return Err(error_at(
-                        light_at(k),
+                    return Err(source.error(
+                        Place::Light(k),
                         format!(
                             "expected a circle light's radius of at most {MAX_COORDINATE:e}, found {}",
                             radius.0
@@ -396,7 +477,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
     let mut polygons: Vec<Vec<DVec2>> = Vec::with_capacity(file.glass.len());
     for (k, spec) in file.glass.iter().enumerate() {
         let points: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
-        let located = |message: String| error_at(glass_items.get(k).copied().unwrap_or(0), message);
+        let located = |message: String| source.error(Place::Glass(k), message);
         validate_polygon(&points).map_err(located)?;
         for (j, other) in polygons.iter().enumerate() {
             if polygons_cross(&points, other) {
@@ -455,36 +536,48 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
         polygons.push(points);
     }
 
-    let mut warnings = overlap_warnings(text, &walls, file.walls.len());
-    warnings.extend(crate::lint::lint(text, &file, &canvas));
-    let scene = Scene::with_glass(canvas, floor, file.small_radius.0, walls, lights, bodies);
-    let options = RenderOptions {
-        samples: file.render.samples.0,
-        bounces: file.render.bounces.0,
-        specular: file.render.specular.0,
-        seed: file.render.seed,
-        exposure: file.render.exposure.0,
-        scale: 1.0,
-        integrator: match file.render.integrator {
-            IntegratorSpec::Path => Integrator::Path,
-            IntegratorSpec::Original => Integrator::Original,
-            IntegratorSpec::Light => Integrator::Light,
-        },
-        memo: MemoOptions {
-            enabled: file.render.cache.memo().0,
-            onward: file.render.cache.memo().1,
-            bin_length: file.render.cache_bin.0,
-            floor_samples: file.render.cache_floor_samples.0,
-            ..MemoOptions::default()
-        },
-        caustics: file.render.caustics,
-        reference: false,
-        fast_paths: FastPaths::ALL,
-        light_choice: match file.render.lights {
-            LightsSpec::Auto => LightChoice::Auto,
-            LightsSpec::Every => LightChoice::Every,
-            LightsSpec::Table => LightChoice::Table,
-        },
+    let warnings = match *source {
+        Source::Text { text, .. } => {
+            let mut warnings = overlap_warnings(text, &walls, file.walls.len());
+            warnings.extend(crate::lint::lint(text, &file, &canvas));
+            warnings
+        }
+        Source::Values { .. } => Vec::new(),
+    };
+    // What the file's types checked, the scene checks again: a failure
+    // here is a bound the format does not know, put at the item it names.
+    let file_walls = file.walls.len();
+    let scene = Scene::with_glass(canvas, floor, file.small_radius.0, walls, lights, bodies)
+        .map_err(|invalid| {
+            let place = match invalid.item {
+                Item::Wall(k) if k < file_walls => Place::Wall(k),
+                Item::Glass(k) => Place::Glass(k),
+                Item::Floor => Place::Floor,
+                _ => Place::Top,
+            };
+            source.error(place, invalid.to_string())
+        })?;
+    let mut options = RenderOptions::default();
+    options.samples = file.render.samples.0;
+    options.bounces = file.render.bounces.0;
+    options.specular = file.render.specular.0;
+    options.seed = file.render.seed;
+    options.exposure = file.render.exposure.0;
+    options.scale = 1.0;
+    options.integrator = match file.render.integrator {
+        IntegratorSpec::Path => Integrator::Path,
+        IntegratorSpec::Original => Integrator::Original,
+        IntegratorSpec::Light => Integrator::Light,
+    };
+    options.memo.enabled = file.render.cache.memo().0;
+    options.memo.onward = file.render.cache.memo().1;
+    options.memo.bin_length = file.render.cache_bin.0;
+    options.memo.floor_samples = file.render.cache_floor_samples.0;
+    options.caustics = file.render.caustics;
+    options.light_choice = match file.render.lights {
+        LightsSpec::Auto => LightChoice::Auto,
+        LightsSpec::Every => LightChoice::Every,
+        LightsSpec::Table => LightChoice::Table,
     };
     Ok(Loaded {
         scene,

@@ -11,7 +11,7 @@ fn wall_colour(scene: &Scene, index: usize) -> [f64; 3] {
     if scene.light_of_wall(index as u32).is_some() {
         return [1.0, 0.85, 0.3];
     }
-    let material = &scene.walls[index].material;
+    let material = &scene.walls()[index].material;
     if let Some(albedo) = material.diffuse_albedo() {
         return match albedo {
             // Darkened a little, so that a white wall shows on a white floor.
@@ -55,12 +55,12 @@ fn draw(
         return;
     }
     let step = DVec2::new(
-        size.0 as f64 / scene.canvas.width as f64,
-        size.1 as f64 / scene.canvas.height as f64,
+        size.0 as f64 / scene.canvas().width as f64,
+        size.1 as f64 / scene.canvas().height as f64,
     );
-    let to_pixels = |p: DVec2| (p - scene.canvas.origin) * step;
+    let to_pixels = |p: DVec2| (p - scene.canvas().origin) * step;
     let half = 0.5 * width;
-    for (index, wall) in scene.walls.iter().enumerate() {
+    for (index, wall) in scene.walls().iter().enumerate() {
         let (colour, opacity) = fixed.unwrap_or((wall_colour(scene, index), 1.0));
         let colour = colour.map(|c| c * 255.0);
         let (a, b) = (to_pixels(wall.segment.a), to_pixels(wall.segment.b));
@@ -148,7 +148,8 @@ mod tests {
                 ),
             ],
             Vec::new(),
-        );
+        )
+        .expect("a valid scene");
         // At half scale: 20 x 10 pixels.
         let mut bytes = vec![0u8; 20 * 10 * 3];
         draw_walls(&mut bytes, (20, 10), &scene, 1.5);

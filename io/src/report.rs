@@ -312,6 +312,57 @@ pub fn chart_png(
 
 use image::ImageEncoder as _;
 
+/// A render's counts: what was simulated (`physics`), the work it took
+/// (`work`), and the estimated noise with the sums it is made of (so
+/// that the noise of renders of disjoint windows can be put together), as
+/// `render --json` prints them (`docs/cli.md`).
+pub fn stats_json(stats: &flatray_tracer::Stats) -> serde_json::Value {
+    let p = &stats.physics;
+    let w = &stats.work;
+    serde_json::json!({
+        "noise": {
+            "relative": stats.noise.relative(),
+            "relative_per_channel": stats.noise.relative_per_channel(),
+            "pixels": stats.noise.pixels,
+            "error_squared": stats.noise.error_squared,
+            "value_squared": stats.noise.value_squared,
+        },
+        "physics": {
+            "camera_samples": p.camera_samples,
+            "light_paths": p.light_paths,
+            "caustic_photons": p.caustic_photons,
+            "paths_to_walls": p.paths_to_walls,
+            "paths_escaped": p.paths_escaped,
+            "paths_bounce_limit": p.paths_bounce_limit,
+            "paths_roulette": p.paths_roulette,
+            "paths_onward": p.paths_onward,
+            "paths_absorbed": p.paths_absorbed,
+            "mirror_reflections": p.mirror_reflections,
+            "transparent_passes": p.transparent_passes,
+            "glass_events": p.glass_events,
+            "nonfinite_samples": p.nonfinite_samples,
+        },
+        "work": {
+            "rays": stats.rays(),
+            "shadow_rays": w.shadow_rays,
+            "bounce_rays": w.bounce_rays,
+            "culled_rays": w.culled_rays,
+            "memo_entries": w.memo_entries,
+            "memo_bytes": w.memo_bytes,
+            "memo_fill_rays": w.memo_fill_rays,
+            "memo_lookups": w.memo_lookups,
+            "memo_checks": w.memo_checks,
+            "floor_memo_reuses": w.floor_memo_reuses,
+            "floor_shared_visibility": w.floor_shared_visibility,
+            "chosen_lights": w.chosen_lights,
+            "light_table_bytes": w.light_table_bytes,
+            "onward_lookups": w.onward_lookups,
+            "onward_rays": w.onward_rays,
+            "onward_bytes": w.onward_bytes,
+        },
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::log_label;

@@ -145,9 +145,10 @@ pub fn block_stats(
 ) -> Vec<(f64, f64)> {
     let all: Vec<Vec<f64>> = (0..runs)
         .map(|k| {
-            let options = RenderOptions {
-                seed: first_seed + k,
-                ..options
+            let options = {
+                let mut options = options;
+                options.seed = first_seed + k;
+                options
             };
             block_totals(&render(scene, &options).image, block)
         })
@@ -208,9 +209,10 @@ impl Agreement {
         options: RenderOptions,
         keep: impl Fn(usize) -> bool,
     ) -> Vec<(f64, f64)> {
-        let at = |integrator| RenderOptions {
-            integrator,
-            ..options
+        let at = |integrator| {
+            let mut options = options;
+            options.integrator = integrator;
+            options
         };
         let stats = |integrator| {
             block_stats(

@@ -17,9 +17,10 @@ const K: f64 = 5.0;
 /// differs from what it would be without the caustic pass by more than
 /// `min_share` of the light (the check is not vacuous).
 fn assert_agree(name: &str, scene: &Scene, options: RenderOptions, min_share: f64) {
-    let at = |integrator| RenderOptions {
-        integrator,
-        ..options
+    let at = |integrator| {
+        let mut options = options;
+        options.integrator = integrator;
+        options
     };
     let agreement = Agreement {
         block: BLOCK,
@@ -38,14 +39,15 @@ fn assert_agree(name: &str, scene: &Scene, options: RenderOptions, min_share: f6
     let total = |blocks: &[(f64, f64)]| blocks.iter().map(|b| b.0).sum::<f64>();
     let rendered = render(scene, &at(Integrator::Path));
     assert!(rendered.stats.physics.caustic_photons > 0, "{name}");
-    let mut dark = scene.clone();
+    let mut dark = scene.parts();
     for wall in &mut dark.walls {
         if let flatray_tracer::Material::Mirror { tint } = &mut wall.material {
             *tint = flatray_tracer::Rgb::ZERO;
         }
     }
+    let dark = dark.build().expect("a valid scene");
     let without = block_stats(&dark, at(Integrator::Path), BLOCK, 4, 2000);
-    if scene.glass.is_empty() {
+    if scene.glass().is_empty() {
         assert!(
             total(&path) > (1.0 + min_share) * total(&without),
             "{name}: the mirrors add {} of {}",
@@ -56,15 +58,14 @@ fn assert_agree(name: &str, scene: &Scene, options: RenderOptions, min_share: f6
 }
 
 fn options(samples: u32, bounces: u32, scale: f64, memo: bool) -> RenderOptions {
-    RenderOptions {
-        samples,
-        bounces,
-        scale,
-        memo: MemoOptions {
-            enabled: memo,
-            ..MemoOptions::default()
-        },
-        ..RenderOptions::default()
+    {
+        let mut options = RenderOptions::default();
+        options.samples = samples;
+        options.bounces = bounces;
+        options.scale = scale;
+        options.memo = MemoOptions::default();
+        options.memo.enabled = memo;
+        options
     }
 }
 
@@ -156,10 +157,11 @@ fn scenes_without_mirrors_glass_or_lamps_trace_no_photon() {
         ),
     ] {
         let loaded = scene(text);
-        let options = RenderOptions {
-            bounces: 3,
-            ..loaded.options
-        };
+        let options = {
+ let mut options = loaded.options;
+ options.bounces = 3;
+ options
+};
         let rendered = render(&loaded.scene, &options);
         assert_eq!(rendered.stats.physics.caustic_photons, 0, "{name}");
         assert!(!flatray_tracer::Plan::new(&loaded.scene, &options).caustics);
@@ -184,10 +186,11 @@ fn the_photon_rate_follows_the_mirrors_share_of_the_light() {
             y1 = 50.0 + half,
         );
         let loaded = scene(&text);
-        let options = RenderOptions {
-            samples: 16,
-            bounces: 1,
-            ..RenderOptions::default()
+        let options = {
+            let mut options = RenderOptions::default();
+            options.samples = 16;
+            options.bounces = 1;
+            options
         };
         let rendered = render(&loaded.scene, &options);
         let share = 2.0 * (half / distance).atan() / std::f64::consts::TAU;
@@ -212,7 +215,7 @@ fn a_generated_apartment() {
         ..Default::default()
     };
     let loaded = scene(&plan.to_ron());
-    assert!(loaded.scene.walls.len() > 20 && loaded.scene.lights.len() == 5);
+    assert!(loaded.scene.walls().len() > 20 && loaded.scene.lights().len() == 5);
     assert_agree("apartment", &loaded.scene, options(4, 3, 0.2, false), 0.005);
 }
 
@@ -237,11 +240,12 @@ fn every_example_scene_agrees_with_the_light_tracer() {
             continue;
         }
         // About 60 pixels across.
-        let scale = 60.0 / loaded.scene.canvas.width as f64;
-        let options = RenderOptions {
-            samples: 4,
-            scale,
-            ..loaded.options
+        let scale = 60.0 / loaded.scene.canvas().width as f64;
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 4;
+            options.scale = scale;
+            options
         };
         assert_agree(&name, &loaded.scene, options, -1.0);
     }

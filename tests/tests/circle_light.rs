@@ -27,15 +27,13 @@ fn closed_form_7_an_unoccluded_disk_gives_radiance_times_subtended_angle() {
     );
     for bounces in [0, 2] {
         let samples = 16;
-        let image = render(
-            &loaded.scene,
-            &RenderOptions {
-                samples,
-                bounces,
-                seed: 7,
-                ..RenderOptions::default()
-            },
-        )
+        let image = render(&loaded.scene, &{
+            let mut options = RenderOptions::default();
+            options.samples = samples;
+            options.bounces = bounces;
+            options.seed = 7;
+            options
+        })
         .image;
         let (mut outside, mut inside) = (0, 0);
         for y in 0..image.height {
@@ -82,15 +80,14 @@ const K: f64 = 5.0;
 /// Path and light tracing agree on every block within `K` combined
 /// standard errors.
 fn assert_agree(name: &str, scene: &Scene, bounces: u32) {
-    let at = |integrator| RenderOptions {
-        samples: 8,
-        bounces,
-        integrator,
-        memo: MemoOptions {
-            enabled: false,
-            ..MemoOptions::default()
-        },
-        ..RenderOptions::default()
+    let at = |integrator| {
+        let mut options = RenderOptions::default();
+        options.samples = 8;
+        options.bounces = bounces;
+        options.integrator = integrator;
+        options.memo = MemoOptions::default();
+        options.memo.enabled = false;
+        options
     };
     let agreement = Agreement {
         block: BLOCK,
@@ -168,10 +165,11 @@ fn path_tracing_sees_a_circle_light_in_a_mirror() {
     assert_agree("mirror", &scene, 2);
     // And the mirror adds light that the same room without it lacks, on
     // the mirror's side of the room: the test above is not vacuous.
-    let options = RenderOptions {
-        samples: 32,
-        bounces: 2,
-        ..RenderOptions::default()
+    let options = {
+        let mut options = RenderOptions::default();
+        options.samples = 32;
+        options.bounces = 2;
+        options
     };
     let with = render(&scene, &options).image;
     let without = render(&l_room("", false), &options).image;

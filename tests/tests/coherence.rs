@@ -12,9 +12,10 @@ fn image_and_stats(
     options: &RenderOptions,
     coherence: bool,
 ) -> (flatray_tracer::Image, Stats) {
-    let options = RenderOptions {
-        reference: !coherence,
-        ..*options
+    let options = {
+        let mut options = *options;
+        options = options.with_reference(!coherence);
+        options
     };
     let rendered = render(scene, &options);
     (rendered.image, rendered.stats)
@@ -59,10 +60,11 @@ fn the_example_scenes_render_the_same_with_fewer_shadow_rays() {
     ] {
         let loaded =
             flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
-        let options = RenderOptions {
-            samples: 16,
-            scale: 0.25,
-            ..loaded.options
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 16;
+            options.scale = 0.25;
+            options
         };
         if options.integrator == flatray_tracer::Integrator::Light {
             continue;
@@ -112,10 +114,11 @@ fn hard_configurations_render_the_same() {
     for (k, text) in HARD.iter().enumerate() {
         let loaded = scene(text);
         for scale in [1.0, 0.37] {
-            let options = RenderOptions {
-                samples: 16,
-                scale,
-                ..loaded.options
+            let options = {
+                let mut options = loaded.options;
+                options.samples = 16;
+                options.scale = scale;
+                options
             };
             assert_same_image(
                 &format!("hard scene {k} at {scale}"),
@@ -141,10 +144,11 @@ fn a_line_light_shares_one_ray_where_walls_cut_it_off_whole() {
                     Wall(a: (28, 12), b: (30, 24))],
             lights: [Line(a: (50, 10), b: (55, 30), intensity: 1.0)])",
     );
-    let options = RenderOptions {
-        samples: 16,
-        scale: 2.0,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 16;
+        options.scale = 2.0;
+        options
     };
     let (with, rays, rays_without) = rays_both_ways("line light", &loaded.scene, &options);
     // Without the shared umbra and pane, the floor left of the pane
@@ -214,9 +218,10 @@ fn shadow_edges_stop_inside_an_opaque_walls_shadow() {
             render: (samples: 16, bounces: 1))"
     );
     let loaded = scene(&text);
-    let options = RenderOptions {
-        samples: 16,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 16;
+        options
     };
     let (_, rays, rays_without) = rays_both_ways("umbra", &loaded.scene, &options);
     assert!(
@@ -270,9 +275,10 @@ fn wall_ends_the_light_cannot_see_cast_no_edge() {
             render: (samples: 16, bounces: 1))"
     );
     let loaded = scene(&text);
-    let options = RenderOptions {
-        samples: 16,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 16;
+        options
     };
     let (with, rays, rays_without) = rays_both_ways("dark room", &loaded.scene, &options);
     let pixels = (with.width * with.height) as u64;
@@ -302,10 +308,11 @@ fn generated_plans_render_the_same() {
         }
         .to_ron();
         let loaded = scene(&text);
-        let options = RenderOptions {
-            samples: 16,
-            bounces: 1,
-            ..loaded.options
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 16;
+            options.bounces = 1;
+            options
         };
         let name = format!("seed {seed}");
         let (_, rays, rays_without) = rays_both_ways(&name, &loaded.scene, &options);

@@ -9,12 +9,13 @@
 //! the physics statistics are the same, and the counts show culling ran.
 
 use flatray_tests::{render, scene, workspace_root};
-use flatray_tracer::{Image, MemoOptions, RenderOptions, Scene, Stats};
+use flatray_tracer::{Image, RenderOptions, Scene, Stats};
 
 fn image_and_stats(scene: &Scene, options: &RenderOptions, cull: bool) -> (Image, Stats) {
-    let options = RenderOptions {
-        reference: !cull,
-        ..*options
+    let options = {
+        let mut options = *options;
+        options = options.with_reference(!cull);
+        options
     };
     let rendered = render(scene, &options);
     (rendered.image, rendered.stats)
@@ -51,10 +52,11 @@ fn the_example_rooms_render_the_same_testing_an_eighth_of_the_walls() {
             flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
         // 64 samples: the lists of each block of 4x4 pixels, not of its
         // tile (below 64).
-        let options = RenderOptions {
-            samples: 64,
-            scale: 0.3,
-            ..loaded.options
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 64;
+            options.scale = 0.3;
+            options
         };
         let stats = assert_same_image(name, &loaded.scene, &options);
         assert_eq!(
@@ -74,7 +76,7 @@ fn the_example_rooms_render_the_same_testing_an_eighth_of_the_walls() {
         );
         // 13 walls, 1.18 tested per ray here (1.0 at full size, where the
         // blocks are smaller in world units).
-        let walls = loaded.scene.walls.len() as u64;
+        let walls = loaded.scene.walls().len() as u64;
         assert!(
             stats.work.culled_walls_tested * 8 < stats.work.culled_rays * walls,
             "{name}: {} walls tested for {} rays",
@@ -126,15 +128,14 @@ fn hard_configurations_render_the_same() {
             (2.5, 1, true),
             (1.0, 2, false),
         ] {
-            let options = RenderOptions {
-                samples: 24,
-                scale,
-                bounces,
-                memo: MemoOptions {
-                    enabled: memo,
-                    ..loaded.options.memo
-                },
-                ..loaded.options
+            let options = {
+                let mut options = loaded.options;
+                options.samples = 24;
+                options.scale = scale;
+                options.bounces = bounces;
+                options.memo = loaded.options.memo;
+                options.memo.enabled = memo;
+                options
             };
             let stats = assert_same_image(
                 &format!("hard scene {k} at {scale}, {bounces} bounces, memo {memo}"),
@@ -233,9 +234,9 @@ fn floor_plans_of_many_walls_render_the_same_testing_few_of_them() {
         ("turned", turned_plan()),
     ] {
         let loaded = scene(&text);
-        let walls = loaded.scene.walls.len() as u64;
+        let walls = loaded.scene.walls().len() as u64;
         assert!(walls > 32, "{name}: {walls} walls: a BVH");
-        let tests = walls as usize * loaded.scene.lights.len();
+        let tests = walls as usize * loaded.scene.lights().len();
         assert_eq!(
             name == "many lights",
             tests > flatray_tracer::TILE_SHADOW_TESTS,
@@ -245,15 +246,14 @@ fn floor_plans_of_many_walls_render_the_same_testing_few_of_them() {
         // bounces, and three without the memo (every sample casts the
         // floor's shadow rays and follows its path wall to wall).
         for (samples, bounces, memo) in [(16, 2, true), (64, 2, true), (16, 3, false)] {
-            let options = RenderOptions {
-                samples,
-                scale: if name == "turned" { 1.0 } else { 0.25 },
-                bounces,
-                memo: MemoOptions {
-                    enabled: memo,
-                    ..loaded.options.memo
-                },
-                ..loaded.options
+            let options = {
+                let mut options = loaded.options;
+                options.samples = samples;
+                options.scale = if name == "turned" { 1.0 } else { 0.25 };
+                options.bounces = bounces;
+                options.memo = loaded.options.memo;
+                options.memo.enabled = memo;
+                options
             };
             let name = format!("{name}, {samples} spp, {bounces} bounces, memo {memo}");
             let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
@@ -299,9 +299,10 @@ fn plans_of_very_many_walls_are_not_culled() {
         "Scene(canvas: (50, 20), floor: Color((0.8, 0.8, 0.8)), walls: [{walls}],
             lights: [Point(at: (45, 5), intensity: 1.0)])"
     ));
-    let options = RenderOptions {
-        samples: 4,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 4;
+        options
     };
     let stats = assert_same_image("many walls", &loaded.scene, &options);
     assert_eq!(stats.work.culled_rays, 0);
@@ -316,14 +317,17 @@ fn samples_that_are_not_finite_are_left_out_as_without_culling() {
     // infinities, so every path that reads a wall is not finite, while the
     // floor's own light (f64) is. Culled, the samples are summed unchecked
     // and a pixel whose sum is not finite takes them again, checked.
-    // The loader refuses such values; a scene built in code can hold them.
+    // The loader and `Scene::new` refuse such values; the renderer still
+    // guards against them.
     let mut loaded = scene(
         "Scene(canvas: (12, 12), floor: Color((0.8, 0.8, 0.8)),
             walls: [Wall(a: (2, 2), b: (10, 2)), Wall(a: (10, 2), b: (10, 10))],
             lights: [Point(at: (6, 6))],
             render: (samples: 16))",
     );
-    loaded.scene.lights[0].intensity = 1e200;
+    let mut parts = loaded.scene.parts();
+    parts.lights[0].intensity = 1e200;
+    loaded.scene = parts.build_unchecked();
     loaded.options.exposure = 1e-200;
     let stats = assert_same_image("overflow", &loaded.scene, &loaded.options);
     assert!(stats.work.culled_rays > 0);

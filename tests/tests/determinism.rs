@@ -2,7 +2,7 @@
 //! number of threads, and for any order in which tiles finish.
 
 use flatray_tests::{TempDir, render_on, scene, workspace_root};
-use flatray_tracer::{Integrator, RenderOptions};
+use flatray_tracer::Integrator;
 
 #[test]
 fn one_thread_and_several_threads_give_bit_identical_images() {
@@ -12,16 +12,15 @@ fn one_thread_and_several_threads_give_bit_identical_images() {
         (Integrator::Path, false),
         (Integrator::Original, true),
     ] {
-        let options = RenderOptions {
-            samples: 3,
-            bounces: 2,
-            scale: 0.3,
-            integrator,
-            memo: flatray_tracer::MemoOptions {
-                enabled: memo,
-                ..loaded.options.memo
-            },
-            ..loaded.options
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 3;
+            options.bounces = 2;
+            options.scale = 0.3;
+            options.integrator = integrator;
+            options.memo = loaded.options.memo;
+            options.memo.enabled = memo;
+            options
         };
         let one = render_on(&loaded.scene, &options, 1);
         for threads in [2, 5] {
@@ -51,11 +50,12 @@ fn a_floor_plan_of_many_lights_renders_the_same_on_any_number_of_threads() {
         ..Default::default()
     };
     let loaded = scene(&plan.to_ron());
-    let options = RenderOptions {
-        samples: 4,
-        bounces: 3,
-        scale: 0.3,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 4;
+        options.bounces = 3;
+        options.scale = 0.3;
+        options
     };
     let table = flatray_tracer::Plan::new(&loaded.scene, &options);
     assert!(table.light_table && table.floor_coherence);
@@ -71,13 +71,22 @@ fn a_floor_plan_of_many_lights_renders_the_same_on_any_number_of_threads() {
 #[test]
 fn a_different_seed_gives_a_different_image() {
     let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
-    let options = RenderOptions {
-        samples: 2,
-        scale: 0.2,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 2;
+        options.scale = 0.2;
+        options
     };
     let a = render_on(&loaded.scene, &options, 2);
-    let b = render_on(&loaded.scene, &RenderOptions { seed: 1, ..options }, 2);
+    let b = render_on(
+        &loaded.scene,
+        &{
+            let mut options = options;
+            options.seed = 1;
+            options
+        },
+        2,
+    );
     assert_ne!(a.image, b.image);
 }
 
@@ -85,15 +94,14 @@ fn a_different_seed_gives_a_different_image() {
 fn a_pixel_sample_can_be_rerendered_alone() {
     let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
     // Without the memo, a pixel is the mean of its samples alone.
-    let options = RenderOptions {
-        samples: 1,
-        scale: 0.1,
-        exposure: 1.0,
-        memo: flatray_tracer::MemoOptions {
-            enabled: false,
-            ..loaded.options.memo
-        },
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 1;
+        options.scale = 0.1;
+        options.exposure = 1.0;
+        options.memo = loaded.options.memo;
+        options.memo.enabled = false;
+        options
     };
     let whole = render_on(&loaded.scene, &options, 2);
     let size = (whole.image.width, whole.image.height);
@@ -101,11 +109,11 @@ fn a_pixel_sample_can_be_rerendered_alone() {
     let mut stats = flatray_tracer::Stats::default();
     let fluence = flatray_tracer::pixel_sample(&loaded.scene, &options, size, x, y, 0, &mut stats);
     // The pixel's square: 10 units at scale 0.1.
-    let lo = loaded.scene.canvas.origin + glam::DVec2::new(x as f64, y as f64) * 10.0;
+    let lo = loaded.scene.canvas().origin + glam::DVec2::new(x as f64, y as f64) * 10.0;
     let albedo = loaded
         .scene
-        .floor
-        .mean_albedo(&loaded.scene.canvas, lo, lo + 10.0);
+        .floor()
+        .mean_albedo(loaded.scene.canvas(), lo, lo + 10.0);
     let value = fluence * albedo;
     assert_eq!(
         whole.image.get(x, y),

@@ -61,10 +61,11 @@ fn closed_form_1_point_light_gives_the_mean_of_one_over_r() {
     let image = render_to_exr(
         "Scene(canvas: (80, 64), floor: Color((1, 1, 1)),
                lights: [Point(at: (40.3, 31.7), intensity: 2.5)])",
-        RenderOptions {
-            samples,
-            bounces: 0,
-            ..RenderOptions::default()
+        {
+            let mut options = RenderOptions::default();
+            options.samples = samples;
+            options.bounces = 0;
+            options
         },
     );
     assert_matches(
@@ -83,10 +84,11 @@ fn closed_form_1_holds_with_bounces_when_nothing_reflects() {
     let image = render_to_exr(
         "Scene(canvas: (64, 64), floor: Color((1, 1, 1)),
                lights: [Point(at: (10.5, 50.25))])",
-        RenderOptions {
-            samples,
-            bounces: 3,
-            ..RenderOptions::default()
+        {
+            let mut options = RenderOptions::default();
+            options.samples = samples;
+            options.bounces = 3;
+            options
         },
     );
     assert_matches(
@@ -105,10 +107,11 @@ fn closed_form_2_line_light_gives_intensity_times_subtended_angle() {
     let image = render_to_exr(
         "Scene(canvas: (80, 64), floor: Color((1, 1, 1)),
                lights: [Line(a: (20, 30.5), b: (55, 22), intensity: 0.7)])",
-        RenderOptions {
-            samples,
-            bounces: 0,
-            ..RenderOptions::default()
+        {
+            let mut options = RenderOptions::default();
+            options.samples = samples;
+            options.bounces = 0;
+            options
         },
     );
     // Skip pixels the light crosses, where the subtended angle jumps.
@@ -153,14 +156,12 @@ fn closed_room(angle_degrees: f64) -> String {
 fn closed_form_3_no_direct_light_leaks_into_a_closed_room() {
     for angle in [0.0, 17.0, 45.0] {
         let loaded = scene(&closed_room(angle));
-        let rendered = render(
-            &loaded.scene,
-            &RenderOptions {
-                samples: 8,
-                bounces: 0,
-                ..RenderOptions::default()
-            },
-        );
+        let rendered = render(&loaded.scene, &{
+            let mut options = RenderOptions::default();
+            options.samples = 8;
+            options.bounces = 0;
+            options
+        });
         let inside = |x: u32, y: u32| {
             let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
             // Well inside the square in its own frame.
@@ -244,11 +245,12 @@ fn the_floor_memo_converges_at_shadow_edges() {
         .collect();
     assert!(edge.len() > 30, "{} edge pixels", edge.len());
     let error = |samples: u32| {
-        let options = RenderOptions {
-            samples,
-            bounces: 1,
-            seed: 5,
-            ..RenderOptions::default()
+        let options = {
+            let mut options = RenderOptions::default();
+            options.samples = samples;
+            options.bounces = 1;
+            options.seed = 5;
+            options
         };
         let image = render(&loaded.scene, &options).image;
         let (mut squares, mut total) = (0.0, 0.0);

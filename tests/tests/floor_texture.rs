@@ -6,7 +6,6 @@
 //! image's f32 rounding.
 
 use flatray_tests::{render, scene};
-use flatray_tracer::RenderOptions;
 
 const SUN: f64 = 0.5;
 
@@ -37,14 +36,12 @@ fn a_grout_line_narrower_than_a_pixel_shows_with_its_coverage_in_every_row() {
     let loaded = scene(&tiles(size, 0.0));
     let (tile, grout) = ([0.8, 0.7, 0.6], [0.2, 0.25, 0.3]);
     for scale in [1.0, 0.5, 0.25] {
-        let image = render(
-            &loaded.scene,
-            &RenderOptions {
-                scale,
-                samples: 1,
-                ..loaded.options
-            },
-        )
+        let image = render(&loaded.scene, &{
+            let mut options = loaded.options;
+            options.scale = scale;
+            options.samples = 1;
+            options
+        })
         .image;
         let side = 1.0 / scale;
         let mut grout_pixels = 0;
@@ -79,14 +76,12 @@ fn a_tile_floor_has_the_same_mean_at_every_scale() {
     // The tutorial's tiles: 20 units, grout 1, varied shades.
     let loaded = scene(&tiles(20.0, 0.15));
     let mean_at = |scale: f64| {
-        let image = render(
-            &loaded.scene,
-            &RenderOptions {
-                scale,
-                samples: 1,
-                ..loaded.options
-            },
-        )
+        let image = render(&loaded.scene, &{
+            let mut options = loaded.options;
+            options.scale = scale;
+            options.samples = 1;
+            options
+        })
         .image;
         let n = image.pixels.len() as f64;
         let sum: f64 = image.pixels.iter().flatten().map(|&v| v as f64).sum();

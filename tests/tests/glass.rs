@@ -142,15 +142,14 @@ fn light_and_path_tracing_agree_on_glass_lit_by_a_line_light() {
         lights: [Line(a: (8, 6), b: (20, 4), intensity: 1.0)],
         glass: [Glass(points: [(24, 12), (44, 14), (40, 34), (26, 30)], ior: 1.5, absorption: (0.0, 0.02, 0.05), dispersion: 0.01)])";
     let loaded = scene(text);
-    let options = |integrator| RenderOptions {
-        samples: 8,
-        bounces: 4,
-        integrator,
-        memo: MemoOptions {
-            enabled: false,
-            ..MemoOptions::default()
-        },
-        ..RenderOptions::default()
+    let options = |integrator| {
+        let mut options = RenderOptions::default();
+        options.samples = 8;
+        options.bounces = 4;
+        options.integrator = integrator;
+        options.memo = MemoOptions::default();
+        options.memo.enabled = false;
+        options
     };
     let light = block_stats(&loaded.scene, options(Integrator::Light));
     let path = block_stats(&loaded.scene, options(Integrator::Path));

@@ -16,9 +16,10 @@ use proptest::prelude::*;
 /// Renders `scene` both ways and compares.
 fn assert_identical(name: &str, scene: &Scene, options: RenderOptions) {
     let fast = render(scene, &options);
-    let reference_options = RenderOptions {
-        reference: true,
-        ..options
+    let reference_options = {
+        let mut options = options;
+        options = options.with_reference(true);
+        options
     };
     let reference = render(scene, &reference_options);
     assert!(
@@ -50,15 +51,14 @@ fn every_example_scene_renders_the_same_with_and_without_fast_paths() {
         let loaded = flatray_io::load(&path).unwrap();
         let name = path.file_stem().unwrap().to_string_lossy().into_owned();
         for (bounces, memo) in [(loaded.options.bounces, true), (3, false), (1, true)] {
-            let options = RenderOptions {
-                samples: 8,
-                scale: 0.2,
-                bounces,
-                memo: MemoOptions {
-                    enabled: memo,
-                    ..loaded.options.memo
-                },
-                ..loaded.options
+            let options = {
+                let mut options = loaded.options;
+                options.samples = 8;
+                options.scale = 0.2;
+                options.bounces = bounces;
+                options.memo = loaded.options.memo;
+                options.memo.enabled = memo;
+                options
             };
             let label = format!("{name}, {bounces} bounces, memo {memo}");
             assert_identical(&label, &loaded.scene, options);
@@ -66,9 +66,10 @@ fn every_example_scene_renders_the_same_with_and_without_fast_paths() {
                 // And each fast path left out alone.
                 let fast = render(&loaded.scene, &options).image;
                 for path in FastPath::ALL {
-                    let without = RenderOptions {
-                        fast_paths: FastPaths::ALL.without(path),
-                        ..options
+                    let without = {
+                        let mut options = options;
+                        options = options.with_fast_paths(FastPaths::ALL.without(path));
+                        options
                     };
                     assert!(
                         render(&loaded.scene, &without).image == fast,
@@ -79,10 +80,11 @@ fn every_example_scene_renders_the_same_with_and_without_fast_paths() {
             if options.integrator != Integrator::Light {
                 // And the light tracer, which has no fast path of its own
                 // but shares the lights and materials.
-                let light = RenderOptions {
-                    integrator: Integrator::Light,
-                    samples: 1,
-                    ..options
+                let light = {
+                    let mut options = options;
+                    options.integrator = Integrator::Light;
+                    options.samples = 1;
+                    options
                 };
                 assert_identical(&format!("{label}, light tracing"), &loaded.scene, light);
             }
@@ -181,19 +183,25 @@ proptest! {
     ) {
         let text = random_room(&corners, &materials, &lights, tiles);
         let loaded = scene(&text);
-        let options = RenderOptions {
-            samples: 5,
-            bounces,
-            scale,
-            seed,
-            memo: MemoOptions { enabled: memo, ..MemoOptions::default() },
+        let options = {
+ let mut options = RenderOptions::default();
+ options.samples = 5;
+ options.bounces = bounces;
+ options.scale = scale;
+ options.seed = seed;
+ options.memo = MemoOptions::default();
+ options.memo.enabled = memo;
             // The lights chosen by a table, as a scene of many lights
             // would have them.
-            light_choice: if table { LightChoice::Table } else { LightChoice::Auto },
-            ..RenderOptions::default()
-        };
+            options.light_choice = if table { LightChoice::Table } else { LightChoice::Auto };
+ options
+};
         assert_identical(&text, &loaded.scene, options);
-        let original = RenderOptions { integrator: Integrator::Original, ..options };
+        let original = {
+ let mut options = options;
+ options.integrator = Integrator::Original;
+ options
+};
         assert_identical(&text, &loaded.scene, original);
     }
 }

@@ -109,7 +109,7 @@ fn an_inkscape_svg_imports_with_units_transforms_and_marks() {
         plan.warnings
     );
     let loaded = scene_of(&plan);
-    assert_eq!(loaded.scene.lights.len(), 2);
+    assert_eq!(loaded.scene.lights().len(), 2);
 }
 
 #[test]
@@ -213,10 +213,11 @@ fn a_wall_mask_traces_closed_outlines_with_its_door_and_diagonal() {
 fn assert_dark_inside(name: &str, plan: &Imported, inside: impl Fn(DVec2) -> bool) {
     let loaded = scene_of(plan);
     for bounces in [0, 2] {
-        let options = RenderOptions {
-            samples: 4,
-            bounces,
-            ..RenderOptions::default()
+        let options = {
+            let mut options = RenderOptions::default();
+            options.samples = 4;
+            options.bounces = bounces;
+            options
         };
         let image = render(&loaded.scene, &options).image;
         let mut count = 0;
@@ -325,10 +326,11 @@ fn an_imported_scene_renders_as_the_hand_written_one() {
             Wall(a: (45, 15), b: (45, 35), material: Mirror()),
         ], lights: [Point(at: (25, 30), intensity: 20)])",
     );
-    let options = RenderOptions {
-        samples: 8,
-        bounces: 2,
-        ..RenderOptions::default()
+    let options = {
+        let mut options = RenderOptions::default();
+        options.samples = 8;
+        options.bounces = 2;
+        options
     };
     let a = render(&scene_of(&plan).scene, &options).image;
     let b = render(&by_hand.scene, &options).image;
@@ -459,7 +461,7 @@ fn an_svg_bitmap_becomes_the_floor_when_asked() {
     assert!(written.exists(), "{run:?}");
     let loaded = flatray_io::load(&out).unwrap_or_else(|e| panic!("{e}"));
     assert!(matches!(
-        loaded.scene.floor,
+        loaded.scene.floor(),
         flatray_tracer::Floor::Image {
             width: 8,
             height: 6,
@@ -565,15 +567,13 @@ fn the_imported_flat_is_dark_outside_but_through_its_window() {
     let loaded = scene_of(&plan);
     let mm = 96.0 / 25.4;
     for bounces in [0, 1, 3] {
-        let image = render(
-            &loaded.scene,
-            &RenderOptions {
-                samples: 4,
-                bounces,
-                scale: 0.25,
-                ..loaded.options
-            },
-        )
+        let image = render(&loaded.scene, &{
+            let mut options = loaded.options;
+            options.samples = 4;
+            options.bounces = bounces;
+            options.scale = 0.25;
+            options
+        })
         .image;
         let world = |x: u32, y: u32| DVec2::new(x as f64 + 0.5, y as f64 + 0.5) * 4.0 / mm;
         let (mut outside, mut above) = (0, 0.0);

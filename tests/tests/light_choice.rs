@@ -5,7 +5,7 @@
 //! tolerance in standard errors, with fixed seeds.
 
 use flatray_tests::{block_stats, render, scene};
-use flatray_tracer::{FastPath, FastPaths, LightChoice, MemoOptions, RenderOptions};
+use flatray_tracer::{FastPath, FastPaths, LightChoice};
 
 /// A rotated, non-convex plan of three rooms (doors, a pane, a mirror, a
 /// furniture stub) lit by 13 lights of every kind and falloff.
@@ -85,14 +85,13 @@ fn a_table_of_chosen_lights_has_the_expected_image_of_every_light() {
         ("open", OPEN, true),
     ] {
         let loaded = scene(text);
-        let options = |light_choice| RenderOptions {
-            light_choice,
-            samples: 8,
-            memo: MemoOptions {
-                enabled: cache,
-                ..loaded.options.memo
-            },
-            ..loaded.options
+        let options = |light_choice| {
+            let mut options = loaded.options;
+            options.light_choice = light_choice;
+            options.samples = 8;
+            options.memo = loaded.options.memo;
+            options.memo.enabled = cache;
+            options
         };
         let table = block_stats(&loaded.scene, options(LightChoice::Table), BLOCK, RUNS, 1);
         let every = block_stats(&loaded.scene, options(LightChoice::Every), BLOCK, RUNS, 101);
@@ -144,13 +143,11 @@ fn row_of_rooms(rooms: usize, per_room: usize) -> String {
 fn shadow_rays_per_point_do_not_grow_with_the_lights() {
     let per_point = |rooms: usize| {
         let loaded = scene(&row_of_rooms(rooms, 4));
-        let rendered = render(
-            &loaded.scene,
-            &RenderOptions {
-                light_choice: LightChoice::Table,
-                ..loaded.options
-            },
-        );
+        let rendered = render(&loaded.scene, &{
+            let mut options = loaded.options;
+            options.light_choice = LightChoice::Table;
+            options
+        });
         let stats = rendered.stats;
         let points = (rendered.image.width * rendered.image.height) as f64 * 4.0;
         stats.work.shadow_rays as f64 / points
@@ -178,21 +175,20 @@ fn lights_a_wall_hides_from_the_whole_cell_cost_no_shadow_ray() {
     }
     .to_ron();
     let loaded = scene(&text);
-    let options = RenderOptions {
-        samples: 16,
-        scale: 0.5,
-        bounces: 1,
-        light_choice: LightChoice::Table,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 16;
+        options.scale = 0.5;
+        options.bounces = 1;
+        options.light_choice = LightChoice::Table;
+        options
     };
     let with = render(&loaded.scene, &options);
-    let without = render(
-        &loaded.scene,
-        &RenderOptions {
-            fast_paths: FastPaths::ALL.without(FastPath::DarkCells),
-            ..options
-        },
-    );
+    let without = render(&loaded.scene, &{
+        let mut options = options;
+        options = options.with_fast_paths(FastPaths::ALL.without(FastPath::DarkCells));
+        options
+    });
     assert!(with.image == without.image, "dark cells changed the image");
     let (w, wo) = (with.stats.work, without.stats.work);
     assert_eq!(w.chosen_lights, wo.chosen_lights);

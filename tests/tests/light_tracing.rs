@@ -17,15 +17,14 @@ fn block_stats(scene: &Scene, options: RenderOptions, runs: u64) -> Vec<(f64, f6
 }
 
 fn options(integrator: Integrator, samples: u32, bounces: u32) -> RenderOptions {
-    RenderOptions {
-        samples,
-        bounces,
-        integrator,
-        memo: MemoOptions {
-            enabled: false,
-            ..MemoOptions::default()
-        },
-        ..RenderOptions::default()
+    {
+        let mut options = RenderOptions::default();
+        options.samples = samples;
+        options.bounces = bounces;
+        options.integrator = integrator;
+        options.memo = MemoOptions::default();
+        options.memo.enabled = false;
+        options
     }
 }
 
@@ -46,9 +45,10 @@ fn assert_agree(name: &str, scene: &Scene, scale: f64, bounces: u32, keep: impl 
         k: K,
         min_blocks: 10,
     };
-    let options = RenderOptions {
-        scale,
-        ..options(Integrator::Path, 8, bounces)
+    let options = {
+        let mut options = options(Integrator::Path, 8, bounces);
+        options.scale = scale;
+        options
     };
     agreement.check(name, scene, options, keep);
 }
@@ -234,11 +234,12 @@ fn both_integrators_see_a_point_light_in_a_mirror() {
 #[test]
 fn light_tracing_is_bit_identical_for_any_thread_count() {
     let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
-    let options = RenderOptions {
-        samples: 2,
-        scale: 0.2,
-        integrator: Integrator::Light,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 2;
+        options.scale = 0.2;
+        options.integrator = Integrator::Light;
+        options
     };
     let one = flatray_tests::render_on(&loaded.scene, &options, 1);
     let three = flatray_tests::render_on(&loaded.scene, &options, 3);
@@ -324,9 +325,10 @@ fn light_tracing_meets_every_kernel_next_to_the_light() {
             };
             let runs: Vec<flatray_tracer::Image> = (0..RUNS)
                 .map(|seed| {
-                    let options = RenderOptions {
-                        seed: 7000 + seed,
-                        ..options(Integrator::Light, 400, 0)
+                    let options = {
+                        let mut options = options(Integrator::Light, 400, 0);
+                        options.seed = 7000 + seed;
+                        options
                     };
                     render(&loaded.scene, &options).image
                 })

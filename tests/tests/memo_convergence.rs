@@ -34,14 +34,13 @@ fn corner_blocks(stats: &[(f64, f64)]) -> Vec<(f64, f64)> {
 }
 
 fn options(samples: u32, memo: bool) -> RenderOptions {
-    RenderOptions {
-        samples,
-        bounces: 2,
-        memo: MemoOptions {
-            enabled: memo,
-            ..MemoOptions::default()
-        },
-        ..RenderOptions::default()
+    {
+        let mut options = RenderOptions::default();
+        options.samples = samples;
+        options.bounces = 2;
+        options.memo = MemoOptions::default();
+        options.memo.enabled = memo;
+        options
     }
 }
 

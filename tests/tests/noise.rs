@@ -5,19 +5,20 @@
 //! three scenes and both integrators. Fixed seeds.
 
 use flatray_tests::{render, workspace_root};
+use flatray_tracer::Integrator;
 use flatray_tracer::metrics::compare;
-use flatray_tracer::{Integrator, RenderOptions};
 
 /// The estimate over the true error, for `scene` at `scale` and `samples`.
 fn ratio(name: &str, scale: f64, samples: u32, integrator: Integrator) -> f64 {
     let loaded = flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron")))
         .unwrap_or_else(|e| panic!("{e}"));
-    let options = |samples: u32, seed: u64| RenderOptions {
-        samples,
-        seed,
-        scale,
-        integrator,
-        ..loaded.options
+    let options = |samples: u32, seed: u64| {
+        let mut options = loaded.options;
+        options.samples = samples;
+        options.seed = seed;
+        options.scale = scale;
+        options.integrator = integrator;
+        options
     };
     let rendered = render(&loaded.scene, &options(samples, 1));
     let reference = render(&loaded.scene, &options(samples * 64, 2));
@@ -58,10 +59,11 @@ fn the_noise_estimate_agrees_with_the_true_error() {
 fn one_sample_per_pixel_has_no_estimate_and_the_image_does_not_change() {
     let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron"))
         .unwrap_or_else(|e| panic!("{e}"));
-    let options = RenderOptions {
-        samples: 1,
-        scale: 0.1,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 1;
+        options.scale = 0.1;
+        options
     };
     let rendered = render(&loaded.scene, &options);
     assert_eq!(rendered.stats.noise.relative(), None);

@@ -7,7 +7,7 @@
 //! tolerance in standard errors, with fixed seeds.
 
 use flatray_tests::{block_stats, render, scene};
-use flatray_tracer::{Integrator, MemoOptions, Plan, RenderOptions};
+use flatray_tracer::{Integrator, Plan, RenderOptions};
 
 /// A rotated, non-convex plan of three rooms: doors, a pane, two mirrors
 /// (one facing a lamp, for the caustic pass, and one facing a line
@@ -42,13 +42,12 @@ const ROOMS: &str = "Scene(
 
 fn options(onward: bool, bounces: u32) -> RenderOptions {
     let loaded = scene(ROOMS);
-    RenderOptions {
-        bounces,
-        memo: MemoOptions {
-            onward,
-            ..loaded.options.memo
-        },
-        ..loaded.options
+    {
+        let mut options = loaded.options;
+        options.bounces = bounces;
+        options.memo = loaded.options.memo;
+        options.memo.onward = onward;
+        options
     }
 }
 
@@ -130,22 +129,22 @@ fn the_plan_runs_the_onward_memo_only_where_it_applies() {
     assert!(!one && why.contains("one bounce"), "{why}");
     let (off, why) = runs(options(false, 3));
     assert!(!off && why.contains("--cache direct"), "{why}");
-    let (no_cache, why) = runs(RenderOptions {
-        memo: MemoOptions {
-            enabled: false,
-            ..options(true, 3).memo
-        },
-        ..options(true, 3)
+    let (no_cache, why) = runs({
+        let mut options = options(true, 3);
+        options.memo.enabled = false;
+        options
     });
     assert!(!no_cache && why.contains("--cache off"), "{why}");
-    let (original, why) = runs(RenderOptions {
-        integrator: Integrator::Original,
-        ..options(true, 3)
+    let (original, why) = runs({
+        let mut options = options(true, 3);
+        options.integrator = Integrator::Original;
+        options
     });
     assert!(!original && why.contains("original"), "{why}");
-    let (light, _) = runs(RenderOptions {
-        integrator: Integrator::Light,
-        ..options(true, 3)
+    let (light, _) = runs({
+        let mut options = options(true, 3);
+        options.integrator = Integrator::Light;
+        options
     });
     assert!(!light);
     // Glass: a wall's bins cannot tell whether a path is inside a body.

@@ -157,19 +157,15 @@ fn configurations() -> Vec<(String, RenderOptions)> {
                 if integrator != Integrator::Path && memo {
                     continue;
                 }
-                out.push((
-                    format!("{name}, D = {bounces}, memo {memo}"),
-                    RenderOptions {
-                        samples: 4,
-                        bounces,
-                        integrator,
-                        memo: MemoOptions {
-                            enabled: memo,
-                            ..MemoOptions::default()
-                        },
-                        ..RenderOptions::default()
-                    },
-                ));
+                out.push((format!("{name}, D = {bounces}, memo {memo}"), {
+                    let mut options = RenderOptions::default();
+                    options.samples = 4;
+                    options.bounces = bounces;
+                    options.integrator = integrator;
+                    options.memo = MemoOptions::default();
+                    options.memo.enabled = memo;
+                    options
+                }));
             }
         }
     }
@@ -233,7 +229,7 @@ fn the_image_does_not_depend_on_the_order_of_the_walls() {
         let resolved = |walls: &[String]| {
             let mut out: Vec<String> = scene(&case.text(walls))
                 .scene
-                .walls
+                .walls()
                 .iter()
                 .map(|w| format!("{:?}", w))
                 .collect();

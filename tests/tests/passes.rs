@@ -26,13 +26,11 @@ fn check_passes(name: &str, options: RenderOptions, samples: u32) {
             .min(samples);
         assert!(progressive.pass(end, &|_| {}), "{name}: pass to {end}");
         let passes = progressive.rendered();
-        let single = render(
-            &loaded.scene,
-            &RenderOptions {
-                samples: end,
-                ..options
-            },
-        );
+        let single = render(&loaded.scene, &{
+            let mut options = options;
+            options.samples = end;
+            options
+        });
         assert!(
             passes.image == single.image,
             "{name}: the image after the pass to {end} spp is not the single render's"
@@ -53,9 +51,10 @@ fn passes_give_the_single_render_at_every_step() {
     let first_flat = load("first-flat").options;
     check_passes(
         "first-flat",
-        RenderOptions {
-            scale: 0.2,
-            ..first_flat
+        {
+            let mut options = first_flat;
+            options.scale = 0.2;
+            options
         },
         100,
     );
@@ -63,10 +62,11 @@ fn passes_give_the_single_render_at_every_step() {
     let apartment = load("apartment").options;
     check_passes(
         "apartment",
-        RenderOptions {
-            scale: 0.12,
-            bounces: 3,
-            ..apartment
+        {
+            let mut options = apartment;
+            options.scale = 0.12;
+            options.bounces = 3;
+            options
         },
         40,
     );
@@ -74,10 +74,11 @@ fn passes_give_the_single_render_at_every_step() {
     let room = load("room").options;
     check_passes(
         "room",
-        RenderOptions {
-            scale: 0.1,
-            integrator: Integrator::Light,
-            ..room
+        {
+            let mut options = room;
+            options.scale = 0.1;
+            options.integrator = Integrator::Light;
+            options
         },
         35,
     );
@@ -88,9 +89,10 @@ fn passes_give_the_single_render_at_every_step() {
 #[test]
 fn a_short_pass_is_the_last() {
     let loaded = load("room");
-    let options = RenderOptions {
-        scale: 0.05,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.scale = 0.05;
+        options
     };
     let mut progressive = Progressive::new(&loaded.scene, &options);
     assert_eq!(progressive.next_end(), Some(16));
@@ -110,10 +112,11 @@ fn a_short_pass_is_the_last() {
 #[test]
 fn passes_do_not_depend_on_the_threads() {
     let loaded = load("bathroom");
-    let options = RenderOptions {
-        samples: 70,
-        scale: 0.2,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 70;
+        options.scale = 0.2;
+        options
     };
     let one = render_on(&loaded.scene, &options, 1);
     let two = render_on(&loaded.scene, &options, 2);

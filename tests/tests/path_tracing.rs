@@ -60,9 +60,10 @@ fn well_inside(points: &[DVec2], p: DVec2, margin: f64) -> bool {
 /// memo's binning bias is below these tests' noise (`docs/performance.md`
 /// measures it on the room).
 fn memo_options(enabled: bool) -> MemoOptions {
-    MemoOptions {
-        enabled,
-        ..MemoOptions::default()
+    {
+        let mut memo = MemoOptions::default();
+        memo.enabled = enabled;
+        memo
     }
 }
 
@@ -100,12 +101,13 @@ fn closed_form_4_flatland_furnace() {
                 polygon_walls(room, &extra)
             );
             let loaded = scene(&text);
-            let options = RenderOptions {
-                samples: 8,
-                bounces,
-                seed: 11,
-                memo: memo_options(memo),
-                ..RenderOptions::default()
+            let options = {
+                let mut options = RenderOptions::default();
+                options.samples = 8;
+                options.bounces = bounces;
+                options.seed = 11;
+                options.memo = memo_options(memo);
+                options
             };
             let image = render(&loaded.scene, &options).image;
             let expected = TAU * l_e * geometric_sum(rho, bounces + 1);
@@ -194,13 +196,14 @@ fn closed_form_4_furnace_in_rotated_and_star_rooms() {
             (Integrator::Original, 1, false),
             (Integrator::Original, 2, true),
         ] {
-            let options = RenderOptions {
-                samples: 8,
-                bounces,
-                seed: 12,
-                integrator,
-                memo: memo_options(memo),
-                ..RenderOptions::default()
+            let options = {
+                let mut options = RenderOptions::default();
+                options.samples = 8;
+                options.bounces = bounces;
+                options.seed = 12;
+                options.integrator = integrator;
+                options.memo = memo_options(memo);
+                options
             };
             let image = render(&loaded.scene, &options).image;
             let expected = TAU * l_e * geometric_sum(rho, bounces + 1);
@@ -244,15 +247,13 @@ fn closed_form_3_no_leak_with_bounces() {
     );
     let loaded = scene(&text);
     for (bounces, memo) in [(1, false), (2, false), (5, false), (1, true), (5, true)] {
-        let image = render(
-            &loaded.scene,
-            &RenderOptions {
-                samples: 4,
-                bounces,
-                memo: memo_options(memo),
-                ..RenderOptions::default()
-            },
-        )
+        let image = render(&loaded.scene, &{
+            let mut options = RenderOptions::default();
+            options.samples = 4;
+            options.bounces = bounces;
+            options.memo = memo_options(memo);
+            options
+        })
         .image;
         let mut inside = 0;
         for y in 0..100 {
@@ -297,16 +298,27 @@ fn closed_form_5_circle_room() {
     );
     let loaded = scene(&text);
     for (bounces, memo) in [(1, false), (2, false), (1, true), (2, true)] {
-        let base = RenderOptions {
-            samples: 16,
-            seed: 5,
-            memo: memo_options(memo),
-            ..RenderOptions::default()
+        let base = {
+            let mut options = RenderOptions::default();
+            options.samples = 16;
+            options.seed = 5;
+            options.memo = memo_options(memo);
+            options
         };
         // The direct part draws no random numbers after the jitter, so the
         // difference of two renders with one seed is the indirect part.
-        let direct = render(&loaded.scene, &RenderOptions { bounces: 0, ..base }).image;
-        let total = render(&loaded.scene, &RenderOptions { bounces, ..base }).image;
+        let direct = render(&loaded.scene, &{
+            let mut options = base;
+            options.bounces = 0;
+            options
+        })
+        .image;
+        let total = render(&loaded.scene, &{
+            let mut options = base;
+            options.bounces = bounces;
+            options
+        })
+        .image;
         let indirect = Image {
             pixels: total
                 .pixels
@@ -354,16 +366,14 @@ fn closed_form_6_symmetric_scene_gives_symmetric_image() {
             Line(a: (95, 60), b: (85, 70), intensity: 1.0),
         ])";
     let loaded = scene(text);
-    let image = render(
-        &loaded.scene,
-        &RenderOptions {
-            samples: 16,
-            bounces: 2,
-            seed: 3,
-            memo: memo_options(false),
-            ..RenderOptions::default()
-        },
-    )
+    let image = render(&loaded.scene, &{
+        let mut options = RenderOptions::default();
+        options.samples = 16;
+        options.bounces = 2;
+        options.seed = 3;
+        options.memo = memo_options(false);
+        options
+    })
     .image;
     // Compare regions of the left half with their mirror images.
     for channel in 0..3 {
@@ -420,29 +430,35 @@ fn block_totals(image: &Image) -> Vec<f64> {
 fn the_mean_of_many_low_sample_renders_matches_a_high_sample_render() {
     let loaded = scene(MIXED);
     for integrator in [Integrator::Path, Integrator::Original] {
-        let options = RenderOptions {
-            samples: 1,
-            bounces: 3,
-            integrator,
-            memo: memo_options(false),
-            ..RenderOptions::default()
+        let options = {
+            let mut options = RenderOptions::default();
+            options.samples = 1;
+            options.bounces = 3;
+            options.integrator = integrator;
+            options.memo = memo_options(false);
+            options
         };
         let runs = 128;
         let per_run: Vec<Vec<f64>> = (0..runs)
             .map(|seed| {
-                block_totals(&render(&loaded.scene, &RenderOptions { seed, ..options }).image)
+                block_totals(
+                    &render(&loaded.scene, &{
+                        let mut options = options;
+                        options.seed = seed;
+                        options
+                    })
+                    .image,
+                )
             })
             .collect();
         let high_samples = 256;
         let high = block_totals(
-            &render(
-                &loaded.scene,
-                &RenderOptions {
-                    samples: high_samples,
-                    seed: 10_000,
-                    ..options
-                },
-            )
+            &render(&loaded.scene, &{
+                let mut options = options;
+                options.samples = high_samples;
+                options.seed = 10_000;
+                options
+            })
             .image,
         );
         for block in 0..20 {
@@ -466,22 +482,21 @@ fn the_mean_of_many_low_sample_renders_matches_a_high_sample_render() {
 #[test]
 fn the_original_estimator_converges_to_the_same_image() {
     let loaded = scene(MIXED);
-    let options = RenderOptions {
-        samples: 128,
-        bounces: 2,
-        seed: 99,
-        memo: memo_options(false),
-        ..RenderOptions::default()
+    let options = {
+        let mut options = RenderOptions::default();
+        options.samples = 128;
+        options.bounces = 2;
+        options.seed = 99;
+        options.memo = memo_options(false);
+        options
     };
     let path = render(&loaded.scene, &options).image;
-    let original = render(
-        &loaded.scene,
-        &RenderOptions {
-            integrator: Integrator::Original,
-            seed: 100,
-            ..options
-        },
-    )
+    let original = render(&loaded.scene, &{
+        let mut options = options;
+        options.integrator = Integrator::Original;
+        options.seed = 100;
+        options
+    })
     .image;
     // Pixel differences are independent between pixels: their spread
     // gives the standard error of their mean over a block.

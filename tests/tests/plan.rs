@@ -68,14 +68,12 @@ fn plans_of_test_scenes() {
 
 fn stats_of(text: &str, force: bool) -> (flatray_tracer::Image, Stats) {
     let loaded = scene(text);
-    let rendered = render(
-        &loaded.scene,
-        &RenderOptions {
-            samples: 4,
-            reference: force,
-            ..loaded.options
-        },
-    );
+    let rendered = render(&loaded.scene, &{
+        let mut options = loaded.options;
+        options.samples = 4;
+        options = options.with_reference(force);
+        options
+    });
     (rendered.image, rendered.stats)
 }
 
@@ -145,11 +143,12 @@ fn skipped_effects_cast_no_rays_and_count_no_events() {
 #[test]
 fn the_light_tracer_casts_no_shadow_ray_and_reads_no_memo() {
     let loaded = flatray_io::load(&workspace_root().join("scenes/room.ron")).unwrap();
-    let options = RenderOptions {
-        samples: 1,
-        scale: 0.2,
-        integrator: flatray_tracer::Integrator::Light,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 1;
+        options.scale = 0.2;
+        options.integrator = flatray_tracer::Integrator::Light;
+        options
     };
     let plan = Plan::new(&loaded.scene, &options);
     assert!(!plan.shadows && !plan.wall_memo && !plan.floor_memo);
@@ -179,12 +178,13 @@ fn images_are_bit_identical_with_and_without_the_plan() {
         let loaded =
             flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron"))).unwrap();
         let render_with = |force| {
-            let options = RenderOptions {
-                samples: 8,
-                scale: 0.2,
-                bounces: 1,
-                reference: force,
-                ..loaded.options
+            let options = {
+                let mut options = loaded.options;
+                options.samples = 8;
+                options.scale = 0.2;
+                options.bounces = 1;
+                options = options.with_reference(force);
+                options
             };
             render(&loaded.scene, &options)
         };

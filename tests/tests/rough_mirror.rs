@@ -36,10 +36,11 @@ fn roughness_zero_is_the_mirror_bit_for_bit() {
         .unwrap_or_default();
     assert!(room.contains("material: Mirror()"));
     let rough = room.replace("material: Mirror()", "material: Rough(roughness: 0)");
-    let options = RenderOptions {
-        scale: 0.25,
-        samples: 16,
-        ..RenderOptions::default()
+    let options = {
+        let mut options = RenderOptions::default();
+        options.scale = 0.25;
+        options.samples = 16;
+        options
     };
     let mirror = render(&scene(&room).scene, &options);
     let zero = render(&scene(&rough).scene, &options);
@@ -48,7 +49,7 @@ fn roughness_zero_is_the_mirror_bit_for_bit() {
     // roughness 0.
     let given = scene(&room).scene;
     let walls = given
-        .walls
+        .walls()
         .iter()
         .map(|w| Wall {
             material: match w.material {
@@ -62,14 +63,15 @@ fn roughness_zero_is_the_mirror_bit_for_bit() {
         })
         .collect();
     let api = Scene::with_glass(
-        given.canvas,
-        given.floor.clone(),
-        given.small_radius,
+        *given.canvas(),
+        given.floor().clone(),
+        given.small_radius(),
         walls,
-        given.lights.clone(),
-        given.glass.clone(),
-    );
-    assert!(api.walls.iter().any(|w| w.material.is_mirror()));
+        given.lights().to_vec(),
+        given.glass().to_vec(),
+    )
+    .expect("a valid scene");
+    assert!(api.walls().iter().any(|w| w.material.is_mirror()));
     assert_eq!(render(&api, &options).image.pixels, mirror.image.pixels);
     // A slightly rough one differs.
     let slight = room.replace("material: Mirror()", "material: Rough(roughness: 0.05)");
@@ -100,11 +102,12 @@ fn a_furnace_of_rough_white_mirrors_conserves_energy() {
         let text = format!("Scene(canvas: (64, 64), floor: Color((1, 1, 1)), walls: [{walls}])");
         let loaded = scene(&text);
         for integrator in [Integrator::Path, Integrator::Light] {
-            let options = RenderOptions {
-                samples: 4,
-                bounces,
-                integrator,
-                ..RenderOptions::default()
+            let options = {
+                let mut options = RenderOptions::default();
+                options.samples = 4;
+                options.bounces = bounces;
+                options.integrator = integrator;
+                options
             };
             // The mean of the blocks well inside (inradius 27), over runs.
             let runs = 16;
@@ -171,14 +174,13 @@ fn light_and_path_tracing_agree_with_a_rough_mirror() {
         k: 5.0,
         min_blocks: 20,
     };
-    let options = RenderOptions {
-        samples: 8,
-        bounces: 2,
-        memo: MemoOptions {
-            enabled: false,
-            ..MemoOptions::default()
-        },
-        ..RenderOptions::default()
+    let options = {
+        let mut options = RenderOptions::default();
+        options.samples = 8;
+        options.bounces = 2;
+        options.memo = MemoOptions::default();
+        options.memo.enabled = false;
+        options
     };
     agreement.check("rough mirror room", &loaded.scene, options, |b| {
         b != light_block
@@ -256,11 +258,12 @@ fn the_caustic_pass_and_next_event_estimation_agree_off_a_rough_mirror() {
         );
         let loaded = scene(&text);
         let block = 8;
-        let at = |caustics| RenderOptions {
-            samples: 8,
-            bounces: 2,
-            caustics,
-            ..RenderOptions::default()
+        let at = |caustics| {
+            let mut options = RenderOptions::default();
+            options.samples = 8;
+            options.bounces = 2;
+            options.caustics = caustics;
+            options
         };
         let photons = block_stats(&loaded.scene, at(true), block, 16, 5000);
         let paths = block_stats(&loaded.scene, at(false), block, 16, 5000);

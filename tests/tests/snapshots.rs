@@ -22,20 +22,22 @@ fn snapshot_scene(name: &str, options: impl FnOnce(RenderOptions) -> RenderOptio
 
 #[test]
 fn room() {
-    snapshot_scene("room", |o| RenderOptions {
-        samples: 4,
-        scale: 0.2,
-        seed: 7,
-        ..o
+    snapshot_scene("room", |o| {
+        let mut options = o;
+        options.samples = 4;
+        options.scale = 0.2;
+        options.seed = 7;
+        options
     });
 }
 
 #[test]
 fn soft_shadow() {
-    snapshot_scene("soft-shadow", |o| RenderOptions {
-        samples: 4,
-        scale: 0.3,
-        seed: 7,
-        ..o
+    snapshot_scene("soft-shadow", |o| {
+        let mut options = o;
+        options.samples = 4;
+        options.scale = 0.3;
+        options.seed = 7;
+        options
     });
 }

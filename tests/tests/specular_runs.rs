@@ -80,9 +80,10 @@ fn sunlight_through_a_glass_slab_at_the_default_settings() {
         // Above the slab: the sun and what the slab sends back, all of it
         // but what it lets through.
         let above = 0.5 + 0.5 * (1.0 - (1.0 - r) / (1.0 + r));
-        let options = RenderOptions {
-            samples: 16,
-            ..scene(&text).options
+        let options = {
+            let mut options = scene(&text).options;
+            options.samples = 16;
+            options
         };
         let checked = assert_blocks(
             &format!("slab at {degrees} degrees, {bounces} bounces"),
@@ -133,9 +134,10 @@ fn facing_mirrors_show_many_images_at_the_default_settings() {
             .map(|&(image, k)| tint.powi(k) / (p - image).length().max(0.5))
             .sum()
     };
-    let options = RenderOptions {
-        samples: 64,
-        ..scene(&text).options
+    let options = {
+        let mut options = scene(&text).options;
+        options.samples = 64;
+        options
     };
     assert_eq!(options.bounces, 1);
     let checked = assert_blocks(
@@ -175,9 +177,10 @@ fn a_line_light_seen_in_a_mirror_lights_the_walls_at_one_bounce() {
                 Wall(a: (36, 12), b: (52, 12.5), material: Diffuse(albedo: Some((0.9, 0.6, 0.4))))],
         lights: [Line(a: (8, 8), b: (14, 14), intensity: 0.5)])";
     let loaded = scene(text);
-    let options = RenderOptions {
-        samples: 16,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.samples = 16;
+        options
     };
     assert_eq!(options.bounces, 1);
     let path = flatray_tests::Agreement {
@@ -188,12 +191,13 @@ fn a_line_light_seen_in_a_mirror_lights_the_walls_at_one_bounce() {
         min_blocks: 30,
     }
     .check("line light in a mirror", &loaded.scene, options, |_| true);
-    let mut dark = loaded.scene.clone();
+    let mut dark = loaded.scene.parts();
     for wall in &mut dark.walls {
         if let flatray_tracer::Material::Mirror { tint } = &mut wall.material {
             *tint = flatray_tracer::Rgb::ZERO;
         }
     }
+    let dark = dark.build().expect("a valid scene");
     let without = block_stats(&dark, options, 8, 4, 3000);
     let total = |blocks: &[(f64, f64)]| blocks.iter().map(|b| b.0).sum::<f64>();
     assert!(

@@ -51,13 +51,21 @@ pub type Rgb = glam::DVec3;
 
 pub use caustics::{FULL_RATE_SHARE, LEAST_RATE, PHOTONS_PER_SAMPLE, photon_rate};
 pub use options::{
-    DEFAULT_SPECULAR, FastPath, FastPaths, Image, Integrator, LightChoice, MANY_LIGHTS,
-    MAX_CULLED_WALLS, MemoOptions, RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, image_size,
+    DEFAULT_SPECULAR, Image, Integrator, LightChoice, MANY_LIGHTS, MAX_CULLED_WALLS, MemoOptions,
+    RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, Window, image_size,
 };
+/// The fast paths, to measure what each buys
+/// ([`RenderOptions::with_fast_paths`]); every one computes the model's
+/// bits.
+#[doc(hidden)]
+pub use options::{FastPath, FastPaths};
 pub use passes::{FIRST_PASS, next_pass_end};
 pub use plan::Plan;
 pub use render::{Progressive, render};
 pub use run::ROULETTE_FROM;
-pub use scene::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Scene, Wall};
+pub use scene::{
+    Canvas, Falloff, Floor, GlassBody, InvalidScene, Light, LightShape, Material, Parts, Scene,
+    Wall,
+};
 pub use stats::{Noise, Physics, Stats, Work};
 pub use tile::pixel_sample;

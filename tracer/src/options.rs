@@ -11,8 +11,10 @@ use crate::scene::Scene;
 /// facing mirrors; Russian roulette ends most long runs well before it.
 pub const DEFAULT_SPECULAR: u32 = 32;
 
-/// How the memo is used.
+/// How the memo is used. Start from [`MemoOptions::default`] and set the
+/// fields you need: more may be added without a breaking release.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct MemoOptions {
     /// Whether a render uses the memo at all.
     pub enabled: bool,
@@ -62,7 +64,28 @@ pub enum Integrator {
 }
 
 /// Everything about a render that is not the scene.
+///
+/// Start from [`RenderOptions::default`] and set the fields you need:
+/// more may be added without a breaking release.
+///
+/// ```
+/// use flatray_tracer::{Integrator, RenderOptions};
+///
+/// let mut options = RenderOptions::default();
+/// options.samples = 64;
+/// options.bounces = 2;
+/// options.integrator = Integrator::Path;
+/// assert_eq!(options.seed, 0);
+/// ```
+///
+/// A struct expression outside this crate does not compile, so that a
+/// new field breaks no caller:
+///
+/// ```compile_fail
+/// let options = flatray_tracer::RenderOptions { samples: 4, ..Default::default() };
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct RenderOptions {
     /// Samples per pixel.
     pub samples: u32,
@@ -92,17 +115,78 @@ pub struct RenderOptions {
     /// culling, lanes, shared shadow rays, tables or shortcuts, and the
     /// pixel loop compiled for any processor). The same image, bit for
     /// bit (`tests/tests/identity.rs`), more slowly: for tests, debugging
-    /// and benchmarks.
-    pub reference: bool,
+    /// and benchmarks ([`RenderOptions::with_reference`]).
+    pub(crate) reference: bool,
     /// The fast paths a render may take (all, by default); `reference`
     /// takes none. Each computes what the model computes, bit for bit: a
     /// fast path is left out only to measure what it buys.
-    pub fast_paths: FastPaths,
+    pub(crate) fast_paths: FastPaths,
     /// How next-event estimation picks its lights.
     pub light_choice: LightChoice,
+    /// Only the pixels of this window are rendered (all of them when
+    /// `None`); the others are 0 and take no part in the noise estimate.
+    /// A window's pixels have the whole render's bits, so a render split
+    /// into windows and put back together is the whole render, bit for
+    /// bit. The path estimators skip the tiles outside the window; the
+    /// light tracer traces every path and keeps the window's pixels.
+    pub window: Option<Window>,
+}
+
+/// A rectangle of an image's pixels: columns `x0..x1`, rows `y0..y1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Window {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl Window {
+    /// Whether pixel `(x, y)` is in the window.
+    #[inline]
+    pub fn contains(&self, (x, y): (u32, u32)) -> bool {
+        (self.x0..self.x1).contains(&x) && (self.y0..self.y1).contains(&y)
+    }
+
+    /// Whether the window and the rectangle `x0..x1`, `y0..y1` share a
+    /// pixel.
+    #[inline]
+    pub fn meets(&self, (x0, y0): (u32, u32), (x1, y1): (u32, u32)) -> bool {
+        self.x0 < x1 && x0 < self.x1 && self.y0 < y1 && y0 < self.y1
+    }
 }
 
 impl RenderOptions {
+    /// These options with the plain model on or off: every effect
+    /// computed wherever it could add light, and no fast path. The same
+    /// image, bit for bit, more slowly; for tests, debugging and
+    /// benchmarks.
+    #[doc(hidden)]
+    pub fn with_reference(mut self, on: bool) -> RenderOptions {
+        self.reference = on;
+        self
+    }
+
+    /// Whether the plain model is on ([`RenderOptions::with_reference`]).
+    #[doc(hidden)]
+    pub fn is_reference(&self) -> bool {
+        self.reference
+    }
+
+    /// These options taking only the fast paths `paths`, to measure what
+    /// each buys. Every fast path computes the model's bits.
+    #[doc(hidden)]
+    pub fn with_fast_paths(mut self, paths: FastPaths) -> RenderOptions {
+        self.fast_paths = paths;
+        self
+    }
+
+    /// The fast paths a render may take.
+    #[doc(hidden)]
+    pub fn fast_paths(&self) -> FastPaths {
+        self.fast_paths
+    }
+
     /// Whether the render takes fast path `path`.
     #[inline]
     pub fn takes(&self, path: FastPath) -> bool {
@@ -208,6 +292,7 @@ impl Default for RenderOptions {
             reference: false,
             fast_paths: FastPaths::ALL,
             light_choice: LightChoice::Auto,
+            window: None,
         }
     }
 }

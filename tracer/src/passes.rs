@@ -18,7 +18,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::film::{PixelSums, pixel_scale};
-use crate::options::{Image, Rendered};
+use crate::options::{Image, Rendered, Window};
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
@@ -220,7 +220,7 @@ impl Totals {
     /// The image so far: exposure times floor albedo times each pixel's
     /// mean, and the noise estimate from the halves. Rows in parallel,
     /// their noise summed in row order.
-    pub fn rendered(&self, scene: &Scene, exposure: f64) -> Rendered {
+    pub fn rendered(&self, scene: &Scene, exposure: f64, window: Option<Window>) -> Rendered {
         let (width, height) = self.size;
         let mut stats = self.stats;
         if self.samples == 0 || self.sums.is_empty() || width == 0 {
@@ -244,6 +244,9 @@ impl Totals {
                 let mut stats = Stats::default();
                 for (x, (pixel, sums)) in out.iter_mut().zip(row).enumerate() {
                     let (x, y) = (x as u32, y as u32);
+                    if window.is_some_and(|w| !w.contains((x, y))) {
+                        continue;
+                    }
                     let scale = pixel_scale(scene, self.size, (x, y), exposure);
                     let value = sums.all / n * scale;
                     if n1 > 0.0 && n2 > 0.0 {

@@ -14,6 +14,27 @@ use crate::tile::{Shared, path_passes};
 /// depend on the number of threads or on their scheduling. The render is
 /// the sequence of passes that `passes.rs` describes: the same image as
 /// [`crate::Progressive`] driven to the same samples.
+///
+/// ```
+/// use flatray_tracer::{Canvas, Falloff, Floor, Light, LightShape, RenderOptions, Rgb, Scene};
+/// use glam::DVec2;
+///
+/// let canvas = Canvas { width: 32, height: 16, origin: DVec2::ZERO };
+/// let lamp = Light {
+///     shape: LightShape::Point { at: DVec2::new(8.0, 8.0) },
+///     color: Rgb::ONE,
+///     intensity: 1.0,
+///     falloff: Falloff::Flatland,
+/// };
+/// let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.5)), 0.5, vec![], vec![lamp])?;
+/// let mut options = RenderOptions::default();
+/// options.samples = 4;
+/// let rendered = flatray_tracer::render(&scene, &options, &|_| {});
+/// assert_eq!((rendered.image.width, rendered.image.height), (32, 16));
+/// // Nearer the lamp is brighter.
+/// assert!(rendered.image.get(9, 8)[0] > rendered.image.get(30, 8)[0]);
+/// # Ok::<(), flatray_tracer::InvalidScene>(())
+/// ```
 pub fn render(scene: &Scene, options: &RenderOptions, progress: &(dyn Fn(u64) + Sync)) -> Rendered {
     let mut passes = Passes::new(scene, options);
     passes.run_to(options.samples, progress);
@@ -193,7 +214,8 @@ impl<'a> Passes<'a> {
     }
 
     pub fn rendered(&self) -> Rendered {
-        self.totals.rendered(self.scene, self.options.exposure)
+        self.totals
+            .rendered(self.scene, self.options.exposure, self.options.window)
     }
 }
 

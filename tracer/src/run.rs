@@ -258,7 +258,8 @@ mod tests {
             0.5,
             walls.clone(),
             vec![light],
-        );
+        )
+        .expect("a valid scene");
         let sides = last_leg_sides(&scene);
         let facing = |w: usize, towards: DVec2| {
             let s = &scene.walls[w].segment;
@@ -278,7 +279,8 @@ mod tests {
         assert!(!facing(2, left));
         // A mirror on the far left lights the first mirror's left side.
         walls.push(wall((0.5, 0.0), (0.5, 20.0), mirror));
-        let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, vec![light]);
+        let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, vec![light])
+            .expect("a valid scene");
         let sides = last_leg_sides(&scene);
         let s = &scene.walls[2].segment;
         let towards_mirror = if s.normal().dot(right) > 0.0 {

@@ -65,8 +65,16 @@ impl Shared {
             .floor_coherence
             .then(|| FloorCoherence::build(scene, (width, height)))
             .flatten();
+        // Only the tiles that meet the window, where there is one: each
+        // tile's pixels do not depend on which other tiles are rendered.
+        let window = options.window;
         let tiles = (0..height.div_ceil(TILE))
             .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx, ty)))
+            .filter(|&(tx, ty)| {
+                window.is_none_or(|w| {
+                    w.meets((tx * TILE, ty * TILE), ((tx + 1) * TILE, (ty + 1) * TILE))
+                })
+            })
             .collect();
         let last_leg_sides = plan.last_legs.then(|| crate::run::last_leg_sides(scene));
         Shared {

@@ -59,19 +59,21 @@ fn main() {
         height: size as u32,
         origin: DVec2::ZERO,
     };
-    let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.85)), 0.5, walls, lights);
+    let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.85)), 0.5, walls, lights)
+        .expect("the maze is a valid scene");
     let build_seconds = built.elapsed().as_secs_f64();
-    let options = RenderOptions {
-        samples,
-        bounces: 1,
-        ..RenderOptions::default()
+    let options = {
+        let mut options = RenderOptions::default();
+        options.samples = samples;
+        options.bounces = 1;
+        options
     };
     let started = Instant::now();
     let rendered = flatray_tracer::render(&scene, &options, &|_| {});
     let seconds = started.elapsed().as_secs_f64();
     println!(
         "{count} walls, {} lights, {samples} spp, 500 x 500: scene built in {build_seconds:.2} s, rendered in {seconds:.2} s ({:.1} M rays/s)",
-        scene.lights.len(),
+        scene.lights().len(),
         (rendered.stats.rays() + rendered.stats.work.memo_fill_rays) as f64 / seconds / 1e6
     );
     let w = &rendered.stats.work;

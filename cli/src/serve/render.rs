@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use flatray_io::{Loaded, ToneMap};
-use flatray_tracer::{Image, RenderOptions};
+use flatray_tracer::Image;
 use tokio::sync::watch;
 
 /// The quick first frame's longest side, in pixels, and its samples.
@@ -168,14 +168,13 @@ fn show(
     };
     // The quick frame, without the cache: for so few samples, filling it
     // would cost more than the shadow rays it saves.
-    let quick = RenderOptions {
-        scale: quick_scale(loaded),
-        samples: QUICK_SPP,
-        memo: flatray_tracer::MemoOptions {
-            enabled: false,
-            ..loaded.options.memo
-        },
-        ..loaded.options
+    let quick = {
+        let mut options = loaded.options;
+        options.scale = quick_scale(loaded);
+        options.samples = QUICK_SPP;
+        options.memo = loaded.options.memo;
+        options.memo.enabled = false;
+        options
     };
     let rendered = stoppable(version, latest, |progress| {
         flatray_tracer::render(&loaded.scene, &quick, progress)
@@ -187,9 +186,10 @@ fn show(
     if let Some(newer) = newest(incoming) {
         return Some(newer);
     }
-    let options = RenderOptions {
-        scale: 1.0,
-        ..loaded.options
+    let options = {
+        let mut options = loaded.options;
+        options.scale = 1.0;
+        options
     };
     let mut progressive = flatray_tracer::Progressive::new(&loaded.scene, &options);
     let mut passes = 0;
@@ -221,9 +221,9 @@ fn show(
 fn quick_scale(loaded: &Loaded) -> f64 {
     let side = loaded
         .scene
-        .canvas
+        .canvas()
         .width
-        .max(loaded.scene.canvas.height)
+        .max(loaded.scene.canvas().height)
         .max(1);
     (QUICK_SIDE as f64 / side as f64).min(1.0)
 }

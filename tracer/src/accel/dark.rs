@@ -191,7 +191,7 @@ mod tests {
             }),
             light(LightShape::Spot {
                 at: turn(20.0, 30.0),
-                direction: DVec2::new(1.0, -0.2),
+                direction: DVec2::new(1.0, -0.2).normalize(),
                 cone: 0.9,
                 softness: 0.2,
             }),
@@ -200,7 +200,7 @@ mod tests {
                 at: turn(30.0, 16.0),
             }),
             light(LightShape::Directional {
-                direction: DVec2::new(0.4, 1.0),
+                direction: DVec2::new(0.4, 1.0).normalize(),
             }),
         ];
         let canvas = Canvas {
@@ -208,7 +208,7 @@ mod tests {
             height: 40,
             origin: DVec2::ZERO,
         };
-        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights)
+        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene")
     }
 
     /// Every light marked dark in a cell brings exactly nothing to every

@@ -353,7 +353,7 @@ mod tests {
             height: 40,
             origin: DVec2::ZERO,
         };
-        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights)
+        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene")
     }
 
     /// The floor memo's light-by-light passes give every point exactly what

@@ -257,7 +257,8 @@ mod tests {
                 height: 50,
                 origin: DVec2::ZERO,
             };
-            let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, Vec::new());
+            let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, Vec::new())
+                .expect("a valid scene");
             assert_eq!(scene.segments.strategy(), Strategy::Bvh);
             let ray = Ray::new(DVec2::new(0.0, 0.1), DVec2::new(1.0, 0.0));
             let mut stats = Stats::default();

@@ -298,6 +298,7 @@ mod tests {
             origin: DVec2::ZERO,
         };
         Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, Vec::new(), Vec::new())
+            .expect("a valid scene")
     }
 
     /// For the Lambertian BSDF, `sample`'s weight is `f cos / pdf` with

@@ -1,8 +1,25 @@
-//! The in-memory scene: plain data that the integrators read.
+//! The in-memory scene: data that the integrators read, checked when it
+//! is built.
 //!
-//! `flatray-io` builds it from a scene file; tests and benchmarks build it
-//! directly. Every value here is assumed valid (finite, in range): the
-//! loader checks user input, [`Scene::new`] only builds derived tables.
+//! `flatray-io` builds it from a scene file; embedders, tests and
+//! benchmarks build it directly with [`Scene::new`] or
+//! [`Scene::with_glass`], which check every value (`check.rs`) and derive
+//! the tables the integrators use. Its fields are private, so the tables
+//! cannot fall out of step with the walls and lights.
+
+mod check;
+pub use check::{
+    IOR_RANGE, InvalidScene, Item, MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MAX_COORDINATE,
+    MAX_INTENSITY, SMALL_RADIUS_RANGE,
+};
+/// The checks of single values, with the messages a scene file's errors
+/// use.
+pub mod checks {
+    pub use super::check::{
+        canvas_size, color, cone, exposure, finite, fraction, intensity, ior, non_negative, point,
+        positive, roughness, small_radius,
+    };
+}
 
 use flatray_geometry::{DVec2, Ray, Segment, SegmentSet, Side, Skip};
 
@@ -716,17 +733,68 @@ pub fn smooth_window(angle: f64, cone: f64, softness: f64) -> f64 {
     }
 }
 
-/// A complete scene.
-#[derive(Clone, Debug)]
-pub struct Scene {
+/// What a scene is built from: plain data, checked when it is built.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parts {
     pub canvas: Canvas,
     pub floor: Floor,
-    /// Every kernel clamps `r` below at this radius (world units).
     pub small_radius: f64,
     pub walls: Vec<Wall>,
     pub lights: Vec<Light>,
-    /// Glass bodies, referred to by `Material::Glass` walls.
     pub glass: Vec<GlassBody>,
+}
+
+impl Parts {
+    /// The scene of these parts, checked ([`Scene::with_glass`]).
+    pub fn build(self) -> Result<Scene, InvalidScene> {
+        Scene::with_glass(
+            self.canvas,
+            self.floor,
+            self.small_radius,
+            self.walls,
+            self.lights,
+            self.glass,
+        )
+    }
+
+    /// The scene of these parts, unchecked: for tests of the renderer's
+    /// guards against values that no checked scene holds (a light of
+    /// intensity 1e200). Never for user input.
+    #[doc(hidden)]
+    pub fn build_unchecked(self) -> Scene {
+        Scene::derive(
+            self.canvas,
+            self.floor,
+            self.small_radius,
+            self.walls,
+            self.lights,
+            self.glass,
+        )
+    }
+}
+
+/// A complete scene: its walls and lights, and the tables derived from
+/// them. Built by [`Scene::new`] or [`Scene::with_glass`], which check
+/// every value; read through its accessors; changed only by building a
+/// new one from its [`Scene::parts`], so the tables always match.
+///
+/// ```compile_fail
+/// // The walls are private: a wall pushed here would be missing from
+/// // the tables that rays are traced against.
+/// fn add(scene: &mut flatray_tracer::Scene, wall: flatray_tracer::Wall) {
+///     scene.walls.push(wall);
+/// }
+/// ```
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub(crate) canvas: Canvas,
+    pub(crate) floor: Floor,
+    /// Every kernel clamps `r` below at this radius (world units).
+    pub(crate) small_radius: f64,
+    pub(crate) walls: Vec<Wall>,
+    pub(crate) lights: Vec<Light>,
+    /// Glass bodies, referred to by `Material::Glass` walls.
+    pub(crate) glass: Vec<GlassBody>,
     /// How many segments given to [`Scene::new`] lay along others and were
     /// merged with them (`docs/robustness.md`, rule 8).
     pub(crate) merged: usize,
@@ -743,47 +811,97 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Builds a scene and its derived tables. A line light whose `wall` is
-    /// out of range is treated as not solid.
+    /// Builds a scene of walls and lights and its derived tables, after
+    /// checking every value ([`InvalidScene`] names the first that is
+    /// out of bounds). Walls that lie along others are merged
+    /// (`docs/robustness.md`, rule 8).
+    ///
+    /// ```
+    /// use flatray_tracer::{Canvas, Falloff, Floor, Light, LightShape, Rgb, Scene};
+    /// use glam::DVec2;
+    ///
+    /// let canvas = Canvas { width: 100, height: 100, origin: DVec2::ZERO };
+    /// let lamp = Light {
+    ///     shape: LightShape::Point { at: DVec2::new(50.0, 50.0) },
+    ///     color: Rgb::ONE,
+    ///     intensity: 1.0,
+    ///     falloff: Falloff::Flatland,
+    /// };
+    /// let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.5)), 0.5, vec![], vec![lamp])?;
+    /// assert_eq!(scene.lights().len(), 1);
+    ///
+    /// let far = Light { intensity: -1.0, ..lamp };
+    /// let error = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, vec![], vec![far]).unwrap_err();
+    /// assert_eq!(error.to_string(), "light 0: expected an intensity from 0 to 1e9, found -1");
+    /// # Ok::<(), flatray_tracer::scene::InvalidScene>(())
+    /// ```
     pub fn new(
         canvas: Canvas,
         floor: Floor,
         small_radius: f64,
         walls: Vec<Wall>,
         lights: Vec<Light>,
-    ) -> Scene {
+    ) -> Result<Scene, InvalidScene> {
         Scene::with_glass(canvas, floor, small_radius, walls, lights, Vec::new())
     }
 
-    /// Builds a scene with glass bodies. A glass wall whose body is out of
-    /// range is treated as clear glass of index 1.5.
+    /// Builds a scene with glass bodies, which `Material::Glass` walls
+    /// refer to by index, after checking every value.
     pub fn with_glass(
+        canvas: Canvas,
+        floor: Floor,
+        small_radius: f64,
+        walls: Vec<Wall>,
+        lights: Vec<Light>,
+        glass: Vec<GlassBody>,
+    ) -> Result<Scene, InvalidScene> {
+        check::scene(&canvas, &floor, small_radius, &walls, &lights, &glass)?;
+        Ok(Scene::derive(
+            canvas,
+            floor,
+            small_radius,
+            walls,
+            lights,
+            glass,
+        ))
+    }
+
+    /// What the scene is built from, to change and build again: the one
+    /// way to edit a scene, so that its tables are derived anew.
+    ///
+    /// ```
+    /// # use flatray_tracer::{Canvas, Falloff, Floor, Light, LightShape, Rgb, Scene};
+    /// # use glam::DVec2;
+    /// # let canvas = Canvas { width: 10, height: 10, origin: DVec2::ZERO };
+    /// # let lamp = Light { shape: LightShape::Point { at: DVec2::new(5.0, 5.0) },
+    /// #     color: Rgb::ONE, intensity: 1.0, falloff: Falloff::Flatland };
+    /// # let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, vec![], vec![lamp])?;
+    /// let mut parts = scene.parts();
+    /// parts.lights[0].intensity = 2.0;
+    /// let brighter = parts.build()?;
+    /// assert_eq!(brighter.lights()[0].intensity, 2.0);
+    /// # Ok::<(), flatray_tracer::scene::InvalidScene>(())
+    /// ```
+    pub fn parts(&self) -> Parts {
+        Parts {
+            canvas: self.canvas,
+            floor: self.floor.clone(),
+            small_radius: self.small_radius,
+            walls: self.walls.clone(),
+            lights: self.lights.clone(),
+            glass: self.glass.clone(),
+        }
+    }
+
+    /// The derived tables of a scene whose values are checked.
+    fn derive(
         canvas: Canvas,
         floor: Floor,
         small_radius: f64,
         mut walls: Vec<Wall>,
         mut lights: Vec<Light>,
-        mut glass: Vec<GlassBody>,
+        glass: Vec<GlassBody>,
     ) -> Scene {
-        if walls.iter().any(|w| {
-            w.material
-                .glass()
-                .is_some_and(|(body, _)| body as usize >= glass.len())
-        }) {
-            glass.push(GlassBody {
-                ior: 1.5,
-                dispersion: 0.0,
-                absorption: Rgb::ZERO,
-            });
-            let fallback = glass.len() as u32 - 1;
-            for w in &mut walls {
-                if let Material::Glass { body, .. } = &mut w.material
-                    && *body >= fallback
-                {
-                    *body = fallback;
-                }
-            }
-        }
         // A rough mirror of roughness 0 is the mirror, to the bit.
         for w in &mut walls {
             if let Material::Rough { roughness, tint } = w.material {
@@ -828,6 +946,37 @@ impl Scene {
             segments,
             albedo_along,
         }
+    }
+
+    /// The rectangle of the world the image covers.
+    pub fn canvas(&self) -> &Canvas {
+        &self.canvas
+    }
+
+    /// The floor's albedo.
+    pub fn floor(&self) -> &Floor {
+        &self.floor
+    }
+
+    /// The radius (world units) below which every kernel clamps `r`.
+    pub fn small_radius(&self) -> f64 {
+        self.small_radius
+    }
+
+    /// The walls, after walls that lay along others were merged: a
+    /// glass body's edges among them, and a solid line light's wall.
+    pub fn walls(&self) -> &[Wall] {
+        &self.walls
+    }
+
+    /// The lights.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// The glass bodies, which `Material::Glass` walls refer to.
+    pub fn glass(&self) -> &[GlassBody] {
+        &self.glass
     }
 
     /// Each wall's length if it is diffuse, else 0: what the wall memo
