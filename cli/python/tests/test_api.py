@@ -1,0 +1,226 @@
+"""The Python binding against the CLI and against bad input."""
+
+import pathlib
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import flatray
+
+# A rotated room (its walls at 30 degrees) with a mirror, a coloured wall,
+# a pane, glass and two kinds of light: as RON text and as Python values.
+ROOM_RON = """Scene(
+    canvas: (60, 48),
+    floor: Color((0.8, 0.8, 0.8)),
+    walls: [
+        Wall(a: (10, 8), b: (50, 4)),
+        Wall(a: (50, 4), b: (54, 40), material: Mirror()),
+        Wall(a: (54, 40), b: (14, 44), material: Diffuse(albedo: (0.9, 0.3, 0.2))),
+        Wall(a: (14, 44), b: (10, 8), material: Transparent(tint: (0.5, 0.8, 1))),
+    ],
+    lights: [
+        Point(at: (24, 20), intensity: 2.0),
+        Line(a: (30, 36), b: (40, 35), intensity: 0.5),
+    ],
+    glass: [Glass(points: [(36, 14), (44, 16), (40, 24)], ior: 1.5)],
+    render: (samples: 8, bounces: 2),
+)
+"""
+
+ROOM_VALUES = dict(
+    canvas=(60, 48),
+    floor={"Color": (0.8, 0.8, 0.8)},
+    walls=[
+        {"a": (10, 8), "b": (50, 4)},
+        {"a": (50, 4), "b": (54, 40), "material": "Mirror"},
+        {"a": (54, 40), "b": (14, 44), "material": {"Diffuse": {"albedo": (0.9, 0.3, 0.2)}}},
+        {"a": (14, 44), "b": (10, 8), "material": {"Transparent": {"tint": (0.5, 0.8, 1)}}},
+    ],
+    lights=[
+        {"Point": {"at": (24, 20), "intensity": 2.0}},
+        {"Line": {"a": (30, 36), "b": (40, 35), "intensity": 0.5}},
+    ],
+    glass=[{"points": [(36, 14), (44, 16), (40, 24)], "ior": 1.5}],
+    render={"samples": 8, "bounces": 2},
+)
+
+
+def cli_render(cli, scene_path, out, *flags):
+    subprocess.run([cli, "render", str(scene_path), "-o", str(out), "-q", *flags], check=True)
+    return flatray.read_exr(out)
+
+
+def test_a_scene_built_in_python_renders_the_clis_bits(cli, tmp_path):
+    path = tmp_path / "room.ron"
+    path.write_text(ROOM_RON)
+    expected = cli_render(cli, path, tmp_path / "cli.exr", "--seed", "3")
+    built = flatray.Scene(**ROOM_VALUES)
+    got = flatray.render(built, seed=3)
+    assert got.image.shape == expected.shape
+    assert np.array_equal(got.image, expected)
+    # The same through the loader, and with the samples given here.
+    loaded = flatray.load(path)
+    assert np.array_equal(flatray.render(loaded, seed=3).image, expected)
+    more = cli_render(cli, path, tmp_path / "more.exr", "--spp", "20", "--integrator", "light")
+    assert np.array_equal(flatray.render(built, spp=20, integrator="light").image, more)
+
+
+def test_the_image_is_height_by_width_by_three_float32(repo):
+    scene = flatray.load(repo / "scenes" / "room.ron")
+    result = flatray.render(scene, spp=2, scale=0.1)
+    assert result.image.shape == (50, 50, 3)
+    assert result.image.dtype == np.float32
+    assert result.image.flags["C_CONTIGUOUS"]
+    assert result.image.max() > 0
+    assert 0 < result.noise < 1
+    assert result.stats["physics"]["camera_samples"] == 50 * 50 * 2
+    assert result.settings["spp"] == 2 and result.settings["scale"] == 0.1
+
+
+def test_a_bad_scene_file_raises_with_its_file_line_and_column(tmp_path):
+    path = tmp_path / "bad.ron"
+    path.write_text(
+        "Scene(\n    canvas: (10, 10),\n    floor: Color((1, 1, 1)),\n"
+        "    lights: [Point(at: (5, 5), intensity: -2)],\n)\n"
+    )
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.load(path)
+    error = caught.value
+    assert error.file == str(path)
+    assert (error.line, error.column) == (4, 43)
+    assert "expected an intensity from 0 to 1e9, found -2" in error.message
+    assert str(error).startswith(f"{path}:4:43: ")
+    assert isinstance(error, ValueError)
+
+
+def test_a_bad_scene_text_and_bad_values_raise_where_they_are_wrong():
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.parse("Scene(canvas: (10, 10), floor: Colour((1, 1, 1)))", name="mine.ron")
+    assert caught.value.file == "mine.ron" and caught.value.line == 1
+    assert "Colour" in caught.value.message
+    values = dict(ROOM_VALUES)
+    values["lights"] = [{"Spot": {"at": (1, 1), "direction": (1, 0), "cone": 200}}]
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.Scene(**values)
+    assert caught.value.at == "lights[0]"
+    assert caught.value.line is None and caught.value.file is None
+    assert "cone" in caught.value.message
+    values["lights"] = [{"Point": {"at": (1, "x")}}]
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.Scene(**values)
+    assert caught.value.at.startswith("lights[0].Point.at")
+    values = dict(ROOM_VALUES, walls=[{"a": (1, 1), "b": (5, 5), "material": {"Rough": {"roughness": 2}}}])
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.Scene(**values)
+    assert caught.value.at == "walls[0].material.roughness"
+    assert "`roughness` is from 0" in caught.value.message
+
+
+def test_bad_render_settings_raise_value_errors():
+    scene = flatray.Scene(**ROOM_VALUES)
+    for bad in [dict(spp=0), dict(integrator="photon"), dict(cache="maybe"), dict(scale=0),
+                dict(window=(0, 0, 100, 10)), dict(exposure=-1), dict(threads=0)]:
+        with pytest.raises(ValueError):
+            flatray.render(scene, **bad)
+
+
+def test_the_gil_is_released_while_rendering(repo):
+    scene = flatray.load(repo / "scenes" / "room.ron")
+    ticks = []
+    stop = threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.005)
+
+    ticker = threading.Thread(target=tick)
+    ticker.start()
+    try:
+        started = time.perf_counter()
+        result = flatray.render(scene, spp=16, bounces=2, threads=1)
+        ended = time.perf_counter()
+    finally:
+        stop.set()
+        ticker.join()
+    assert ended - started > 0.3, "the render is too short to tell"
+    during = [t for t in ticks if started + 0.05 < t < ended - 0.05]
+    # Held, the GIL would let the ticker run only before and after.
+    assert len(during) > 0.5 * (ended - started - 0.1) / 0.02, (len(during), ended - started)
+    assert result.image.max() > 0
+
+
+def test_ctrl_c_stops_a_render(repo):
+    script = (
+        "import flatray, sys, time\n"
+        f"scene = flatray.load({str(repo / 'scenes' / 'room.ron')!r})\n"
+        "print('rendering', flush=True)\n"
+        "started = time.perf_counter()\n"
+        "try:\n"
+        "    flatray.render(scene, spp=100000)\n"
+        "except KeyboardInterrupt:\n"
+        "    print(f'interrupted after {time.perf_counter() - started:.1f}', flush=True)\n"
+        "    sys.exit(3)\n"
+    )
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "rendering"
+    time.sleep(1.0)
+    child.send_signal(__import__("signal").SIGINT)
+    try:
+        code = child.wait(timeout=30)
+    finally:
+        child.kill()
+    assert code == 3, child.stdout.read()
+
+
+def test_generate_gives_the_clis_plan(cli, tmp_path):
+    out = tmp_path / "plan.ron"
+    subprocess.run([cli, "generate", "--rooms", "3", "--lamps", "2", "--seed", "7", "-o", str(out)],
+                   check=True, capture_output=True)
+    scene = flatray.generate(rooms=3, lamps=2, seed=7)
+    assert scene.text == out.read_text()
+    assert scene.counts["lights"] >= 6
+
+
+def test_import_plan_gives_the_clis_scene(cli, tmp_path):
+    svg = tmp_path / "plan.svg"
+    svg.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="100" height="80">'
+        '<rect x="10" y="10" width="80" height="60" fill="none" stroke="black"/>'
+        '<circle cx="50" cy="40" r="2" fill="yellow"/></svg>'
+    )
+    scene = flatray.import_plan(svg)
+    out = tmp_path / "plan.ron"
+    subprocess.run([cli, "import", str(svg), "-o", str(out)], check=True, capture_output=True)
+    assert scene.text == out.read_text()
+    assert scene.canvas == (100, 80)
+    assert scene.counts["walls"] > 0
+
+
+def test_a_window_has_the_whole_renders_bits():
+    scene = flatray.Scene(**ROOM_VALUES)
+    whole = flatray.render(scene, spp=4)
+    part = flatray.render(scene, spp=4, window=(7, 19, 41, 33))
+    assert np.array_equal(part.image[19:33, 7:41], whole.image[19:33, 7:41])
+    outside = part.image.copy()
+    outside[19:33, 7:41] = 0
+    assert not outside.any()
+
+
+def test_scenes_pickle_and_write(tmp_path):
+    import pickle
+
+    for scene in [flatray.Scene(**ROOM_VALUES), flatray.parse(ROOM_RON)]:
+        again = pickle.loads(pickle.dumps(scene))
+        assert np.array_equal(flatray.render(again, spp=2).image, flatray.render(scene, spp=2).image)
+    result = flatray.render(flatray.parse(ROOM_RON), spp=2)
+    result.write(tmp_path / "out.exr")
+    assert np.array_equal(flatray.read_exr(tmp_path / "out.exr"), result.image)
+    result.write(tmp_path / "out.png")
+    assert (tmp_path / "out.png").read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(OSError):
+        result.write(tmp_path / "out.tiff")
