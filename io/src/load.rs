@@ -37,6 +37,8 @@ pub struct Loaded {
 /// A warning about a scene that loads: where, and what.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Warning {
+    /// The line and column of scene text, from 1; both 0 for values given
+    /// in code ([`from_json`]), whose messages name the item by its index.
     pub line: usize,
     pub column: usize,
     pub message: String,
@@ -164,7 +166,8 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
 /// text, as a binding passes them: the scene file's fields and variants
 /// in JSON's syntax); `name` names them in messages and `base` is the
 /// folder that relative paths resolve against. Errors point at the value
-/// by its path, as `lights[2].Spot.cone`. Values carry no warnings.
+/// by its path, as `lights[2].Spot.cone`. Warnings name the item by its
+/// index, at line and column 0.
 pub fn from_json(json: &str, name: &str, base: &Path) -> Result<Loaded, SceneError> {
     let mut deserializer = serde_json::Deserializer::from_str(json);
     let file: SceneFile = serde_path_to_error::deserialize(&mut deserializer).map_err(|e| {
@@ -542,7 +545,15 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             warnings.extend(crate::lint::lint(text, &file, &canvas));
             warnings
         }
-        Source::Values { .. } => Vec::new(),
+        // Values have no lines: the messages name the item by its index.
+        Source::Values { .. } => {
+            let mut warnings = overlap_warnings("", &walls, file.walls.len());
+            warnings.extend(crate::lint::lint("", &file, &canvas));
+            for w in &mut warnings {
+                (w.line, w.column) = (0, 0);
+            }
+            warnings
+        }
     };
     // What the file's types checked, the scene checks again: a failure
     // here is a bound the format does not know, put at the item it names.

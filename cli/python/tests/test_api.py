@@ -120,6 +120,18 @@ def test_a_bad_scene_text_and_bad_values_raise_where_they_are_wrong():
     assert "`roughness` is from 0" in caught.value.message
 
 
+def test_warnings_name_what_would_render_wrong():
+    dark = flatray.Scene(canvas=(20, 20), floor={"Color": (1, 1, 1)},
+                         walls=[{"a": (30, 30), "b": (40, 40)}])
+    said = [w["message"] for w in dark.warnings]
+    assert any("no lights" in m for m in said), said
+    assert any("wall 0 lies wholly outside the canvas" in m for m in said), said
+    assert all(w["line"] is None for w in dark.warnings)
+    text = flatray.parse("Scene(canvas: (20, 20), floor: Color((1, 1, 1)))")
+    assert text.warnings[0]["line"] == 1
+    assert not flatray.Scene(**ROOM_VALUES).warnings
+
+
 def test_bad_render_settings_raise_value_errors():
     scene = flatray.Scene(**ROOM_VALUES)
     for bad in [dict(spp=0), dict(integrator="photon"), dict(cache="maybe"), dict(scale=0),

@@ -121,8 +121,10 @@ class Scene:
         if render is not None:
             values["render"] = render
         text = json.dumps(_plain(values))
-        self._loaded = _flatray.from_json(text, "<values>", os.fspath(base))
-        self._source = ("json", text, "<values>", os.fspath(base))
+        # Absolute, so that a scene sent to another process finds its files.
+        base = os.path.abspath(os.fspath(base))
+        self._loaded = _flatray.from_json(text, "<values>", base)
+        self._source = ("json", text, "<values>", base)
         self._notes: List[str] = []
 
     @classmethod
@@ -151,9 +153,14 @@ class Scene:
 
     @property
     def warnings(self) -> List[Dict[str, Any]]:
-        """What would render otherwise than it reads (scene text only):
-        ``{"line", "column", "message"}`` each."""
-        return [{"line": l, "column": c, "message": m} for l, c, m in self._loaded.warnings]
+        """What would render otherwise than it reads, as ``flatray check``
+        warns of it: ``{"line", "column", "message"}`` each (line and
+        column None for a scene built from values; the message names the
+        item by its index)."""
+        return [
+            {"line": l or None, "column": c or None, "message": m}
+            for l, c, m in self._loaded.warnings
+        ]
 
     @property
     def text(self) -> Optional[str]:
@@ -218,7 +225,7 @@ def parse(text: str, name: str = "<string>", base: PathLike = ".") -> Scene:
     """Parses and validates scene ``text`` (RON, as a scene file holds
     it); ``name`` names it in messages, and relative paths resolve
     against ``base``."""
-    base = os.fspath(base)
+    base = os.path.abspath(os.fspath(base))
     return Scene._of(_flatray.parse(text, name, base), ("ron", text, name, base))
 
 
