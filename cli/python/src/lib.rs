@@ -13,7 +13,7 @@
 
 use std::panic::AssertUnwindSafe;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use flatray_io::format::{MAX_BOUNCES, MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MAX_SAMPLES};
@@ -387,11 +387,15 @@ fn image_of(bytes: &[u8], width: u32, height: u32) -> PyResult<Image> {
 /// Renders `scene`; the keywords override its render settings. Returns
 /// (image bytes, width, height, statistics as JSON, seconds). The GIL is
 /// released while rendering; Ctrl-C stops the render within a tile and
-/// raises KeyboardInterrupt.
+/// raises KeyboardInterrupt. `progress`, where given, is called on this
+/// thread about ten times a second with (work done, total work), and once
+/// with both equal at the end; an exception it raises stops the render
+/// and is raised here.
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, spp = None, bounces = None, specular = None, seed = None, integrator = None,
-    cache = None, caustics = None, exposure = None, scale = 1.0, window = None, threads = None
+    cache = None, caustics = None, exposure = None, scale = 1.0, window = None, threads = None,
+    progress = None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
@@ -408,6 +412,7 @@ fn render<'py>(
     scale: f64,
     window: Option<(u32, u32, u32, u32)>,
     threads: Option<usize>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyBytes>, u32, u32, String, f64)> {
     let loaded = &scene.get().loaded;
     let options = options(
@@ -429,18 +434,33 @@ fn render<'py>(
         ),
     };
     let stop = AtomicBool::new(false);
+    let done = AtomicU64::new(0);
+    let total = work_total(loaded, &options);
+    let progress = progress.map(Bound::unbind);
     let started = Instant::now();
     let mut interrupt: Option<PyErr> = None;
+    // Says how far the render is: the work its progress callback counted,
+    // short of the total until the render ends (the caustic pass's
+    // photons count too, and may take it past the total).
+    let report = |py: Python<'_>, callback: &Py<PyAny>, finished: bool| {
+        let so_far = if finished {
+            total
+        } else {
+            done.load(Ordering::Relaxed).min(total.saturating_sub(1))
+        };
+        callback.call1(py, (so_far, total)).map(drop)
+    };
     let outcome = py.detach(|| {
         std::thread::scope(|s| {
             let worker = s.spawn(|| {
                 // The library's render cannot be asked to stop: its progress
                 // callback, called before each unit of work, unwinds out of
                 // it with a private payload, caught here.
-                let progress = |_: u64| {
+                let progress = |n: u64| {
                     if stop.load(Ordering::Relaxed) {
                         std::panic::resume_unwind(Box::new(Interrupted));
                     }
+                    done.fetch_add(n, Ordering::Relaxed);
                 };
                 let work = || flatray_tracer::render(&loaded.scene, &options, &progress);
                 std::panic::catch_unwind(AssertUnwindSafe(|| match &pool {
@@ -448,11 +468,21 @@ fn render<'py>(
                     None => work(),
                 }))
             });
+            let mut ticks = 0u32;
             while !worker.is_finished() {
                 std::thread::sleep(Duration::from_millis(20));
-                if interrupt.is_none()
-                    && let Err(e) = Python::attach(|py| py.check_signals())
-                {
+                ticks += 1;
+                if interrupt.is_some() {
+                    continue;
+                }
+                let heard = Python::attach(|py| {
+                    py.check_signals()?;
+                    match &progress {
+                        Some(callback) if ticks.is_multiple_of(5) => report(py, callback, false),
+                        _ => Ok(()),
+                    }
+                });
+                if let Err(e) = heard {
                     interrupt = Some(e);
                     stop.store(true, Ordering::Relaxed);
                 }
@@ -468,6 +498,9 @@ fn render<'py>(
         Ok(Ok(rendered)) => rendered,
         Ok(Err(payload)) | Err(payload) => std::panic::resume_unwind(payload),
     };
+    if let Some(callback) = &progress {
+        report(py, callback, true)?;
+    }
     let stats = flatray_io::report::stats_json(&rendered.stats).to_string();
     let bytes = PyBytes::new(py, &image_bytes(&rendered.image));
     Ok((
@@ -477,6 +510,24 @@ fn render<'py>(
         stats,
         seconds,
     ))
+}
+
+/// The work a render's progress callback counts: a sample for each pixel
+/// of the tiles it renders.
+fn work_total(loaded: &Loaded, options: &RenderOptions) -> u64 {
+    let (width, height) = image_size(&loaded.scene, options.scale);
+    let pixels = match options.window {
+        Some(w) => {
+            let tile = flatray_tracer::TILE;
+            let x0 = w.x0 / tile * tile;
+            let y0 = w.y0 / tile * tile;
+            let x1 = w.x1.div_ceil(tile).saturating_mul(tile).min(width);
+            let y1 = w.y1.div_ceil(tile).saturating_mul(tile).min(height);
+            (x1 - x0) as u64 * (y1 - y0) as u64
+        }
+        None => width as u64 * height as u64,
+    };
+    (pixels * options.samples as u64).max(1)
 }
 
 /// Reads a linear EXR image: (bytes, width, height).

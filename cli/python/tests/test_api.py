@@ -166,6 +166,30 @@ def test_the_gil_is_released_while_rendering(repo):
     assert result.image.max() > 0
 
 
+def test_progress_is_reported_and_can_stop_a_render(repo):
+    scene = flatray.load(repo / "scenes" / "room.ron")
+    heard = []
+    result = flatray.render(scene, spp=32, threads=1, progress=lambda done, total: heard.append((done, total)))
+    assert len(heard) >= 2, heard
+    total = heard[-1][1]
+    assert total == 500 * 500 * 32 and heard[-1] == (total, total)
+    assert all(a[0] <= b[0] for a, b in zip(heard, heard[1:]))
+    assert any(0 < done < total for done, _ in heard[:-1]), heard
+    assert result.image.max() > 0
+
+    class Enough(Exception):
+        pass
+
+    def stop(done, total):
+        if done > 0:
+            raise Enough
+
+    started = time.perf_counter()
+    with pytest.raises(Enough):
+        flatray.render(scene, spp=100000, progress=stop)
+    assert time.perf_counter() - started < 20
+
+
 def test_ctrl_c_stops_a_render(repo):
     script = (
         "import flatray, sys, time\n"

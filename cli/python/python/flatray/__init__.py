@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -317,6 +317,7 @@ def render(
     scale: float = 1.0,
     window: Optional[Sequence[int]] = None,
     threads: Optional[int] = None,
+    progress: Optional[Callable[[int, int], Any]] = None,
 ) -> Rendered:
     """Renders ``scene``. The keywords override the scene's own render
     settings, as ``flatray render``'s flags do: ``spp``, ``bounces``,
@@ -325,6 +326,11 @@ def render(
     ``scale``. ``window`` = (x0, y0, x1, y1) renders only those pixels
     (the others are 0), with the bits of the whole render. ``threads``
     sets the worker threads (all cores by default).
+
+    ``progress``, where given, is called about ten times a second, on the
+    calling thread, with (work done, total work), and once with both
+    equal when the render ends; an exception it raises stops the render
+    and is raised here.
 
     The GIL is released while rendering, and Ctrl-C stops the render
     (KeyboardInterrupt)."""
@@ -346,6 +352,7 @@ def render(
         scale=scale,
         window=win,
         threads=threads,
+        progress=progress,
     )
     image = np.frombuffer(data, dtype="<f4").reshape(height, width, 3).astype(np.float32)
     settings = dict(scene.settings)

@@ -1,7 +1,7 @@
 """The native module under `flatray`: use the package's functions, which
 wrap these with NumPy arrays and `flatray.Scene`."""
 
-from typing import List, Optional, Tuple
+from typing import Any, Callable, List, Optional, Tuple
 
 __version__: str
 
@@ -53,6 +53,7 @@ def render(
     scale: float = 1.0,
     window: Optional[Tuple[int, int, int, int]] = None,
     threads: Optional[int] = None,
+    progress: Optional[Callable[[int, int], Any]] = None,
 ) -> Tuple[bytes, int, int, str, float]: ...
 def read_exr(path: str) -> Tuple[bytes, int, int]: ...
 def write_image(
