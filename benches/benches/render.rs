@@ -161,7 +161,6 @@ fn room_render(c: &mut Criterion) {
             let mut options = loaded.options;
             options.samples = 32;
             options.scale = 0.2;
-            options.memo = loaded.options.memo;
             options.memo.enabled = memo;
             options
         };

@@ -12,11 +12,7 @@ fn image_and_stats(
     options: &RenderOptions,
     coherence: bool,
 ) -> (flatray_tracer::Image, Stats) {
-    let options = {
-        let mut options = *options;
-        options = options.with_reference(!coherence);
-        options
-    };
+    let options = options.with_reference(!coherence);
     let rendered = render(scene, &options);
     (rendered.image, rendered.stats)
 }

@@ -12,11 +12,7 @@ use flatray_tests::{render, scene, workspace_root};
 use flatray_tracer::{Image, RenderOptions, Scene, Stats};
 
 fn image_and_stats(scene: &Scene, options: &RenderOptions, cull: bool) -> (Image, Stats) {
-    let options = {
-        let mut options = *options;
-        options = options.with_reference(!cull);
-        options
-    };
+    let options = options.with_reference(!cull);
     let rendered = render(scene, &options);
     (rendered.image, rendered.stats)
 }
@@ -133,7 +129,6 @@ fn hard_configurations_render_the_same() {
                 options.samples = 24;
                 options.scale = scale;
                 options.bounces = bounces;
-                options.memo = loaded.options.memo;
                 options.memo.enabled = memo;
                 options
             };
@@ -251,7 +246,6 @@ fn floor_plans_of_many_walls_render_the_same_testing_few_of_them() {
                 options.samples = samples;
                 options.scale = if name == "turned" { 1.0 } else { 0.25 };
                 options.bounces = bounces;
-                options.memo = loaded.options.memo;
                 options.memo.enabled = memo;
                 options
             };

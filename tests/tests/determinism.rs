@@ -18,7 +18,6 @@ fn one_thread_and_several_threads_give_bit_identical_images() {
             options.bounces = 2;
             options.scale = 0.3;
             options.integrator = integrator;
-            options.memo = loaded.options.memo;
             options.memo.enabled = memo;
             options
         };
@@ -99,7 +98,6 @@ fn a_pixel_sample_can_be_rerendered_alone() {
         options.samples = 1;
         options.scale = 0.1;
         options.exposure = 1.0;
-        options.memo = loaded.options.memo;
         options.memo.enabled = false;
         options
     };

@@ -16,11 +16,7 @@ use proptest::prelude::*;
 /// Renders `scene` both ways and compares.
 fn assert_identical(name: &str, scene: &Scene, options: RenderOptions) {
     let fast = render(scene, &options);
-    let reference_options = {
-        let mut options = options;
-        options = options.with_reference(true);
-        options
-    };
+    let reference_options = options.with_reference(true);
     let reference = render(scene, &reference_options);
     assert!(
         fast.image == reference.image,
@@ -56,7 +52,6 @@ fn every_example_scene_renders_the_same_with_and_without_fast_paths() {
                 options.samples = 8;
                 options.scale = 0.2;
                 options.bounces = bounces;
-                options.memo = loaded.options.memo;
                 options.memo.enabled = memo;
                 options
             };
@@ -66,11 +61,7 @@ fn every_example_scene_renders_the_same_with_and_without_fast_paths() {
                 // And each fast path left out alone.
                 let fast = render(&loaded.scene, &options).image;
                 for path in FastPath::ALL {
-                    let without = {
-                        let mut options = options;
-                        options = options.with_fast_paths(FastPaths::ALL.without(path));
-                        options
-                    };
+                    let without = options.with_fast_paths(FastPaths::ALL.without(path));
                     assert!(
                         render(&loaded.scene, &without).image == fast,
                         "{label}: without {path:?}, the image changed"

@@ -89,7 +89,6 @@ fn a_table_of_chosen_lights_has_the_expected_image_of_every_light() {
             let mut options = loaded.options;
             options.light_choice = light_choice;
             options.samples = 8;
-            options.memo = loaded.options.memo;
             options.memo.enabled = cache;
             options
         };
@@ -184,11 +183,10 @@ fn lights_a_wall_hides_from_the_whole_cell_cost_no_shadow_ray() {
         options
     };
     let with = render(&loaded.scene, &options);
-    let without = render(&loaded.scene, &{
-        let mut options = options;
-        options = options.with_fast_paths(FastPaths::ALL.without(FastPath::DarkCells));
-        options
-    });
+    let without = render(
+        &loaded.scene,
+        &options.with_fast_paths(FastPaths::ALL.without(FastPath::DarkCells)),
+    );
     assert!(with.image == without.image, "dark cells changed the image");
     let (w, wo) = (with.stats.work, without.stats.work);
     assert_eq!(w.chosen_lights, wo.chosen_lights);

@@ -45,7 +45,6 @@ fn options(onward: bool, bounces: u32) -> RenderOptions {
     {
         let mut options = loaded.options;
         options.bounces = bounces;
-        options.memo = loaded.options.memo;
         options.memo.onward = onward;
         options
     }

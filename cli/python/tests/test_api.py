@@ -109,6 +109,10 @@ def test_a_bad_scene_text_and_bad_values_raise_where_they_are_wrong():
     assert caught.value.at == "lights[0]"
     assert caught.value.line is None and caught.value.file is None
     assert "cone" in caught.value.message
+    values["lights"] = [{"Point": {"at": (1, float("nan"))}}]
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.Scene(**values)
+    assert caught.value.at == "lights[0].Point.at[1]", caught.value.at
     values["lights"] = [{"Point": {"at": (1, "x")}}]
     with pytest.raises(flatray.SceneError) as caught:
         flatray.Scene(**values)

@@ -172,7 +172,6 @@ fn show(
         let mut options = loaded.options;
         options.scale = quick_scale(loaded);
         options.samples = QUICK_SPP;
-        options.memo = loaded.options.memo;
         options.memo.enabled = false;
         options
     };

@@ -28,6 +28,7 @@ split into tiles, run on Ray with :mod:`flatray.batch`.
 from __future__ import annotations
 
 import json
+import math
 import os
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
@@ -66,7 +67,11 @@ def _plain(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return _plain(value.tolist())
     if isinstance(value, np.generic):
-        return value.item()
+        return _plain(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        # JSON has no NaN: said as a string, it fails where it stands
+        # ("invalid type: string "nan", expected f64").
+        return repr(value)
     return value
 
 
