@@ -64,18 +64,10 @@ pub(crate) fn plan(plan: &Plan, options: &RenderOptions) -> Value {
         .collect();
     json!({
         "settings": {
-            "integrator": match options.integrator {
-                flatray_tracer::Integrator::Path => "path",
-                flatray_tracer::Integrator::Original => "original",
-                flatray_tracer::Integrator::Light => "light",
-            },
+            "integrator": options.integrator.name(),
             "bounces": options.bounces,
             "specular": options.specular,
-            "cache": match (options.memo.enabled, options.memo.onward) {
-                (false, _) => "off",
-                (true, true) => "on",
-                (true, false) => "direct",
-            },
+            "cache": options.memo.mode(),
             "caustics": options.caustics,
         },
         "effects": effects,

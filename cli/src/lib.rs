@@ -16,9 +16,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use flatray_io::{Format, Loaded};
-use flatray_tracer::{
-    FastPath, FastPaths, Integrator, LightChoice, MemoOptions, RenderOptions, image_size,
-};
+use flatray_tracer::{FastPath, FastPaths, Integrator, LightChoice, MemoOptions, RenderOptions};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Exit code: success.
@@ -1202,18 +1200,8 @@ impl Stop {
 /// The image size at `scale`, or a usage error when it is more than
 /// flatray renders.
 pub(crate) fn checked_size(loaded: &Loaded, scale: f64) -> Result<(u32, u32), Failure> {
-    let (width, height) = image_size(&loaded.scene, scale);
-    if width > flatray_io::format::MAX_CANVAS_SIDE
-        || height > flatray_io::format::MAX_CANVAS_SIDE
-        || width as u64 * height as u64 > flatray_io::format::MAX_CANVAS_PIXELS
-    {
-        return Err(Failure::usage(format!(
-            "--scale {scale}: the image would be {width} x {height} pixels, more than flatray renders (at most {} a side and {} in all)",
-            flatray_io::format::MAX_CANVAS_SIDE,
-            flatray_io::format::MAX_CANVAS_PIXELS
-        )));
-    }
-    Ok((width, height))
+    flatray_tracer::checked_image_size(&loaded.scene, scale)
+        .map_err(|why| Failure::usage(format!("--scale {scale}: {why}")))
 }
 
 /// Refuses, before any work, an output that cannot be written or must not

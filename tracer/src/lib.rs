@@ -52,7 +52,7 @@ pub type Rgb = glam::DVec3;
 pub use caustics::{FULL_RATE_SHARE, LEAST_RATE, PHOTONS_PER_SAMPLE, photon_rate};
 pub use options::{
     DEFAULT_SPECULAR, Image, Integrator, LightChoice, MANY_LIGHTS, MAX_CULLED_WALLS, MemoOptions,
-    RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, Window, image_size,
+    RenderOptions, Rendered, TILE, TILE_SHADOW_TESTS, Window, checked_image_size, image_size,
 };
 /// The fast paths, to measure what each buys
 /// ([`RenderOptions::with_fast_paths`]); every one computes the model's

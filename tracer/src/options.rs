@@ -34,6 +34,18 @@ pub struct MemoOptions {
     pub onward: bool,
 }
 
+impl MemoOptions {
+    /// The cache's mode, as `--cache` says it: "on", "direct" (the wall
+    /// and floor memos, paths followed from wall to wall) or "off".
+    pub fn mode(&self) -> &'static str {
+        match (self.enabled, self.onward) {
+            (false, _) => "off",
+            (true, true) => "on",
+            (true, false) => "direct",
+        }
+    }
+}
+
 impl Default for MemoOptions {
     fn default() -> MemoOptions {
         MemoOptions {
@@ -61,6 +73,18 @@ pub enum Integrator {
     /// to the pixels it crosses by its track length. Sees point lights in
     /// mirrors, which path tracing cannot.
     Light,
+}
+
+impl Integrator {
+    /// The integrator's name, as `--integrator` and the scene format's
+    /// `render` block say it (lower case).
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Path => "path",
+            Integrator::Original => "original",
+            Integrator::Light => "light",
+        }
+    }
 }
 
 /// Everything about a render that is not the scene.
@@ -354,6 +378,22 @@ pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
     let w = (scene.canvas.width as f64 * scale).round().max(1.0) as u32;
     let h = (scene.canvas.height as f64 * scale).round().max(1.0) as u32;
     (w, h)
+}
+
+/// The image size for `scene` at `scale`, or, where it is more than
+/// flatray renders, what it would be and the bounds it passes.
+pub fn checked_image_size(scene: &Scene, scale: f64) -> Result<(u32, u32), String> {
+    use crate::scene::{MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE};
+    let (width, height) = image_size(scene, scale);
+    if width > MAX_CANVAS_SIDE
+        || height > MAX_CANVAS_SIDE
+        || width as u64 * height as u64 > MAX_CANVAS_PIXELS
+    {
+        return Err(format!(
+            "the image would be {width} x {height} pixels, more than flatray renders (at most {MAX_CANVAS_SIDE} a side and {MAX_CANVAS_PIXELS} in all)"
+        ));
+    }
+    Ok((width, height))
 }
 
 /// Rays whose arc lists more walls than this ask the whole set instead

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use flatray_io::format::{MAX_BOUNCES, MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MAX_SAMPLES};
+use flatray_io::format::{MAX_BOUNCES, MAX_SAMPLES};
 use flatray_io::{Loaded, SceneError as IoSceneError, ToneMap};
 use flatray_tracer::{Image, Integrator, RenderOptions, Window, image_size};
 use pyo3::exceptions::{PyOSError, PyValueError};
@@ -120,8 +120,8 @@ impl LoadedScene {
             o.specular,
             o.seed,
             o.exposure,
-            integrator_name(o.integrator),
-            cache_name(o),
+            o.integrator.name(),
+            o.memo.mode(),
             o.caustics,
         )
     }
@@ -136,26 +136,15 @@ impl LoadedScene {
         }
     }
 
+    /// The image's size in pixels at `scale`: (width, height).
+    fn image_size(&self, scale: f64) -> (u32, u32) {
+        image_size(&self.loaded.scene, scale)
+    }
+
     /// The plan of a render with the scene's settings: the effects, with
     /// whether each runs and why, one line each.
     fn plan(&self) -> String {
         flatray_tracer::Plan::new(&self.loaded.scene, &self.loaded.options).to_string()
-    }
-}
-
-fn integrator_name(integrator: Integrator) -> &'static str {
-    match integrator {
-        Integrator::Path => "path",
-        Integrator::Original => "original",
-        Integrator::Light => "light",
-    }
-}
-
-fn cache_name(options: &RenderOptions) -> &'static str {
-    match (options.memo.enabled, options.memo.onward) {
-        (false, _) => "off",
-        (true, true) => "on",
-        (true, false) => "direct",
     }
 }
 
@@ -334,16 +323,8 @@ fn options(
         return Err(format!("scale: expected a number > 0, found {scale}"));
     }
     options.scale = scale;
-    let (width, height) = image_size(&loaded.scene, scale);
-    if width > MAX_CANVAS_SIDE
-        || height > MAX_CANVAS_SIDE
-        || width as u64 * height as u64 > MAX_CANVAS_PIXELS
-    {
-        return Err(format!(
-            "scale {scale}: the image would be {width} x {height} pixels, more than flatray \
-             renders (at most {MAX_CANVAS_SIDE} a side and {MAX_CANVAS_PIXELS} in all)"
-        ));
-    }
+    let (width, height) = flatray_tracer::checked_image_size(&loaded.scene, scale)
+        .map_err(|why| format!("scale {scale}: {why}"))?;
     if let Some((x0, y0, x1, y1)) = window {
         if !(x0 < x1 && y0 < y1 && x1 <= width && y1 <= height) {
             return Err(format!(

@@ -56,6 +56,15 @@ def test_one_render_split_into_tiles_is_the_single_render(local_ray, repo):
                           flatray.render(scene, **light).image)
 
 
+def test_a_tiled_render_has_the_renders_size_where_the_scale_rounds(local_ray):
+    # 45 x 33 at 0.5 is 22.5 x 16.5: the renderer rounds halves up.
+    scene = flatray.Scene(canvas=(45, 33), floor={"Color": (1, 1, 1)},
+                          lights=[{"Point": {"at": (20, 15)}}])
+    single = flatray.render(scene, spp=2, scale=0.5)
+    assert single.image.shape == (17, 23, 3)
+    assert np.array_equal(batch.render_tiled(scene, tiles=2, spp=2, scale=0.5).image, single.image)
+
+
 def test_bands_fall_on_tiles():
     assert batch.bands(150, 4) == [(0, 32), (32, 80), (80, 128), (128, 150)]
     assert batch.bands(10, 4) == [(0, 10)]

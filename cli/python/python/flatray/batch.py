@@ -174,7 +174,7 @@ def render_tiled(
     each task."""
     ray = _ray()
     scale = settings.get("scale", 1.0)
-    width, height = _size(scene, scale)
+    width, height = scene._loaded.image_size(scale)
     if tiles is None:
         tiles = max(1, 2 * int(ray.cluster_resources().get("CPU", 1)))
     task = _remote(threads)
@@ -197,11 +197,6 @@ def render_tiled(
     return flatray.Rendered(
         image, stats, time.perf_counter() - started, chosen, None, scene._loaded.white
     )
-
-
-def _size(scene: flatray.Scene, scale: float) -> Tuple[int, int]:
-    w, h = scene.canvas
-    return max(1, int(round(w * scale))), max(1, int(round(h * scale)))
 
 
 def _merge(a: Dict[str, Any], b: Dict[str, Any]) -> Dict[str, Any]:
