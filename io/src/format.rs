@@ -201,6 +201,21 @@ pub struct GlassSpec {
     /// 0 for none.
     #[serde(default)]
     pub dispersion: NonNegative,
+    /// The spread of a rough glass's lobe, from 0 (smooth) to 1.
+    #[serde(default)]
+    pub roughness: GlassRoughness,
+}
+
+/// A glass body's roughness, 0 to 1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct GlassRoughness(pub f64);
+
+impl TryFrom<f64> for GlassRoughness {
+    type Error = String;
+    fn try_from(v: f64) -> Result<GlassRoughness, String> {
+        checks::glass_roughness(v).map(|()| GlassRoughness(v))
+    }
 }
 
 fn glass_ior() -> Ior {

@@ -535,6 +535,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             absorption: spec
                 .absorption
                 .map_or(Rgb::ZERO, |(r, g, b)| Rgb::new(r.0, g.0, b.0)),
+            roughness: spec.roughness.0,
         });
         polygons.push(points);
     }

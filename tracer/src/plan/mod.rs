@@ -38,6 +38,8 @@ pub struct Inventory {
     pub glass_edges: usize,
     pub glass_bodies: usize,
     pub dispersive: usize,
+    /// Glass bodies whose edges spread light (`roughness` above 0).
+    pub rough_glass: usize,
     pub diffuse: usize,
     /// Diffuse walls that take the floor's albedo.
     pub floor_albedo_walls: usize,
@@ -73,6 +75,7 @@ impl Inventory {
             glass_edges: walls(&Material::is_glass),
             glass_bodies: scene.glass.len(),
             dispersive: scene.glass.iter().filter(|g| g.dispersion != 0.0).count(),
+            rough_glass: scene.glass.iter().filter(|g| g.roughness > 0.0).count(),
             diffuse: walls(&Material::is_diffuse),
             floor_albedo_walls: walls(&Material::takes_floor_albedo),
             occluders: walls(&Material::occludes),

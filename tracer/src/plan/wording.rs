@@ -55,6 +55,7 @@ impl Plan {
             glass_edges,
             glass_bodies,
             dispersive,
+            rough_glass,
             diffuse,
             floor_albedo_walls,
             occluders,
@@ -387,8 +388,13 @@ impl Plan {
             } else if !specular_runs {
                 specular_why(glass_edges, "glass edge")
             } else {
+                let rough = match rough_glass {
+                    0 => String::new(),
+                    r if r == glass_bodies => " (rough: each event spreads its light)".into(),
+                    r => format!(" ({r} rough: each event spreads its light)"),
+                };
                 format!(
-                    "{} in {} edges{limit_said}",
+                    "{}{rough} in {} edges{limit_said}",
                     n(glass_bodies, "glass body"),
                     glass_edges,
                 )

@@ -206,6 +206,17 @@ pub fn roughness(v: f64) -> Checked {
     }
 }
 
+/// A glass body's roughness, from 0 (smooth glass) to 1.
+pub fn glass_roughness(v: f64) -> Checked {
+    if (0.0..=1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(format!(
+            "a glass body's `roughness` is from 0 (smooth glass) to 1 (a broad lobe), not {v}"
+        ))
+    }
+}
+
 /// A spot's cone and softness (radians): `0 < cone <= pi`, `0 <= softness
 /// <= cone`. Said in degrees, as a scene file gives them.
 pub fn cone(cone: f64, softness: f64) -> Checked {
@@ -355,6 +366,7 @@ fn light(light: &Light, walls: usize) -> Checked {
 fn glass(body: &GlassBody) -> Checked {
     ior(body.ior)?;
     non_negative(body.dispersion)?;
+    glass_roughness(body.roughness)?;
     body.absorption
         .to_array()
         .into_iter()

@@ -16,8 +16,8 @@ pub use check::{
 /// use.
 pub mod checks {
     pub use super::check::{
-        canvas_size, color, cone, exposure, finite, fraction, intensity, ior, non_negative, point,
-        positive, roughness, small_radius,
+        canvas_size, color, cone, exposure, finite, fraction, glass_roughness, intensity, ior,
+        non_negative, point, positive, roughness, small_radius,
     };
 }
 
@@ -652,6 +652,9 @@ pub struct GlassBody {
     pub dispersion: f64,
     /// Beer-Lambert absorption per unit length inside, per channel.
     pub absorption: Rgb,
+    /// The spread of its edges' lobe (`material::glass`), from 0 (smooth
+    /// glass: Fresnel and Snell exactly) to 1.
+    pub roughness: f64,
 }
 
 /// A two-sided wall.
