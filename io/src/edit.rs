@@ -297,6 +297,30 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
                     item.direction = Some((direction.0, direction.1));
                     (color, intensity)
                 }
+                LightSpec::Beam {
+                    a,
+                    b,
+                    direction,
+                    color,
+                    intensity,
+                } => {
+                    item.kind = "Beam";
+                    item.a = Some((a.0, a.1));
+                    item.b = Some((b.0, b.1));
+                    item.direction = Some((direction.0, direction.1));
+                    (color, intensity)
+                }
+                LightSpec::Laser {
+                    at,
+                    direction,
+                    color,
+                    intensity,
+                } => {
+                    item.kind = "Laser";
+                    item.at = Some((at.0, at.1));
+                    item.direction = Some((direction.0, direction.1));
+                    (color, intensity)
+                }
             };
             item.color = (color.0, color.1, color.2);
             item.intensity = intensity.0;

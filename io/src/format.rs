@@ -434,6 +434,28 @@ pub enum LightSpec {
         #[serde(default = "one")]
         intensity: Intensity,
     },
+    /// Parallel light leaving the segment from `a` to `b` in `direction`:
+    /// a sun limited to a strip.
+    Beam {
+        a: Point,
+        b: Point,
+        direction: Direction,
+        #[serde(default = "white")]
+        color: Color,
+        /// Irradiance across the beam.
+        #[serde(default = "one")]
+        intensity: Intensity,
+    },
+    /// One ray from `at` in `direction`: a beam of no width.
+    Laser {
+        at: Point,
+        direction: Direction,
+        #[serde(default = "white")]
+        color: Color,
+        /// The ray's power.
+        #[serde(default = "one")]
+        intensity: Intensity,
+    },
     /// A disk whose rim emits outward; not a wall.
     Circle {
         at: Point,

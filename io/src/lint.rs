@@ -95,12 +95,14 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
 
     for (k, light) in file.lights.iter().enumerate() {
         let (centre, reach, name) = match light {
-            LightSpec::Point { at, .. } => (DVec2::new(at.0, at.1), 0.0, "light"),
+            LightSpec::Point { at, .. } | LightSpec::Laser { at, .. } => {
+                (DVec2::new(at.0, at.1), 0.0, "light")
+            }
             LightSpec::Spot { at, .. } => (DVec2::new(at.0, at.1), 0.0, "light"),
             LightSpec::Circle { at, radius, .. } => {
                 (DVec2::new(at.0, at.1), radius.0, "circle light")
             }
-            LightSpec::Line { a, b, .. } => {
+            LightSpec::Line { a, b, .. } | LightSpec::Beam { a, b, .. } => {
                 let (a, b) = (DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
                 if outside(a, b) {
                     at(

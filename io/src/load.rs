@@ -473,6 +473,40 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 intensity: intensity.0,
                 falloff: Falloff::Constant,
             },
+            LightSpec::Beam {
+                a,
+                b,
+                direction,
+                color,
+                intensity,
+            } => {
+                let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
+                let direction = DVec2::new(direction.0, direction.1);
+                let shape = LightShape::Beam { segment, direction };
+                if let Err(message) = flatray_tracer::scene::checks::light_shape(&shape) {
+                    return Err(source.error(Place::Light(k), format!("light {k}: {message}")));
+                }
+                Light {
+                    shape,
+                    color: rgb(color),
+                    intensity: intensity.0,
+                    falloff: Falloff::Constant,
+                }
+            }
+            LightSpec::Laser {
+                at,
+                direction,
+                color,
+                intensity,
+            } => Light {
+                shape: LightShape::Laser {
+                    at: DVec2::new(at.0, at.1),
+                    direction: DVec2::new(direction.0, direction.1),
+                },
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: Falloff::Constant,
+            },
         });
     }
 

@@ -7,7 +7,9 @@
 //! - next-event estimation (the path tracer) takes light that reaches a
 //!   receiver straight from a light, through panes at most;
 //! - the caustic pass takes light from a light of one direction per point
-//!   that reaches the receiver after at least one mirror or glass event.
+//!   that reaches the receiver after at least one mirror or glass event,
+//!   and all the light of a laser (a delta in position and direction,
+//!   which no path finds).
 //!
 //! Photons leave each such light towards the mirrors and glass edges only
 //! (`Aperture`: the directions, or the sun's rays, that meet each of
@@ -415,14 +417,19 @@ pub(crate) fn trace_caustics(
         .iter()
         .enumerate()
         .filter_map(|(index, light)| {
-            let apertures: Vec<Aperture> = targets
-                .iter()
-                .filter_map(|&t| {
-                    let target = &scene.walls[t as usize].segment;
-                    light.shape.aperture(scene, target).map(|a| (a, t))
-                })
-                .flat_map(|(a, t)| reaching(scene, &a, t))
-                .collect();
+            // A light no path finds (a laser) is traced whole; any other
+            // towards the specular walls.
+            let apertures: Vec<Aperture> = match light.shape.whole_aperture() {
+                Some(whole) => vec![whole],
+                None => targets
+                    .iter()
+                    .filter_map(|&t| {
+                        let target = &scene.walls[t as usize].segment;
+                        light.shape.aperture(scene, target).map(|a| (a, t))
+                    })
+                    .flat_map(|(a, t)| reaching(scene, &a, t))
+                    .collect(),
+            };
             let mut sum = 0.0;
             let cumulative: Vec<f64> = apertures
                 .iter()
@@ -554,6 +561,7 @@ impl Estimator for CausticPass<'_> {
                 scale: 1.0,
                 kernel: light.shape.kernel(light),
                 skip: Skip::NONE,
+                unseen: !light.shape.found_by_paths(),
             };
             let mut deposits = Deposits {
                 grid: &self.grid,

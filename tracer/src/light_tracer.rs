@@ -265,6 +265,8 @@ pub(crate) fn follow_photon(
     // finds the light it brings to a diffuse wall, which is binned there.
     let mut specular_then_glossy = false;
     let mut glass = GlassState::default();
+    // A laser's light no path finds: the caustic pass counts all of it.
+    let unseen = photon.unseen;
     loop {
         stats.work.bounce_rays += 1;
         let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
@@ -280,7 +282,7 @@ pub(crate) fn follow_photon(
             None => glass.inside,
         };
         let absorb = absorption(scene, body);
-        if !caustic || run.specular() || glossy {
+        if !caustic || run.specular() || glossy || unseen {
             deposits.grid.deposit(
                 &ray,
                 t_end,
@@ -330,7 +332,7 @@ pub(crate) fn follow_photon(
             stats.physics.paths_to_walls += 1;
             if bsdf.lambertian().is_some() {
                 let arriving = power * kernel.factor(travelled, r0);
-                if !glossy && run.specular() {
+                if !glossy && (run.specular() || unseen) {
                     bins.add(values, (index, side, h.u), arriving);
                 } else if glossy && specular_then_glossy && limits.bounces >= 2 {
                     bins.add_late(values, (index, side, h.u), arriving);
@@ -340,7 +342,7 @@ pub(crate) fn follow_photon(
         }
         if caustic && takes_lobe {
             glossy = true;
-            specular_then_glossy = run.specular();
+            specular_then_glossy = run.specular() || unseen;
         }
         if !bsdf.is_specular() {
             if diffuse == limits.bounces {

@@ -62,12 +62,12 @@ pub(crate) enum Coherence {
 }
 
 /// The kinds of light whose boundaries [`FloorCoherence::build`] knows how
-/// to draw: points, spots, suns and lines. For any other kind every pixel
-/// traces its strata, as without the masks.
+/// to draw: points, spots, suns and lines. For any other kind (circles,
+/// beams, lasers) every pixel traces its strata, as without the masks.
 pub(crate) fn draws(emitter: Emitter) -> bool {
     match emitter {
         Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Segment { .. } => true,
-        Emitter::Disk { .. } => false,
+        Emitter::Disk { .. } | Emitter::Parallel { .. } => false,
     }
 }
 
@@ -188,7 +188,7 @@ fn light_states(
                         mask.mark(e, direction / step, 0.0, end_t);
                     }
                 }
-                Emitter::Disk { .. } => {}
+                Emitter::Disk { .. } | Emitter::Parallel { .. } => {}
                 Emitter::Segment { segment, .. } => {
                     // A wall that touches an end of the light cuts
                     // every triangle: the centre test below says
@@ -223,7 +223,10 @@ fn light_states(
             let all: Vec<Segment> = walls().collect();
             (!all.iter().any(|w| near_light(w, &segment))).then_some(all)
         }
-        Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Disk { .. } => None,
+        Emitter::Point { .. }
+        | Emitter::Direction(_)
+        | Emitter::Disk { .. }
+        | Emitter::Parallel { .. } => None,
     };
     // Rows in parallel: a line light tests every wall at every
     // unmarked pixel.
@@ -243,7 +246,7 @@ fn light_states(
                     }
                     (Emitter::Segment { .. }, None) => Coherence::Varies,
                     (Emitter::Point { .. } | Emitter::Direction(_), _) => Coherence::Same,
-                    (Emitter::Disk { .. }, _) => Coherence::Varies,
+                    (Emitter::Disk { .. } | Emitter::Parallel { .. }, _) => Coherence::Varies,
                 }
             })
         })
@@ -572,8 +575,9 @@ pub(crate) fn centre_transmittance(
             walls,
             stats,
         ),
-        // Lights with a source were answered above.
-        Emitter::Point { .. } | Emitter::Direction(_) => Rgb::ZERO,
+        // Lights with a source were answered above; beams and lasers are
+        // not drawn, and no pixel of theirs is `Same`.
+        Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Parallel { .. } => Rgb::ZERO,
     }
 }
 

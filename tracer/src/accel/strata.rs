@@ -121,7 +121,13 @@ pub(crate) fn direct_light_strata(
                     }
                 }
             }
-            (Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Disk { .. }, _) => {
+            (
+                Emitter::Point { .. }
+                | Emitter::Direction(_)
+                | Emitter::Disk { .. }
+                | Emitter::Parallel { .. },
+                _,
+            ) => {
                 let takes = light.shape.numbers() > 0;
                 for (k, (value, &x)) in values.iter_mut().zip(points.iter()).enumerate() {
                     let u = if takes {
@@ -219,7 +225,8 @@ pub(crate) fn direct_light_chosen_strata(
                 Emitter::Point { .. }
                 | Emitter::Direction(_)
                 | Emitter::Segment { .. }
-                | Emitter::Disk { .. },
+                | Emitter::Disk { .. }
+                | Emitter::Parallel { .. },
                 _,
             ) => {
                 for (value, (&x, numbers)) in values

@@ -77,6 +77,7 @@ pub(super) fn emit(at: DVec2, radius: f64, light: &Light, stream: &mut Stream) -
         scale: 1.0,
         kernel: PhotonKernel::Line(light.falloff),
         skip: Skip::NONE,
+        unseen: false,
     }
 }
 

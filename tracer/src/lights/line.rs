@@ -103,6 +103,7 @@ pub(super) fn emit(
         scale: 1.0,
         kernel: PhotonKernel::Line(light.falloff),
         skip: wall.map_or(Skip::NONE, Skip::one),
+        unseen: false,
     }
 }
 

@@ -1,7 +1,8 @@
 //! The light interface: what every kind of light tells the integrators.
 //!
 //! Each kind of light lives in a module of its own (`point.rs`,
-//! `spot.rs`, `line.rs`, `sun.rs`, `circle.rs`) with the same functions:
+//! `spot.rs`, `line.rs`, `sun.rs`, `circle.rs`, `beam.rs` for beams and
+//! lasers) with the same functions:
 //!
 //! - `incident`: a sample of the light arriving at a receiver point, as a
 //!   shadow ray to test, the value it carries per radian (or, for a light
@@ -27,6 +28,7 @@
 //! point and line lanes), matching it exhaustively, and fall back to these
 //! functions for every other.
 
+mod beam;
 mod contribution;
 mod kernel;
 pub(crate) use contribution::{
@@ -103,6 +105,10 @@ pub(crate) struct Photon {
     pub scale: f64,
     pub kernel: PhotonKernel,
     pub skip: Skip,
+    /// Whether no path from a receiver finds this photon's light (a
+    /// laser's): the caustic pass then counts its every flight, not only
+    /// those after a specular event.
+    pub unseen: bool,
 }
 
 impl LightShape {
@@ -110,9 +116,11 @@ impl LightShape {
     #[inline]
     pub(crate) fn numbers(&self) -> usize {
         match self {
-            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
-                0
-            }
+            LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => 0,
             LightShape::Line { .. } | LightShape::Circle { .. } => 1,
         }
     }
@@ -130,6 +138,9 @@ impl LightShape {
             } => line::incident(&segment, one_sided, light, x, u, r0),
             LightShape::Directional { direction } => Some(sun::incident(direction)),
             LightShape::Circle { at, radius } => circle::incident(at, radius, light, x, u, r0),
+            LightShape::Beam { segment, direction } => beam::incident(&segment, direction, x),
+            // A delta in position and direction: no receiver's sample finds it.
+            LightShape::Laser { .. } => None,
         }
     }
 
@@ -145,9 +156,11 @@ impl LightShape {
                 segment, one_sided, ..
             } => line::pdf(&segment, one_sided, x),
             LightShape::Circle { at, radius } => circle::pdf(at, radius, x),
-            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
-                0.0
-            }
+            LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => 0.0,
         }
     }
 
@@ -161,7 +174,9 @@ impl LightShape {
             LightShape::Point { .. }
             | LightShape::Spot { .. }
             | LightShape::Directional { .. }
-            | LightShape::Circle { .. } => 0.0,
+            | LightShape::Circle { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => 0.0,
         }
     }
 
@@ -173,8 +188,10 @@ impl LightShape {
             LightShape::Line {
                 segment, wall: own, ..
             } => line::grazes(&segment, own, index, wall),
-            LightShape::Directional { direction } => sun::grazes(direction, wall),
-            LightShape::Circle { .. } => false,
+            LightShape::Directional { direction } | LightShape::Beam { direction, .. } => {
+                sun::grazes(direction, wall)
+            }
+            LightShape::Circle { .. } | LightShape::Laser { .. } => false,
         }
     }
 
@@ -189,6 +206,9 @@ impl LightShape {
             } => line::power(&segment, one_sided),
             LightShape::Directional { direction } => sun::power(scene, direction),
             LightShape::Circle { radius, .. } => circle::power(radius),
+            LightShape::Beam { segment, direction } => beam::power(&segment, direction),
+            // Its intensity is its power.
+            LightShape::Laser { .. } => 1.0,
         }
     }
 
@@ -209,6 +229,8 @@ impl LightShape {
             } => line::emit(&segment, one_sided, wall, light, stream),
             LightShape::Directional { direction } => sun::emit(scene, direction, stream),
             LightShape::Circle { at, radius } => circle::emit(at, radius, light, stream),
+            LightShape::Beam { segment, direction } => beam::emit(&segment, direction, stream),
+            LightShape::Laser { at, direction } => beam::emit_laser(at, direction),
         }
     }
 
@@ -227,7 +249,9 @@ impl LightShape {
             LightShape::Line { wall: Some(_), .. }
             | LightShape::Point { .. }
             | LightShape::Spot { .. }
-            | LightShape::Directional { .. } => None,
+            | LightShape::Directional { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => None,
         }
     }
 
@@ -246,18 +270,22 @@ impl LightShape {
                     > -tolerance
             }
             LightShape::Circle { at, radius } => (*at - origin).dot(normal) + radius > -tolerance,
-            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
-                false
-            }
+            LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => false,
         }
     }
 
     pub(crate) fn has_area(&self) -> bool {
         match self {
             LightShape::Line { .. } | LightShape::Circle { .. } => true,
-            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
-                false
-            }
+            LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => false,
         }
     }
 
@@ -308,6 +336,9 @@ impl LightShape {
                 falloff.per_radian(d + radius, r0) * (2.0 * radius / d).min(std::f64::consts::PI)
             }
             LightShape::Directional { .. } => 1.0,
+            LightShape::Beam { segment, direction } => beam::reach(&segment, direction, (lo, hi)),
+            // No receiver's sample finds a laser.
+            LightShape::Laser { .. } => 0.0,
         };
         usable(value)
     }
@@ -318,8 +349,9 @@ impl LightShape {
         match *self {
             LightShape::Point { at } | LightShape::Spot { at, .. } => Some([at; 4]),
             LightShape::Line { segment, .. } => Some([segment.a, segment.b, segment.a, segment.b]),
-            LightShape::Directional { .. } => None,
+            LightShape::Directional { .. } | LightShape::Laser { .. } => None,
             LightShape::Circle { at, radius } => Some(circle::hull(at, radius)),
+            LightShape::Beam { segment, .. } => Some([segment.a, segment.b, segment.a, segment.b]),
         }
     }
 }
@@ -359,6 +391,17 @@ pub(crate) enum Aperture {
         s0: f64,
         s1: f64,
     },
+    /// Rays of a beam light leaving `start + edge * u` for `u` in
+    /// `u0..u1`, travelling in `direction`; measured across the beam.
+    Strip {
+        start: DVec2,
+        edge: DVec2,
+        direction: DVec2,
+        u0: f64,
+        u1: f64,
+    },
+    /// A laser's one ray, of measure 1.
+    Ray { origin: DVec2, direction: DVec2 },
 }
 
 /// Unit `from` turned by `angle` radians, counterclockwise for `turn` 1.
@@ -400,6 +443,20 @@ impl Aperture {
                 s0: s0 + (s1 - s0) * u0,
                 s1: s0 + (s1 - s0) * u1,
             },
+            Aperture::Strip {
+                start,
+                edge,
+                direction,
+                u0: a,
+                u1: b,
+            } => Aperture::Strip {
+                start,
+                edge,
+                direction,
+                u0: a + (b - a) * u0,
+                u1: a + (b - a) * u1,
+            },
+            Aperture::Ray { .. } => *self,
         }
     }
 
@@ -408,6 +465,14 @@ impl Aperture {
         match *self {
             Aperture::Angle { angle, .. } => angle,
             Aperture::Beam { s0, s1, .. } => s1 - s0,
+            Aperture::Strip {
+                edge,
+                direction,
+                u0,
+                u1,
+                ..
+            } => (u1 - u0) * edge.perp_dot(direction).abs(),
+            Aperture::Ray { .. } => 1.0,
         }
     }
 
@@ -428,6 +493,14 @@ impl Aperture {
                 s0,
                 s1,
             } => (start + across * (s0 + (s1 - s0) * u), direction),
+            Aperture::Strip {
+                start,
+                edge,
+                direction,
+                u0,
+                u1,
+            } => (start + edge * (u0 + (u1 - u0) * u), direction),
+            Aperture::Ray { origin, direction } => (origin, direction),
         }
     }
 
@@ -448,6 +521,17 @@ impl Aperture {
                 let s = (origin - start).dot(across);
                 s >= s0 && s <= s1
             }
+            Aperture::Strip {
+                start,
+                edge,
+                u0,
+                u1,
+                ..
+            } => {
+                let u = (origin - start).dot(edge) / edge.length_squared();
+                u >= u0 && u <= u1
+            }
+            Aperture::Ray { .. } => true,
         }
     }
 }
@@ -492,6 +576,13 @@ pub(crate) enum Emitter {
     Segment { segment: Segment, one_sided: bool },
     /// From the rim of a disk.
     Disk { at: DVec2, radius: f64 },
+    /// Parallel rays in `direction` from a segment (a beam), or from one
+    /// point (a laser: `edge` zero).
+    Parallel {
+        start: DVec2,
+        edge: DVec2,
+        direction: DVec2,
+    },
 }
 
 /// How many lights of each kind a scene holds: what the plan counts and
@@ -503,8 +594,10 @@ pub(crate) struct LightCounts {
     pub lines: usize,
     pub circles: usize,
     pub suns: usize,
-    /// Lights of one direction per point (points, spots, suns): the
-    /// caustic pass aims their photons at mirrors and glass.
+    pub beams: usize,
+    pub lasers: usize,
+    /// Lights of one direction per point (points, spots, suns, beams,
+    /// lasers): the caustic pass aims their photons at mirrors and glass.
     pub aimed: usize,
 }
 
@@ -518,6 +611,8 @@ impl LightCounts {
                 LightShape::Line { .. } => counts.lines += 1,
                 LightShape::Circle { .. } => counts.circles += 1,
                 LightShape::Directional { .. } => counts.suns += 1,
+                LightShape::Beam { .. } => counts.beams += 1,
+                LightShape::Laser { .. } => counts.lasers += 1,
             }
             counts.aimed += usize::from(light.shape.aims_photons());
         }
@@ -540,6 +635,16 @@ impl LightShape {
                 segment, one_sided, ..
             } => Emitter::Segment { segment, one_sided },
             LightShape::Circle { at, radius } => Emitter::Disk { at, radius },
+            LightShape::Beam { segment, direction } => Emitter::Parallel {
+                start: segment.a,
+                edge: segment.edge(),
+                direction,
+            },
+            LightShape::Laser { at, direction } => Emitter::Parallel {
+                start: at,
+                edge: DVec2::ZERO,
+                direction,
+            },
         }
     }
 
@@ -548,10 +653,32 @@ impl LightShape {
     #[inline]
     pub(crate) fn aims_photons(&self) -> bool {
         match self {
-            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Directional { .. } => {
-                true
-            }
+            LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => true,
             LightShape::Line { .. } | LightShape::Circle { .. } => false,
+        }
+    }
+
+    /// Whether a path from a receiver can find this light's light at
+    /// all: not a laser's (a delta in position and direction), which only
+    /// light tracing and the caustic pass see.
+    #[inline]
+    pub(crate) fn found_by_paths(&self) -> bool {
+        !matches!(self, LightShape::Laser { .. })
+    }
+
+    /// For a light that no path finds, the one aperture that holds all
+    /// its photons, which the caustic pass traces whatever they meet.
+    pub(crate) fn whole_aperture(&self) -> Option<Aperture> {
+        match *self {
+            LightShape::Laser { at, direction } => Some(Aperture::Ray {
+                origin: at,
+                direction,
+            }),
+            _ => None,
         }
     }
 
@@ -560,7 +687,12 @@ impl LightShape {
         match *self {
             LightShape::Point { at } | LightShape::Spot { at, .. } => Some(Source::At(at)),
             LightShape::Directional { direction } => Some(Source::Sun(direction)),
-            LightShape::Line { .. } | LightShape::Circle { .. } => None,
+            // A beam's shadow rays end at its segment, and only inside its
+            // strip; a laser has none.
+            LightShape::Line { .. }
+            | LightShape::Circle { .. }
+            | LightShape::Beam { .. }
+            | LightShape::Laser { .. } => None,
         }
     }
 
@@ -602,7 +734,9 @@ impl LightShape {
                     s1,
                 })
             }
-            LightShape::Line { .. } | LightShape::Circle { .. } => None,
+            LightShape::Beam { segment, direction } => beam::aperture(&segment, direction, target),
+            // All of a laser's photons are traced (`whole_aperture`).
+            LightShape::Line { .. } | LightShape::Circle { .. } | LightShape::Laser { .. } => None,
         }
     }
 
@@ -615,7 +749,9 @@ impl LightShape {
             LightShape::Line { .. } | LightShape::Circle { .. } => {
                 PhotonKernel::Line(light.falloff)
             }
-            LightShape::Directional { .. } => PhotonKernel::None,
+            LightShape::Directional { .. } | LightShape::Beam { .. } | LightShape::Laser { .. } => {
+                PhotonKernel::None
+            }
         }
     }
 }

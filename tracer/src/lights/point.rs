@@ -55,5 +55,6 @@ pub(super) fn emit(at: DVec2, light: &Light, stream: &mut Stream) -> Photon {
         scale: 1.0,
         kernel: PhotonKernel::Point(light.falloff),
         skip: Skip::NONE,
+        unseen: false,
     }
 }

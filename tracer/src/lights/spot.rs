@@ -50,5 +50,6 @@ pub(super) fn emit(
             / spot_integral(cone, softness),
         kernel: PhotonKernel::Point(light.falloff),
         skip: Skip::NONE,
+        unseen: false,
     }
 }

@@ -59,5 +59,6 @@ pub(super) fn emit(scene: &Scene, direction: DVec2, stream: &mut Stream) -> Phot
         scale: 1.0,
         kernel: PhotonKernel::None,
         skip: Skip::NONE,
+        unseen: false,
     }
 }

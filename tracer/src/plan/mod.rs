@@ -23,8 +23,10 @@ pub struct Inventory {
     pub lines: usize,
     pub circles: usize,
     pub suns: usize,
-    /// Lights of one direction per point (points, spots, suns), whose
-    /// photons the caustic pass aims at mirrors and glass.
+    pub beams: usize,
+    pub lasers: usize,
+    /// Lights of one direction per point (points, spots, suns, beams,
+    /// lasers), whose photons the caustic pass aims at mirrors and glass.
     pub aimed: usize,
     /// Lights a path ray can meet (lines and circles): path tracing sees
     /// them in mirrors.
@@ -65,6 +67,8 @@ impl Inventory {
             lines: counts.lines,
             circles: counts.circles,
             suns: counts.suns,
+            beams: counts.beams,
+            lasers: counts.lasers,
             aimed: counts.aimed,
             areas: scene.lights.iter().filter(|l| l.shape.has_area()).count(),
             lights: scene.lights.len(),
@@ -157,6 +161,7 @@ impl Plan {
         let inventory = Inventory::of(scene);
         let Inventory {
             aimed,
+            lasers,
             areas,
             rough_mirrors,
             glass_edges,
@@ -193,11 +198,12 @@ impl Plan {
         // and leaves it to photons off a rough mirror at a path's first
         // bounce (where a narrow lobe makes paths noisy): the caustic pass
         // does, wherever both are in the scene.
+        // A laser's light no path finds at all: the caustic pass takes it
+        // wherever the scene has one.
         let caustics = options.caustics
             && !tracing_light
-            && (specular_paths || glossy_paths)
             && !no_lights
-            && aimed > 0;
+            && (((specular_paths || glossy_paths) && aimed > 0) || lasers > 0);
         let wall_memo_wanted = !tracing_light
             && indirect
             && options.bounces > 0

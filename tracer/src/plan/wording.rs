@@ -45,6 +45,8 @@ impl Plan {
             lines,
             circles,
             suns,
+            beams,
+            lasers,
             aimed,
             areas,
             lights,
@@ -117,13 +119,31 @@ impl Plan {
         );
         add(
             "direct light: sunlight",
-            suns > 0,
-            if suns > 0 {
-                n(suns, "directional light")
-            } else {
-                "no directional light in the scene".into()
+            suns + beams > 0,
+            match (suns, beams) {
+                (0, 0) => "no directional light in the scene".into(),
+                (_, 0) => n(suns, "directional light"),
+                (0, _) => n(beams, "beam"),
+                _ => format!("{}, {}", n(suns, "directional light"), n(beams, "beam")),
             },
         );
+        if lasers > 0 {
+            // Said only where the scene has a laser: no other plan changes.
+            add(
+                "lasers: light tracing and the caustic pass only",
+                tracing_light || caustics,
+                if tracing_light {
+                    format!("light tracing follows {}", n(lasers, "laser"))
+                } else if caustics {
+                    format!(
+                        "{}: a ray no path from the floor finds, so the caustic pass traces all of its light",
+                        n(lasers, "laser")
+                    )
+                } else {
+                    "the caustic pass is switched off (--caustics off): path tracing alone cannot see a laser".into()
+                },
+            );
+        }
         add(
             "shadow rays",
             shadows,
@@ -375,7 +395,14 @@ impl Plan {
             } else {
                 format!(
                     "a photon pass from {} towards {} (the parts walls do not hide): their light on the floor by track length, on diffuse walls in bins; fewer photons where these take under a quarter of the lights' power",
-                    n(aimed, "point, spot or directional light"),
+                    n(
+                        aimed,
+                        if beams + lasers > 0 {
+                            "point, spot, directional light, beam or laser"
+                        } else {
+                            "point, spot or directional light"
+                        }
+                    ),
                     n(specular, "mirror or glass edge")
                 )
             },

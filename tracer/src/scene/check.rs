@@ -320,7 +320,17 @@ fn light(light: &Light, walls: usize) -> Checked {
     color(light.color)?;
     intensity(light.intensity)?;
     falloff(light.falloff)?;
-    match light.shape {
+    shape(&light.shape, walls)
+}
+
+/// A light's shape alone: what the scene format checks of a beam, whose
+/// segment and direction are checked together.
+pub fn light_shape(shape_: &LightShape) -> Checked {
+    shape(shape_, usize::MAX)
+}
+
+fn shape(shape: &LightShape, walls: usize) -> Checked {
+    match *shape {
         LightShape::Point { at } => point(at.x, at.y),
         LightShape::Spot {
             at,
@@ -350,6 +360,28 @@ fn light(light: &Light, walls: usize) -> Checked {
             }
         }
         LightShape::Directional { direction } => unit(direction),
+        LightShape::Beam { segment, direction } => {
+            let (a, b) = (segment.a, segment.b);
+            point(a.x, a.y)?;
+            point(b.x, b.y)?;
+            unit(direction)?;
+            if a == b {
+                return Err(format!(
+                    "a beam needs two different endpoints, found ({}, {}) twice; use a Laser",
+                    a.x, a.y
+                ));
+            }
+            if segment.edge().normalize().perp_dot(direction).abs() < 1e-9 {
+                return Err(
+                    "a beam's direction runs along its segment: the beam has no width".into(),
+                );
+            }
+            Ok(())
+        }
+        LightShape::Laser { at, direction } => {
+            point(at.x, at.y)?;
+            unit(direction)
+        }
         LightShape::Circle { at, radius } => {
             point(at.x, at.y)?;
             positive(radius)?;

@@ -17,7 +17,7 @@ pub use check::{
 pub mod checks {
     pub use super::check::{
         canvas_size, color, cone, exposure, finite, fraction, glass_roughness, intensity, ior,
-        non_negative, point, positive, roughness, small_radius,
+        light_shape, non_negative, point, positive, roughness, small_radius,
     };
 }
 
@@ -692,6 +692,13 @@ pub enum LightShape {
     /// A disk whose rim emits outward as a Lambertian emitter of radiance
     /// `intensity`. Not a wall: it blocks no light.
     Circle { at: DVec2, radius: f64 },
+    /// Parallel rays travelling in `direction` (unit) from every point of
+    /// `segment`, which must not lie along it: a sun limited to a strip;
+    /// `intensity` is the irradiance across the beam.
+    Beam { segment: Segment, direction: DVec2 },
+    /// One ray from `at` along `direction` (unit), of power `intensity`: a
+    /// beam of no width, found only by light tracing and the caustic pass.
+    Laser { at: DVec2, direction: DVec2 },
 }
 
 /// A light: its shape, colour, intensity and falloff.
@@ -927,11 +934,15 @@ impl Scene {
             .iter()
             .map(|light| match light.shape {
                 LightShape::Line { wall, .. } => wall,
-                LightShape::Point { at } | LightShape::Spot { at, .. } => walls
+                LightShape::Point { at }
+                | LightShape::Spot { at, .. }
+                | LightShape::Laser { at, .. } => walls
                     .iter()
                     .position(|w| lies_on(at, &w.segment))
                     .map(|i| i as u32),
-                LightShape::Directional { .. } | LightShape::Circle { .. } => None,
+                LightShape::Directional { .. }
+                | LightShape::Circle { .. }
+                | LightShape::Beam { .. } => None,
             })
             .collect();
         let segments = SegmentSet::new(walls.iter().map(|w| w.segment).collect());
