@@ -51,6 +51,7 @@ fn render_room(out: &Path) -> Result<f64, Box<dyn std::error::Error>> {
         color: Rgb::new(1.0, 0.9, 0.8),
         intensity: 2.0,
         falloff: Falloff::Flatland,
+        spectrum: None,
     };
     // Every value is checked here: a NaN, a colour above 1 or a wall of
     // no length is an error naming the item, not a broken render.

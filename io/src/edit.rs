@@ -292,6 +292,7 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
                     direction,
                     color,
                     intensity,
+                    ..
                 } => {
                     item.kind = "Directional";
                     item.direction = Some((direction.0, direction.1));
@@ -303,6 +304,7 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
                     direction,
                     color,
                     intensity,
+                    ..
                 } => {
                     item.kind = "Beam";
                     item.a = Some((a.0, a.1));
@@ -315,6 +317,7 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
                     direction,
                     color,
                     intensity,
+                    ..
                 } => {
                     item.kind = "Laser";
                     item.at = Some((at.0, at.1));

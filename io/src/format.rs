@@ -340,6 +340,56 @@ impl TryFrom<RawWall> for WallSpec {
     }
 }
 
+impl LightSpec {
+    /// The light's spectrum, where it gives one.
+    pub fn spectrum(&self) -> Option<&SpectrumSpec> {
+        match self {
+            LightSpec::Point { spectrum, .. }
+            | LightSpec::Spot { spectrum, .. }
+            | LightSpec::Line { spectrum, .. }
+            | LightSpec::Directional { spectrum, .. }
+            | LightSpec::Beam { spectrum, .. }
+            | LightSpec::Laser { spectrum, .. }
+            | LightSpec::Circle { spectrum, .. } => spectrum.as_ref(),
+        }
+    }
+
+    /// The light's colour.
+    pub fn color(&self) -> Color {
+        match *self {
+            LightSpec::Point { color, .. }
+            | LightSpec::Spot { color, .. }
+            | LightSpec::Line { color, .. }
+            | LightSpec::Directional { color, .. }
+            | LightSpec::Beam { color, .. }
+            | LightSpec::Laser { color, .. }
+            | LightSpec::Circle { color, .. } => color,
+        }
+    }
+}
+
+/// A light's spectrum, in place of its colour.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Spectrum")]
+pub enum SpectrumSpec {
+    /// Planck's law at a temperature in kelvin.
+    Blackbody(f64),
+    /// A gas-discharge lamp's lines.
+    Lamp(LampName),
+    /// (wavelength in nm, value) pairs, linear between.
+    Table(Vec<(f64, f64)>),
+}
+
+/// The gas-discharge lamps the format names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename = "Lamp")]
+pub enum LampName {
+    Sodium,
+    Mercury,
+    Neon,
+    Hydrogen,
+}
+
 /// Light that a wall emits: it is then also a solid line light.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Emit")]
@@ -349,6 +399,9 @@ pub struct EmitSpec {
     /// Per unit length.
     #[serde(default = "one")]
     pub intensity: Intensity,
+    /// What it emits wavelength by wavelength, in place of `color`.
+    #[serde(default)]
+    pub spectrum: Option<SpectrumSpec>,
     #[serde(default)]
     pub one_sided: bool,
     #[serde(default)]
@@ -392,6 +445,9 @@ pub enum LightSpec {
         color: Color,
         #[serde(default = "one")]
         intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
         #[serde(default)]
         falloff: Option<FalloffSpec>,
     },
@@ -407,6 +463,9 @@ pub enum LightSpec {
         color: Color,
         #[serde(default = "one")]
         intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
         #[serde(default)]
         falloff: Option<FalloffSpec>,
     },
@@ -418,6 +477,9 @@ pub enum LightSpec {
         /// Per unit length.
         #[serde(default = "one")]
         intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
         #[serde(default)]
         one_sided: bool,
         /// A solid line light also blocks light, as a black wall.
@@ -433,6 +495,9 @@ pub enum LightSpec {
         /// Irradiance across the beam.
         #[serde(default = "one")]
         intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
     },
     /// Parallel light leaving the segment from `a` to `b` in `direction`:
     /// a sun limited to a strip.
@@ -445,6 +510,9 @@ pub enum LightSpec {
         /// Irradiance across the beam.
         #[serde(default = "one")]
         intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
     },
     /// One ray from `at` in `direction`: a beam of no width.
     Laser {
@@ -455,6 +523,9 @@ pub enum LightSpec {
         /// The ray's power.
         #[serde(default = "one")]
         intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
     },
     /// A disk whose rim emits outward; not a wall.
     Circle {
@@ -465,6 +536,9 @@ pub enum LightSpec {
         /// The rim's radiance.
         #[serde(default = "one")]
         intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
         #[serde(default)]
         falloff: Option<FalloffSpec>,
     },

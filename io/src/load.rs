@@ -12,8 +12,8 @@ use ron::extensions::Extensions;
 use crate::error::SceneError;
 use crate::format::MAX_COORDINATE;
 use crate::format::{
-    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LightSpec, LightsSpec,
-    MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MaterialSpec, SceneFile, ToneMap,
+    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LampName, LightSpec, LightsSpec,
+    MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MaterialSpec, SceneFile, SpectrumSpec, ToneMap,
 };
 use crate::locate;
 
@@ -334,6 +334,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             intensity,
             one_sided,
             falloff: light_falloff,
+            ..
         }) = wall.emit
         {
             lights.push(Light {
@@ -345,24 +346,36 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 color: rgb(color),
                 intensity: intensity.0,
                 falloff: light_falloff.map_or(default_falloff, falloff),
+                spectrum: light_spectrum(
+                    wall.emit.as_ref().and_then(|e| e.spectrum.as_ref()),
+                    color,
+                )
+                .map_err(|message| {
+                    source.error(
+                        Place::Wall(wall_index),
+                        format!("wall {wall_index}: {message}"),
+                    )
+                })?,
             });
         }
         walls.push(Wall { segment, material });
     }
     for (k, light) in file.lights.iter().enumerate() {
+        let spectrum = light_spectrum(light.spectrum(), light.color())
+            .map_err(|message| source.error(Place::Light(k), format!("light {k}: {message}")))?;
         lights.push(match *light {
             LightSpec::Point {
                 at,
                 color,
                 intensity,
-                falloff: f,
+                falloff: f, ..
             } => Light {
                 shape: LightShape::Point {
                     at: DVec2::new(at.0, at.1),
                 },
                 color: rgb(color),
                 intensity: intensity.0,
-                falloff: f.map_or(default_falloff, falloff),
+                falloff: f.map_or(default_falloff, falloff), spectrum: None,
             },
             LightSpec::Spot {
                 at,
@@ -371,7 +384,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 softness,
                 color,
                 intensity,
-                falloff: f,
+                falloff: f, ..
             } => {
                 if cone.0 > 180.0 || softness.0 > cone.0 {
                     return Err(source.error(
@@ -391,7 +404,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                     },
                     color: rgb(color),
                     intensity: intensity.0,
-                    falloff: f.map_or(default_falloff, falloff),
+                    falloff: f.map_or(default_falloff, falloff), spectrum: None,
                 }
             }
             LightSpec::Line {
@@ -401,7 +414,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 intensity,
                 one_sided,
                 solid,
-                falloff: f,
+                falloff: f, ..
             } => {
                 if a == b {
                     return Err(source.error(
@@ -432,7 +445,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                     },
                     color: rgb(color),
                     intensity: intensity.0,
-                    falloff: f.map_or(default_falloff, falloff),
+                    falloff: f.map_or(default_falloff, falloff), spectrum: None,
                 }
             }
             LightSpec::Circle {
@@ -440,7 +453,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 radius,
                 color,
                 intensity,
-                falloff: f,
+                falloff: f, ..
             } => {
                 if radius.0 > MAX_COORDINATE {
                     return Err(source.error(
@@ -458,27 +471,27 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                     },
                     color: rgb(color),
                     intensity: intensity.0,
-                    falloff: f.map_or(default_falloff, falloff),
+                    falloff: f.map_or(default_falloff, falloff), spectrum: None,
                 }
             }
             LightSpec::Directional {
                 direction,
                 color,
-                intensity,
+                intensity, ..
             } => Light {
                 shape: LightShape::Directional {
                     direction: DVec2::new(direction.0, direction.1),
                 },
                 color: rgb(color),
                 intensity: intensity.0,
-                falloff: Falloff::Constant,
+                falloff: Falloff::Constant, spectrum: None,
             },
             LightSpec::Beam {
                 a,
                 b,
                 direction,
                 color,
-                intensity,
+                intensity, ..
             } => {
                 let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
                 let direction = DVec2::new(direction.0, direction.1);
@@ -490,14 +503,14 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                     shape,
                     color: rgb(color),
                     intensity: intensity.0,
-                    falloff: Falloff::Constant,
+                    falloff: Falloff::Constant, spectrum: None,
                 }
             }
             LightSpec::Laser {
                 at,
                 direction,
                 color,
-                intensity,
+                intensity, ..
             } => Light {
                 shape: LightShape::Laser {
                     at: DVec2::new(at.0, at.1),
@@ -505,9 +518,12 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 },
                 color: rgb(color),
                 intensity: intensity.0,
-                falloff: Falloff::Constant,
+                falloff: Falloff::Constant, spectrum: None,
             },
         });
+        if let Some(last) = lights.last_mut() {
+            last.spectrum = spectrum;
+        }
     }
 
     let mut bodies = Vec::with_capacity(file.glass.len());
@@ -847,4 +863,32 @@ fn load_floor_image(path: &Path) -> Result<Floor, String> {
         height,
         texels,
     })
+}
+
+/// The spectrum a light gives in place of its `color`, checked: a light
+/// takes one or the other, so a colour given beside a spectrum is an
+/// error rather than ignored.
+fn light_spectrum(
+    spec: Option<&SpectrumSpec>,
+    color: Color,
+) -> Result<Option<flatray_tracer::spectrum::Spectrum>, String> {
+    use flatray_tracer::spectrum::{Lamp, Spectrum};
+    let Some(spec) = spec else {
+        return Ok(None);
+    };
+    if color != Color::WHITE {
+        return Err("a light takes its colour from `color` or from `spectrum`, not both".into());
+    }
+    let spectrum = match spec {
+        SpectrumSpec::Blackbody(kelvin) => Spectrum::Blackbody { kelvin: *kelvin },
+        SpectrumSpec::Lamp(name) => Spectrum::Lamp(match name {
+            LampName::Sodium => Lamp::Sodium,
+            LampName::Mercury => Lamp::Mercury,
+            LampName::Neon => Lamp::Neon,
+            LampName::Hydrogen => Lamp::Hydrogen,
+        }),
+        SpectrumSpec::Table(pairs) => Spectrum::table(pairs)?,
+    };
+    flatray_tracer::scene::checks::spectrum(&spectrum)?;
+    Ok(Some(spectrum))
 }

@@ -23,6 +23,7 @@ fn lamp(at: DVec2) -> Light {
         color: Rgb::ONE,
         intensity: 1.0,
         falloff: Falloff::Flatland,
+        spectrum: None,
     }
 }
 

@@ -578,6 +578,7 @@ fn degenerate_input_is_handled_as_documented() {
         color: Rgb::ONE,
         intensity: 1.0,
         falloff: Falloff::Flatland,
+        spectrum: None,
     };
     let error = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, vec![], vec![line]).unwrap_err();
     assert_eq!(error.item, Item::Light(0));
@@ -726,6 +727,7 @@ fn a_non_finite_value_is_reported_not_written() {
         color: Rgb::ONE,
         intensity,
         falloff: Falloff::Constant,
+        spectrum: None,
     };
     // An intensity past the bound is refused where the scene is built...
     let error = Scene::new(

@@ -551,7 +551,11 @@ impl Estimator for CausticPass<'_> {
                 .count()
                 .max(1);
             let window = light.spot_window(dir);
-            let power = light.color * (weight * window / holding as f64);
+            let (wavelength, colour) = match scene.spectra.photon(emitter.light, &mut stream) {
+                Some((wavelength, colour)) => (Some(wavelength), colour),
+                None => (None, light.color),
+            };
+            let power = colour * (weight * window / holding as f64);
             if power == Rgb::ZERO {
                 continue;
             }
@@ -562,6 +566,7 @@ impl Estimator for CausticPass<'_> {
                 kernel: light.shape.kernel(light),
                 skip: Skip::NONE,
                 unseen: !light.shape.found_by_paths(),
+                wavelength,
             };
             let mut deposits = Deposits {
                 grid: &self.grid,

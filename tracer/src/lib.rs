@@ -43,6 +43,7 @@ mod render;
 mod run;
 pub mod sampling;
 pub mod scene;
+pub mod spectrum;
 mod stats;
 mod tile;
 

@@ -128,7 +128,7 @@ impl Estimator for Photons<'_> {
             let light = &scene.lights[pick];
             trace_photon(
                 scene,
-                light,
+                (pick, light),
                 self.weight,
                 self.limits,
                 &self.grid,
@@ -187,7 +187,7 @@ impl Photons<'_> {
 #[allow(clippy::too_many_arguments)]
 fn trace_photon(
     scene: &Scene,
-    light: &Light,
+    (index, light): (usize, &Light),
     weight: f64,
     limits: Limits,
     grid: &Grid,
@@ -196,8 +196,13 @@ fn trace_photon(
     stats: &mut Stats,
 ) {
     stats.physics.light_paths += 1;
-    let photon = light.shape.emit(light, scene, stream);
-    let power = light.color * weight * photon.scale;
+    let mut photon = light.shape.emit(light, scene, stream);
+    let mut colour = light.color;
+    if let Some((wavelength, of_it)) = scene.spectra.photon(index, stream) {
+        photon.wavelength = Some(wavelength);
+        colour = of_it;
+    }
+    let power = colour * weight * photon.scale;
     let mut deposits = Deposits {
         grid,
         floor: buffer,
@@ -264,7 +269,10 @@ pub(crate) fn follow_photon(
     // Whether a specular event came before that reflection: then no path
     // finds the light it brings to a diffuse wall, which is binned there.
     let mut specular_then_glossy = false;
-    let mut glass = GlassState::default();
+    let mut glass = GlassState {
+        inside: None,
+        wavelength: photon.wavelength,
+    };
     // A laser's light no path finds: the caustic pass counts all of it.
     let unseen = photon.unseen;
     loop {

@@ -48,33 +48,18 @@ pub fn cauchy(ior: f64, b: f64, wavelength_um: f64) -> f64 {
 }
 
 /// The visible range sampled by dispersive scenes, in micrometres.
-pub const VISIBLE: (f64, f64) = (0.38, 0.78);
+pub const VISIBLE: (f64, f64) = (
+    crate::spectrum::RANGE_NM.0 / 1000.0,
+    crate::spectrum::RANGE_NM.1 / 1000.0,
+);
 
-/// The RGB weight of a wavelength drawn uniformly from [`VISIBLE`]: three
-/// Gaussian lobes (red, green, blue) normalised so that their mean over
-/// the range is exactly (1, 1, 1). White light split into wavelengths and
-/// recombined is white again.
+/// The RGB weight of a wavelength (micrometres) drawn uniformly from
+/// [`VISIBLE`]: the CIE 1931 colour matching functions in linear sRGB,
+/// divided channel by channel by their mean over the range, so that
+/// their mean is exactly (1, 1, 1) (`crate::spectrum::wavelength_rgb`).
+/// White light split into wavelengths and recombined is white again.
 pub fn wavelength_rgb(wavelength_um: f64) -> Rgb {
-    let lobe = |centre: f64, width: f64| (-((wavelength_um - centre) / width).powi(2) * 0.5).exp();
-    Rgb::new(lobe(0.61, 0.05), lobe(0.545, 0.04), lobe(0.45, 0.035)) / lobe_means()
-}
-
-/// The means of the three lobes over the visible range, by a fine
-/// midpoint rule (computed once).
-fn lobe_means() -> Rgb {
-    use std::sync::OnceLock;
-    static MEANS: OnceLock<Rgb> = OnceLock::new();
-    *MEANS.get_or_init(|| {
-        let n = 4000;
-        let (lo, hi) = VISIBLE;
-        let mut sum = Rgb::ZERO;
-        for k in 0..n {
-            let l = lo + (hi - lo) * (k as f64 + 0.5) / n as f64;
-            let lobe = |centre: f64, width: f64| (-((l - centre) / width).powi(2) * 0.5).exp();
-            sum += Rgb::new(lobe(0.61, 0.05), lobe(0.545, 0.04), lobe(0.45, 0.035));
-        }
-        sum / n as f64
-    })
+    crate::spectrum::wavelength_rgb(wavelength_um * 1000.0)
 }
 
 #[cfg(test)]
@@ -129,7 +114,7 @@ mod tests {
             sum += wavelength_rgb(lo + (hi - lo) * (k as f64 + 0.5) / n as f64);
         }
         let mean = sum / n as f64;
-        assert!((mean - Rgb::ONE).abs().max_element() < 1e-6, "{mean}");
+        assert!((mean - Rgb::ONE).abs().max_element() < 1e-4, "{mean}");
         assert!(wavelength_rgb(0.45).z > wavelength_rgb(0.45).x);
         assert!(wavelength_rgb(0.65).x > wavelength_rgb(0.65).z);
     }

@@ -15,7 +15,7 @@ use crate::material::{Bsdf, Sampling, Transport};
 use crate::memo::Onward;
 use crate::run::Run;
 use crate::sampling::{Stream, circle_in_arc};
-use crate::scene::{Light, Scene};
+use crate::scene::Scene;
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
@@ -229,7 +229,8 @@ pub(crate) fn follow(
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
         if mirror_emission && (after_mirror || force || glossy_from.is_some()) {
             stats.work.emission_tests += 1;
-            let emitted = emission_crossed(scene, &ray, hit_t, unfolded, glossy_from);
+            let emitted =
+                emission_crossed(scene, &ray, hit_t, unfolded, glossy_from, glass.wavelength);
             if after_mirror || glossy_from.is_some() {
                 fluence += throughput * emitted;
             }
@@ -263,7 +264,8 @@ pub(crate) fn follow(
         if (after_mirror || glossy_from.is_some())
             && let Some(light) = scene.light_of_wall(index)
         {
-            fluence += throughput * wall_emission(scene, light, side, unfolded, glossy_from);
+            fluence += throughput
+                * wall_emission(scene, light, side, unfolded, glossy_from, glass.wavelength);
         }
 
         let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), trace.tables, stats);
@@ -482,9 +484,10 @@ fn emission_crossed(
     t_max: f64,
     unfolded: f64,
     glossy_from: Option<GlossyStart>,
+    wavelength: Option<f64>,
 ) -> Rgb {
     let mut sum = Rgb::ZERO;
-    for light in &scene.lights {
+    for (index, light) in scene.lights.iter().enumerate() {
         if let Some(t) = light.shape.met_by(ray, t_max) {
             let r = unfolded + t;
             let v = light.intensity * light.falloff.per_radian(r, scene.small_radius);
@@ -494,7 +497,7 @@ fn emission_crossed(
                 }
                 None => v,
             };
-            sum += light.color * v;
+            sum += scene.spectra.colour(&scene.lights, index, wavelength) * v;
         }
     }
     sum
@@ -626,9 +629,16 @@ fn wall_emission(
     side: Side,
     r: f64,
     glossy_from: Option<GlossyStart>,
+    wavelength: Option<f64>,
 ) -> Rgb {
+    let colour = scene
+        .spectra
+        .colour(&scene.lights, light as usize, wavelength);
     let light = &scene.lights[light as usize];
-    let emitted = line_emission(light, side, r, scene.small_radius);
+    let emitted = colour
+        * light
+            .shape
+            .emitted_at_wall(light, side, r, scene.small_radius);
     match glossy_from {
         Some(from) => emitted * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf),
         None => emitted,
@@ -642,10 +652,4 @@ struct GlossyStart {
     x: DVec2,
     wall: u32,
     pdf: f64,
-}
-
-/// What a path ray meeting solid line light `light` from `side` at total
-/// distance `r` carries back.
-fn line_emission(light: &Light, side: Side, r: f64, r0: f64) -> Rgb {
-    light.color * light.shape.emitted_at_wall(light, side, r, r0)
 }

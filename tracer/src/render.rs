@@ -25,6 +25,7 @@ use crate::tile::{Shared, path_passes};
 ///     color: Rgb::ONE,
 ///     intensity: 1.0,
 ///     falloff: Falloff::Flatland,
+///     spectrum: None,
 /// };
 /// let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.5)), 0.5, vec![], vec![lamp])?;
 /// let mut options = RenderOptions::default();

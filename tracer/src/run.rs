@@ -238,6 +238,7 @@ mod tests {
             color: Rgb::ONE,
             intensity: 1.0,
             falloff: Falloff::Flatland,
+            spectrum: None,
         };
         let canvas = Canvas {
             width: 30,

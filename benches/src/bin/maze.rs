@@ -51,6 +51,7 @@ fn main() {
                 color: Rgb::new(1.0, 0.95, 0.8),
                 intensity: 2.0,
                 falloff: Falloff::Flatland,
+                spectrum: None,
             }
         })
         .collect();

@@ -181,6 +181,7 @@ mod tests {
             color: Rgb::ONE,
             intensity: 5.0,
             falloff: Falloff::Flatland,
+            spectrum: None,
         };
         let lights = vec![
             light(LightShape::Point {

@@ -291,6 +291,7 @@ mod tests {
             color: Rgb::new(1.0, 0.8, 0.6),
             intensity: 2.0,
             falloff,
+            spectrum: None,
         };
         let walls = [
             ((10.0, 10.0), (30.0, 12.0)),

@@ -68,6 +68,7 @@ pub(super) fn emit(segment: &Segment, direction: DVec2, stream: &mut Stream) -> 
         kernel: PhotonKernel::None,
         skip: Skip::NONE,
         unseen: false,
+        wavelength: None,
     }
 }
 
@@ -115,6 +116,7 @@ pub(super) fn emit_laser(at: DVec2, direction: DVec2) -> Photon {
         kernel: PhotonKernel::None,
         skip: Skip::NONE,
         unseen: true,
+        wavelength: None,
     }
 }
 

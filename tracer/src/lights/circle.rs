@@ -78,6 +78,7 @@ pub(super) fn emit(at: DVec2, radius: f64, light: &Light, stream: &mut Stream) -
         kernel: PhotonKernel::Line(light.falloff),
         skip: Skip::NONE,
         unseen: false,
+        wavelength: None,
     }
 }
 

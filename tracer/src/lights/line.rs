@@ -104,6 +104,7 @@ pub(super) fn emit(
         kernel: PhotonKernel::Line(light.falloff),
         skip: wall.map_or(Skip::NONE, Skip::one),
         unseen: false,
+        wavelength: None,
     }
 }
 

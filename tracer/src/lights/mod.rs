@@ -109,6 +109,9 @@ pub(crate) struct Photon {
     /// laser's): the caustic pass then counts its every flight, not only
     /// those after a specular event.
     pub unseen: bool,
+    /// The wavelength (micrometres) a photon of a lamp with a spectrum
+    /// carries from the lamp, where glass disperses.
+    pub wavelength: Option<f64>,
 }
 
 impl LightShape {

@@ -56,5 +56,6 @@ pub(super) fn emit(at: DVec2, light: &Light, stream: &mut Stream) -> Photon {
         kernel: PhotonKernel::Point(light.falloff),
         skip: Skip::NONE,
         unseen: false,
+        wavelength: None,
     }
 }

@@ -51,5 +51,6 @@ pub(super) fn emit(
         kernel: PhotonKernel::Point(light.falloff),
         skip: Skip::NONE,
         unseen: false,
+        wavelength: None,
     }
 }

@@ -60,5 +60,6 @@ pub(super) fn emit(scene: &Scene, direction: DVec2, stream: &mut Stream) -> Phot
         kernel: PhotonKernel::None,
         skip: Skip::NONE,
         unseen: false,
+        wavelength: None,
     }
 }

@@ -21,7 +21,7 @@
 use flatray_geometry::{DVec2, Side};
 
 use super::rough;
-use crate::optics::{VISIBLE, cauchy, choose, wavelength_rgb};
+use crate::optics::{cauchy, choose};
 use crate::sampling::Stream;
 use crate::scene::{Material, Scene};
 use crate::{Rgb, Stats};
@@ -193,9 +193,9 @@ pub(crate) fn interact(
         let wavelength = match state.wavelength {
             Some(l) => l,
             None => {
-                let l = VISIBLE.0 + (VISIBLE.1 - VISIBLE.0) * stream.uniform();
+                let (l, weight) = scene.spectra.draw(stream);
                 state.wavelength = Some(l);
-                colour = wavelength_rgb(l);
+                colour = weight;
                 l
             }
         };

@@ -42,6 +42,8 @@ pub struct Inventory {
     pub dispersive: usize,
     /// Glass bodies whose edges spread light (`roughness` above 0).
     pub rough_glass: usize,
+    /// Lights with a spectrum.
+    pub spectral: usize,
     pub diffuse: usize,
     /// Diffuse walls that take the floor's albedo.
     pub floor_albedo_walls: usize,
@@ -80,6 +82,7 @@ impl Inventory {
             glass_bodies: scene.glass.len(),
             dispersive: scene.glass.iter().filter(|g| g.dispersion != 0.0).count(),
             rough_glass: scene.glass.iter().filter(|g| g.roughness > 0.0).count(),
+            spectral: scene.lights.iter().filter(|l| l.spectrum.is_some()).count(),
             diffuse: walls(&Material::is_diffuse),
             floor_albedo_walls: walls(&Material::takes_floor_albedo),
             occluders: walls(&Material::occludes),

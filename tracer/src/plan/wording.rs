@@ -58,6 +58,7 @@ impl Plan {
             glass_bodies,
             dispersive,
             rough_glass,
+            spectral,
             diffuse,
             floor_albedo_walls,
             occluders,
@@ -434,6 +435,12 @@ impl Plan {
                 "no dispersive glass in the scene".into()
             } else if !specular_runs {
                 specular_why(glass_edges, "glass edge")
+            } else if spectral > 0 {
+                format!(
+                    "{}; {} with a spectrum, their light wavelength by wavelength",
+                    n(dispersive, "dispersive glass body"),
+                    n(spectral, "light")
+                )
             } else {
                 n(dispersive, "dispersive glass body")
             },

@@ -10,6 +10,7 @@ use flatray_geometry::DVec2;
 
 use super::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Wall};
 use crate::Rgb;
+use crate::spectrum::Spectrum;
 
 /// Largest canvas side, in pixels.
 pub const MAX_CANVAS_SIDE: u32 = 32_768;
@@ -317,10 +318,45 @@ fn wall(wall: &Wall, bodies: usize) -> Checked {
 }
 
 fn light(light: &Light, walls: usize) -> Checked {
-    color(light.color)?;
+    // A light with a spectrum takes its colour from it.
+    match &light.spectrum {
+        None => color(light.color)?,
+        Some(s) => spectrum(s)?,
+    }
     intensity(light.intensity)?;
     falloff(light.falloff)?;
     shape(&light.shape, walls)
+}
+
+/// The most distinct spectra a scene's lights may have: each is held on
+/// a grid of 800 wavelengths (about 13 KiB with what draws from it).
+pub const MAX_SPECTRA: usize = 1024;
+
+/// A light's spectrum: a blackbody's temperature within
+/// [`crate::spectrum::KELVIN_RANGE`], a table's values finite, at least
+/// 0 and not all 0.
+pub fn spectrum(s: &Spectrum) -> Checked {
+    match *s {
+        Spectrum::Blackbody { kelvin } => {
+            let (low, high) = crate::spectrum::KELVIN_RANGE;
+            if (low..=high).contains(&kelvin) {
+                Ok(())
+            } else {
+                Err(format!(
+                    "expected a blackbody's temperature from {low} to {high} kelvin, found {kelvin}"
+                ))
+            }
+        }
+        Spectrum::Lamp(_) => Ok(()),
+        Spectrum::Table(values) => {
+            if values.iter().all(|v| v.is_finite() && *v >= 0.0) && values.iter().any(|&v| v > 0.0)
+            {
+                Ok(())
+            } else {
+                Err("expected a spectrum's table of finite values of at least 0, not all 0".into())
+            }
+        }
+    }
 }
 
 /// A light's shape alone: what the scene format checks of a beam, whose
@@ -427,8 +463,18 @@ pub(super) fn scene(
     for (k, w) in walls.iter().enumerate() {
         wall(w, bodies.len()).map_err(at(Item::Wall(k)))?;
     }
+    let mut spectra = std::collections::HashSet::new();
     for (k, l) in lights.iter().enumerate() {
         light(l, walls.len()).map_err(at(Item::Light(k)))?;
+        if let Some(s) = &l.spectrum
+            && spectra.insert(s.key())
+            && spectra.len() > MAX_SPECTRA
+        {
+            return Err(InvalidScene {
+                item: Item::Light(k),
+                message: format!("expected at most {MAX_SPECTRA} different spectra in a scene"),
+            });
+        }
     }
     Ok(())
 }

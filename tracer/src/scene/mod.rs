@@ -17,13 +17,14 @@ pub use check::{
 pub mod checks {
     pub use super::check::{
         canvas_size, color, cone, exposure, finite, fraction, glass_roughness, intensity, ior,
-        light_shape, non_negative, point, positive, roughness, small_radius,
+        light_shape, non_negative, point, positive, roughness, small_radius, spectrum,
     };
 }
 
 use flatray_geometry::{DVec2, Ray, Segment, SegmentSet, Side, Skip};
 
 use crate::Rgb;
+use crate::spectrum::{Mixture, Sampled, Spectrum};
 
 /// The rectangle of the world that the image covers.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -701,13 +702,20 @@ pub enum LightShape {
     Laser { at: DVec2, direction: DVec2 },
 }
 
-/// A light: its shape, colour, intensity and falloff.
+/// A light: its shape, colour, intensity and falloff, and optionally
+/// its spectrum.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
     pub shape: LightShape,
+    /// Its colour in linear sRGB; for a light with a spectrum, the
+    /// spectrum's colour ([`Scene::new`] sets it).
     pub color: Rgb,
     pub intensity: f64,
     pub falloff: Falloff,
+    /// What it emits wavelength by wavelength: its colour where no glass
+    /// disperses, each wavelength apart where glass does
+    /// (`crate::spectrum`).
+    pub spectrum: Option<Spectrum>,
 }
 
 impl Light {
@@ -818,6 +826,97 @@ pub struct Scene {
     pub(crate) segments: SegmentSet,
     /// The floor's albedo along the walls that take it.
     pub(crate) albedo_along: AlbedoAlong,
+    /// The lights' spectra, held on the grid of wavelengths.
+    pub(crate) spectra: Spectra,
+}
+
+/// The distinct spectra of a scene's lights on the grid of wavelengths,
+/// which light each has, and how paths draw a wavelength at dispersive
+/// glass.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Spectra {
+    sampled: Vec<Sampled>,
+    /// Per light, its spectrum's index in `sampled`.
+    of_light: Vec<Option<u32>>,
+    /// Where glass disperses and a light has a spectrum: the mixture of
+    /// the spectra paths draw from.
+    mixture: Option<Mixture>,
+    /// Whether some glass disperses: only then does a spectrum act
+    /// wavelength by wavelength.
+    dispersive: bool,
+}
+
+impl Spectra {
+    /// The spectra of `lights`, each distinct one sampled once; their
+    /// colours set from them.
+    fn new(lights: &mut [Light], glass: &[GlassBody]) -> Spectra {
+        let mut sampled = Vec::new();
+        let mut index: std::collections::HashMap<Vec<u64>, u32> = Default::default();
+        let of_light = lights
+            .iter_mut()
+            .map(|light| {
+                let spectrum = light.spectrum?;
+                let k = *index.entry(spectrum.key()).or_insert_with(|| {
+                    sampled.push(spectrum.sampled());
+                    sampled.len() as u32 - 1
+                });
+                light.color = sampled[k as usize].rgb();
+                Some(k)
+            })
+            .collect();
+        let dispersive = glass.iter().any(|g| g.dispersion != 0.0);
+        let mixture = (dispersive && !sampled.is_empty()).then(|| Mixture::new(sampled.clone()));
+        Spectra {
+            sampled,
+            of_light,
+            mixture,
+            dispersive,
+        }
+    }
+
+    /// What light `index` sends to a path that carries `wavelength`
+    /// (micrometres), per unit of its intensity: its colour, or, for a
+    /// light with a spectrum, its value at that wavelength.
+    #[inline]
+    pub(crate) fn colour(&self, lights: &[Light], index: usize, wavelength: Option<f64>) -> Rgb {
+        match (wavelength, self.of_light.get(index).copied().flatten()) {
+            (Some(um), Some(k)) => self.sampled[k as usize].at_wavelength(um * 1000.0),
+            _ => lights[index].color,
+        }
+    }
+
+    /// A wavelength (micrometres) for a path at its first dispersive edge,
+    /// and the colour weight it takes.
+    pub(crate) fn draw(&self, stream: &mut crate::sampling::Stream) -> (f64, Rgb) {
+        use crate::spectrum::{RANGE_NM, WIDTH_NM, wavelength_rgb};
+        match &self.mixture {
+            None => {
+                let nm = RANGE_NM.0 + WIDTH_NM * stream.uniform();
+                (nm / 1000.0, wavelength_rgb(nm))
+            }
+            Some(mixture) => {
+                let (nm, pdf) = mixture.sample(stream.uniform(), stream.uniform());
+                (nm / 1000.0, wavelength_rgb(nm) / (WIDTH_NM * pdf))
+            }
+        }
+    }
+
+    /// For a photon of light `index`, where glass disperses and the light
+    /// has a spectrum: a wavelength (micrometres) drawn from its spectrum
+    /// at emission, and the photon's colour in place of the light's.
+    pub(crate) fn photon(
+        &self,
+        index: usize,
+        stream: &mut crate::sampling::Stream,
+    ) -> Option<(f64, Rgb)> {
+        if !self.dispersive {
+            return None;
+        }
+        let k = self.of_light.get(index).copied().flatten()?;
+        let s = &self.sampled[k as usize];
+        let (nm, _) = s.sample(stream.uniform());
+        Some((nm / 1000.0, s.photon_rgb(nm)))
+    }
 }
 
 impl Scene {
@@ -836,6 +935,7 @@ impl Scene {
     ///     color: Rgb::ONE,
     ///     intensity: 1.0,
     ///     falloff: Falloff::Flatland,
+    ///     spectrum: None,
     /// };
     /// let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.5)), 0.5, vec![], vec![lamp])?;
     /// assert_eq!(scene.lights().len(), 1);
@@ -884,7 +984,7 @@ impl Scene {
     /// # use glam::DVec2;
     /// # let canvas = Canvas { width: 10, height: 10, origin: DVec2::ZERO };
     /// # let lamp = Light { shape: LightShape::Point { at: DVec2::new(5.0, 5.0) },
-    /// #     color: Rgb::ONE, intensity: 1.0, falloff: Falloff::Flatland };
+    /// #     color: Rgb::ONE, intensity: 1.0, falloff: Falloff::Flatland, spectrum: None };
     /// # let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, vec![], vec![lamp])?;
     /// let mut parts = scene.parts();
     /// parts.lights[0].intensity = 2.0;
@@ -912,6 +1012,7 @@ impl Scene {
         mut lights: Vec<Light>,
         glass: Vec<GlassBody>,
     ) -> Scene {
+        let spectra = Spectra::new(&mut lights, &glass);
         // A rough mirror of roughness 0 is the mirror, to the bit.
         for w in &mut walls {
             if let Material::Rough { roughness, tint } = w.material {
@@ -959,6 +1060,7 @@ impl Scene {
             light_wall,
             segments,
             albedo_along,
+            spectra,
         }
     }
 
@@ -1497,6 +1599,7 @@ mod tests {
             color: Rgb::ONE,
             intensity: 1.0,
             falloff: Falloff::Flatland,
+            spectrum: None,
         }];
         let (out, _) = resolve_overlaps(walls.clone(), &mut lights);
         assert_eq!(out[0], walls[0]);
