@@ -243,7 +243,11 @@ fn every_example_scene_agrees_with_the_light_tracer() {
         let scale = 60.0 / loaded.scene.canvas().width as f64;
         let options = {
             let mut options = loaded.options;
-            options.samples = 4;
+            // The optical bench's lasers fan out of its prism, one
+            // wavelength a photon: at 4 samples a block past the prism
+            // gets its light from a handful of caustic photons in most
+            // runs, too few for 24 runs to measure their spread.
+            options.samples = if name == "optics" { 16 } else { 4 };
             options.scale = scale;
             options
         };

@@ -551,10 +551,11 @@ impl Estimator for CausticPass<'_> {
                 .count()
                 .max(1);
             let window = light.spot_window(dir);
-            let (wavelength, colour) = match scene.spectra.photon(emitter.light, &mut stream) {
-                Some((wavelength, colour)) => (Some(wavelength), colour),
-                None => (None, light.color),
-            };
+            let (wavelength, colour) =
+                match scene.spectra.photon(emitter.light, || stream.uniform()) {
+                    Some((wavelength, colour)) => (Some(wavelength), colour),
+                    None => (None, light.color),
+                };
             let power = colour * (weight * window / holding as f64);
             if power == Rgb::ZERO {
                 continue;

@@ -198,7 +198,7 @@ fn trace_photon(
     stats.physics.light_paths += 1;
     let mut photon = light.shape.emit(light, scene, stream);
     let mut colour = light.color;
-    if let Some((wavelength, of_it)) = scene.spectra.photon(index, stream) {
+    if let Some((wavelength, of_it)) = scene.spectra.photon(index, || stream.uniform()) {
         photon.wavelength = Some(wavelength);
         colour = of_it;
     }

@@ -193,7 +193,7 @@ pub(crate) fn interact(
         let wavelength = match state.wavelength {
             Some(l) => l,
             None => {
-                let (l, weight) = scene.spectra.draw(stream);
+                let (l, weight) = scene.spectra.draw(|| stream.uniform());
                 state.wavelength = Some(l);
                 colour = weight;
                 l

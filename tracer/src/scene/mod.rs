@@ -886,16 +886,17 @@ impl Spectra {
     }
 
     /// A wavelength (micrometres) for a path at its first dispersive edge,
-    /// and the colour weight it takes.
-    pub(crate) fn draw(&self, stream: &mut crate::sampling::Stream) -> (f64, Rgb) {
+    /// and the colour weight it takes, from numbers in `[0, 1)` that
+    /// `uniform` gives (one, or two where lamps have spectra).
+    pub(crate) fn draw(&self, mut uniform: impl FnMut() -> f64) -> (f64, Rgb) {
         use crate::spectrum::{RANGE_NM, WIDTH_NM, wavelength_rgb};
         match &self.mixture {
             None => {
-                let nm = RANGE_NM.0 + WIDTH_NM * stream.uniform();
+                let nm = RANGE_NM.0 + WIDTH_NM * uniform();
                 (nm / 1000.0, wavelength_rgb(nm))
             }
             Some(mixture) => {
-                let (nm, pdf) = mixture.sample(stream.uniform(), stream.uniform());
+                let (nm, pdf) = mixture.sample(uniform(), uniform());
                 (nm / 1000.0, wavelength_rgb(nm) / (WIDTH_NM * pdf))
             }
         }
@@ -903,18 +904,15 @@ impl Spectra {
 
     /// For a photon of light `index`, where glass disperses and the light
     /// has a spectrum: a wavelength (micrometres) drawn from its spectrum
-    /// at emission, and the photon's colour in place of the light's.
-    pub(crate) fn photon(
-        &self,
-        index: usize,
-        stream: &mut crate::sampling::Stream,
-    ) -> Option<(f64, Rgb)> {
+    /// at emission with a number `uniform` gives, and the photon's colour
+    /// in place of the light's.
+    pub(crate) fn photon(&self, index: usize, uniform: impl FnOnce() -> f64) -> Option<(f64, Rgb)> {
         if !self.dispersive {
             return None;
         }
         let k = self.of_light.get(index).copied().flatten()?;
         let s = &self.sampled[k as usize];
-        let (nm, _) = s.sample(stream.uniform());
+        let (nm, _) = s.sample(uniform());
         Some((nm / 1000.0, s.photon_rgb(nm)))
     }
 }
