@@ -439,3 +439,63 @@ fn a_rough_mirror_out_of_range() {
         "from 0 (a mirror) to 1",
     );
 }
+
+#[test]
+fn rough_glass_out_of_range() {
+    check_rejected(
+        "Scene(canvas: (10, 10), floor: Tiles(size: 2), glass: [\n  Glass(points: [(1, 1), (9, 1), (5, 8)], roughness: 1.5),\n])",
+        2,
+        "from 0 (smooth glass) to 1",
+    );
+}
+
+#[test]
+fn a_beam_along_its_own_segment_or_of_no_length() {
+    check_rejected(
+        "Scene(canvas: (10, 10), floor: Tiles(size: 2), lights: [\n  Point(at: (5, 5)),\n  Beam(a: (1, 1), b: (9, 1), direction: (-2, 0)),\n])",
+        3,
+        "no width",
+    );
+    check_rejected(
+        "Scene(canvas: (10, 10), floor: Tiles(size: 2), lights: [\n  Beam(a: (1, 1), b: (1, 1), direction: (0, 1)),\n])",
+        2,
+        "use a Laser",
+    );
+}
+
+#[test]
+fn a_spectrum_that_is_no_spectrum() {
+    // A temperature out of range, a colour beside a spectrum, a table
+    // whose wavelengths go back, and one with no light in the range.
+    for (light, expected) in [
+        (
+            "Point(at: (5, 5), spectrum: Blackbody(50))",
+            "100 to 100000 kelvin",
+        ),
+        (
+            "Point(at: (5, 5), color: (1, 0, 0), spectrum: Lamp(Neon))",
+            "not both",
+        ),
+        (
+            "Line(a: (1, 1), b: (9, 1), spectrum: Table([(500, 1), (450, 1)]))",
+            "must increase",
+        ),
+        (
+            "Point(at: (5, 5), spectrum: Table([(900, 1), (1000, 1)]))",
+            "no light from 380 to 780 nm",
+        ),
+    ] {
+        check_rejected(
+            &format!(
+                "Scene(canvas: (10, 10), floor: Tiles(size: 2), lights: [\n  Point(at: (2, 2)),\n  {light},\n])"
+            ),
+            3,
+            expected,
+        );
+    }
+    check_rejected(
+        "Scene(canvas: (10, 10), floor: Tiles(size: 2), lights: [\n  Point(at: (5, 5), spectrum: Lamp(Argon)),\n])",
+        2,
+        "Sodium",
+    );
+}
