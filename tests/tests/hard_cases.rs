@@ -837,3 +837,78 @@ fn glass_touching_a_wall() {
         assert_eq!(image.get(50, 20), [0.0; 3]);
     }
 }
+
+/// Lasers and beams at a closed room's walls: a laser that starts at a
+/// point computed on a tilted wall and points out of the room (it shines
+/// past the wall it sits on), one that runs from outside along a wall's
+/// line into the room's corner, and a beam outside the room whose
+/// rays run parallel to a wall, one of them along its line into the
+/// room's corner, for both integrators and D = 0 and 2. Every value is
+/// finite, and no light gets into the room: every pixel inside is
+/// exactly 0.
+#[test]
+fn lasers_and_beams_on_and_along_walls_do_not_leak() {
+    let corners = [(20.3, 14.1), (78.9, 22.7), (70.2, 81.6), (12.8, 73.0)];
+    let walls = walls_text(&corners, true, "");
+    let (a, b) = (DVec2::from(corners[0]), DVec2::from(corners[1]));
+    let on = a + 0.37 * (b - a);
+    let out = (b - a).perp().normalize();
+    // Outward is the side away from the room's centre.
+    let out = if out.dot(on - DVec2::new(45.0, 48.0)) > 0.0 {
+        out
+    } else {
+        -out
+    };
+    let along = (b - a).normalize();
+    let text = format!(
+        "Scene(canvas: (100, 100), floor: Color((1, 1, 1)), walls: [{walls}],
+               lights: [Laser(at: ({:?}, {:?}), direction: ({:?}, {:?}), intensity: 20),
+                        Laser(at: ({:?}, {:?}), direction: ({:?}, {:?}), intensity: 20),
+                        Beam(a: (5, 20), b: (10, 2), direction: ({:?}, {:?}), intensity: 2)])",
+        on.x,
+        on.y,
+        out.x,
+        out.y,
+        (a - 10.0 * along).x,
+        (a - 10.0 * along).y,
+        along.x,
+        along.y,
+        along.x,
+        along.y
+    );
+    let loaded = scene(&text);
+    let room = Segment::new(a, b);
+    let inside = |p: DVec2| {
+        (0..4).all(|k| {
+            let s = Segment::new(
+                DVec2::from(corners[k]),
+                DVec2::from(corners[(k + 1) % 4]),
+            );
+            s.side_value(p) / s.length() > 1.5
+        })
+    };
+    assert!(inside(DVec2::new(45.0, 48.0)) && room.length() > 0.0);
+    for integrator in [Integrator::Path, Integrator::Light] {
+        for bounces in [0, 2] {
+            let image = render(&loaded.scene, &{
+                let mut options = options(4, bounces);
+                options.integrator = integrator;
+                options
+            })
+            .image;
+            assert!(all_finite(&image), "{integrator:?}, D = {bounces}");
+            assert!(image.pixels.iter().any(|p| p[0] > 0.0));
+            for y in 0..100 {
+                for x in 0..100 {
+                    if inside(DVec2::new(x as f64 + 0.5, y as f64 + 0.5)) {
+                        assert_eq!(
+                            image.get(x, y),
+                            [0.0; 3],
+                            "{integrator:?}, D = {bounces}: light leaked into ({x}, {y})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

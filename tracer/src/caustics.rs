@@ -565,7 +565,7 @@ impl Estimator for CausticPass<'_> {
                 dir,
                 scale: 1.0,
                 kernel: light.shape.kernel(light),
-                skip: Skip::NONE,
+                skip: scene.laser_wall(emitter.light).map_or(Skip::NONE, Skip::one),
                 unseen: !light.shape.found_by_paths(),
                 wavelength,
             };

@@ -197,6 +197,9 @@ fn trace_photon(
 ) {
     stats.physics.light_paths += 1;
     let mut photon = light.shape.emit(light, scene, stream);
+    if let Some(wall) = scene.laser_wall(index) {
+        photon.skip = Skip::one(wall);
+    }
     let mut colour = light.color;
     if let Some((wavelength, of_it)) = scene.spectra.photon(index, || stream.uniform()) {
         photon.wavelength = Some(wavelength);

@@ -69,6 +69,56 @@ def test_a_scene_built_in_python_renders_the_clis_bits(cli, tmp_path):
     assert np.array_equal(flatray.render(built, spp=20, integrator="light").image, more)
 
 
+# An optical bench: a beam of a sodium lamp, a laser of a blackbody and a
+# mercury line lamp through a dispersive prism, and rough glass.
+BENCH_RON = """Scene(
+    canvas: (64, 40),
+    floor: Color((0.8, 0.8, 0.8)),
+    lights: [
+        Beam(a: (2, 10), b: (2, 14), direction: (1, 0.1), intensity: 2, spectrum: Lamp(Sodium)),
+        Laser(at: (2, 20), direction: (1, -0.05), intensity: 5, spectrum: Blackbody(6504)),
+        Line(a: (4, 30), b: (8, 34), spectrum: Table([(400, 0.2), (550, 1), (700, 0.5)])),
+    ],
+    glass: [
+        Glass(points: [(20, 30), (34, 30), (27, 8)], ior: 1.6, dispersion: 0.05),
+        Glass(points: [(44, 10), (52, 10), (52, 34), (44, 34)], roughness: 0.2),
+    ],
+    render: (samples: 8),
+)
+"""
+
+BENCH_VALUES = dict(
+    canvas=(64, 40),
+    floor={"Color": (0.8, 0.8, 0.8)},
+    lights=[
+        {"Beam": {"a": (2, 10), "b": (2, 14), "direction": (1, 0.1), "intensity": 2,
+                  "spectrum": {"Lamp": "Sodium"}}},
+        {"Laser": {"at": (2, 20), "direction": (1, -0.05), "intensity": 5,
+                   "spectrum": {"Blackbody": 6504}}},
+        {"Line": {"a": (4, 30), "b": (8, 34),
+                  "spectrum": {"Table": [(400, 0.2), (550, 1), (700, 0.5)]}}},
+    ],
+    glass=[
+        {"points": [(20, 30), (34, 30), (27, 8)], "ior": 1.6, "dispersion": 0.05},
+        {"points": [(44, 10), (52, 10), (52, 34), (44, 34)], "roughness": 0.2},
+    ],
+    render={"samples": 8},
+)
+
+
+def test_beams_lasers_spectra_and_rough_glass_from_python_render_the_clis_bits(cli, tmp_path):
+    path = tmp_path / "bench.ron"
+    path.write_text(BENCH_RON)
+    expected = cli_render(cli, path, tmp_path / "cli.exr", "--seed", "5")
+    got = flatray.render(flatray.Scene(**BENCH_VALUES), seed=5)
+    assert np.array_equal(got.image, expected)
+    assert got.image.max() > 0
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.Scene(**{**BENCH_VALUES, "lights": [{"Point": {"at": (5, 5),
+                                                              "spectrum": {"Blackbody": 10}}}]})
+    assert "kelvin" in caught.value.message
+
+
 def test_the_image_is_height_by_width_by_three_float32(repo):
     scene = flatray.load(repo / "scenes" / "room.ron")
     result = flatray.render(scene, spp=2, scale=0.1)

@@ -1163,6 +1163,16 @@ impl Scene {
             .collect()
     }
 
+    /// The wall a laser sits on, which its photons leave without meeting
+    /// (a light on a wall shines past it, `docs/robustness.md` rule 4):
+    /// `None` for any other light.
+    pub(crate) fn laser_wall(&self, index: usize) -> Option<u32> {
+        match self.lights.get(index)?.shape {
+            LightShape::Laser { .. } => self.light_wall.get(index).copied().flatten(),
+            _ => None,
+        }
+    }
+
     /// The line light that wall `index` also is, if any.
     pub fn light_of_wall(&self, index: u32) -> Option<u32> {
         self.wall_light.get(index as usize).copied().flatten()
