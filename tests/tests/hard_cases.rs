@@ -880,10 +880,7 @@ fn lasers_and_beams_on_and_along_walls_do_not_leak() {
     let room = Segment::new(a, b);
     let inside = |p: DVec2| {
         (0..4).all(|k| {
-            let s = Segment::new(
-                DVec2::from(corners[k]),
-                DVec2::from(corners[(k + 1) % 4]),
-            );
+            let s = Segment::new(DVec2::from(corners[k]), DVec2::from(corners[(k + 1) % 4]));
             s.side_value(p) / s.length() > 1.5
         })
     };

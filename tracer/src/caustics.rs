@@ -565,7 +565,9 @@ impl Estimator for CausticPass<'_> {
                 dir,
                 scale: 1.0,
                 kernel: light.shape.kernel(light),
-                skip: scene.laser_wall(emitter.light).map_or(Skip::NONE, Skip::one),
+                skip: scene
+                    .laser_wall(emitter.light)
+                    .map_or(Skip::NONE, Skip::one),
                 unseen: !light.shape.found_by_paths(),
                 wavelength,
             };

@@ -267,6 +267,11 @@ pub const TABLE_POINTS: usize = 81;
 
 /// What a lamp emits, wavelength by wavelength, up to a factor: its
 /// intensity sets the scale, and the spectrum its colour.
+///
+/// A table is held inline (324 bytes) so that a `Light` stays `Copy`;
+/// the render reads a light's spectrum only from the scene's sampled
+/// copies, never by moving a `Light`.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Spectrum {
     /// Planck's law at a temperature in kelvin.
