@@ -4,38 +4,15 @@
 //! exactly the pixels geometry says, by its power times the track's
 //! length in each; and both integrators agree where their light bounces.
 
-use flatray_geometry::DVec2;
+use flatray_geometry::{DVec2, clip_to_box};
 use flatray_tests::{Agreement, pixel_moments, render, scene};
 use flatray_tracer::{Integrator, RenderOptions};
 
 /// The length of the segment `a b` inside the unit pixel at `(x, y)`.
 fn length_in_pixel(a: DVec2, b: DVec2, x: u32, y: u32) -> f64 {
-    let (lo, hi) = (
-        DVec2::new(x as f64, y as f64),
-        DVec2::new(x as f64 + 1.0, y as f64 + 1.0),
-    );
-    let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [
-        (-d.x, a.x - lo.x),
-        (d.x, hi.x - a.x),
-        (-d.y, a.y - lo.y),
-        (d.y, hi.y - a.y),
-    ] {
-        if p == 0.0 {
-            if q < 0.0 {
-                return 0.0;
-            }
-        } else {
-            let r = q / p;
-            if p < 0.0 {
-                t0 = t0.max(r);
-            } else {
-                t1 = t1.min(r);
-            }
-        }
-    }
-    (t1 - t0).max(0.0) * d.length()
+    let lo = DVec2::new(x as f64, y as f64);
+    clip_to_box(a, b - a, 0.0, 1.0, lo, lo + DVec2::ONE)
+        .map_or(0.0, |(t0, t1)| (t1 - t0).max(0.0) * (b - a).length())
 }
 
 /// A slanted beam on an open floor: every pixel's value is the
