@@ -497,7 +497,7 @@ fn emission_crossed(
                 }
                 None => v,
             };
-            sum += scene.spectra.colour(&scene.lights, index, wavelength) * v;
+            sum += scene.light_colour(index, wavelength) * v;
         }
     }
     sum
@@ -631,9 +631,7 @@ fn wall_emission(
     glossy_from: Option<GlossyStart>,
     wavelength: Option<f64>,
 ) -> Rgb {
-    let colour = scene
-        .spectra
-        .colour(&scene.lights, light as usize, wavelength);
+    let colour = scene.light_colour(light as usize, wavelength);
     let light = &scene.lights[light as usize];
     let emitted = colour
         * light

@@ -495,13 +495,13 @@ impl Sampled {
 /// uniformly over the range, half in proportion to the scene's lamps'
 /// spectra (each alike), so that a lamp's narrow lines are found. A scene
 /// without a lamp of a spectrum draws uniformly.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Mixture {
-    spectra: Vec<Sampled>,
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mixture<'a> {
+    spectra: &'a [Sampled],
 }
 
-impl Mixture {
-    pub fn new(spectra: Vec<Sampled>) -> Mixture {
+impl<'a> Mixture<'a> {
+    pub fn new(spectra: &'a [Sampled]) -> Mixture<'a> {
         Mixture { spectra }
     }
 
@@ -615,7 +615,8 @@ mod tests {
     /// The mixture's density integrates to 1 and its draws follow it.
     #[test]
     fn the_mixture_draws_its_density() {
-        let m = Mixture::new(vec![Spectrum::Lamp(Lamp::Mercury).sampled()]);
+        let mercury = [Spectrum::Lamp(Lamp::Mercury).sampled()];
+        let m = Mixture::new(&mercury);
         let integral: f64 = (0..CELLS)
             .map(|c| m.pdf(RANGE_NM.0 + (c as f64 + 0.5) * CELL_NM) * CELL_NM)
             .sum();

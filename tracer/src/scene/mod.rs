@@ -838,9 +838,6 @@ pub(crate) struct Spectra {
     sampled: Vec<Sampled>,
     /// Per light, its spectrum's index in `sampled`.
     of_light: Vec<Option<u32>>,
-    /// Where glass disperses and a light has a spectrum: the mixture of
-    /// the spectra paths draw from.
-    mixture: Option<Mixture>,
     /// Whether some glass disperses: only then does a spectrum act
     /// wavelength by wavelength.
     dispersive: bool,
@@ -864,24 +861,10 @@ impl Spectra {
                 Some(k)
             })
             .collect();
-        let dispersive = glass.iter().any(|g| g.dispersion != 0.0);
-        let mixture = (dispersive && !sampled.is_empty()).then(|| Mixture::new(sampled.clone()));
         Spectra {
             sampled,
             of_light,
-            mixture,
-            dispersive,
-        }
-    }
-
-    /// What light `index` sends to a path that carries `wavelength`
-    /// (micrometres), per unit of its intensity: its colour, or, for a
-    /// light with a spectrum, its value at that wavelength.
-    #[inline]
-    pub(crate) fn colour(&self, lights: &[Light], index: usize, wavelength: Option<f64>) -> Rgb {
-        match (wavelength, self.of_light.get(index).copied().flatten()) {
-            (Some(um), Some(k)) => self.sampled[k as usize].at_wavelength(um * 1000.0),
-            _ => lights[index].color,
+            dispersive: glass.iter().any(|g| g.dispersion != 0.0),
         }
     }
 
@@ -890,15 +873,13 @@ impl Spectra {
     /// `uniform` gives (one, or two where lamps have spectra).
     pub(crate) fn draw(&self, mut uniform: impl FnMut() -> f64) -> (f64, Rgb) {
         use crate::spectrum::{RANGE_NM, WIDTH_NM, wavelength_rgb};
-        match &self.mixture {
-            None => {
-                let nm = RANGE_NM.0 + WIDTH_NM * uniform();
-                (nm / 1000.0, wavelength_rgb(nm))
-            }
-            Some(mixture) => {
-                let (nm, pdf) = mixture.sample(uniform(), uniform());
-                (nm / 1000.0, wavelength_rgb(nm) / (WIDTH_NM * pdf))
-            }
+        // Where a light has a spectrum, half its draws from the spectra.
+        if self.sampled.is_empty() {
+            let nm = RANGE_NM.0 + WIDTH_NM * uniform();
+            (nm / 1000.0, wavelength_rgb(nm))
+        } else {
+            let (nm, pdf) = Mixture::new(&self.sampled).sample(uniform(), uniform());
+            (nm / 1000.0, wavelength_rgb(nm) / (WIDTH_NM * pdf))
         }
     }
 
@@ -1161,6 +1142,18 @@ impl Scene {
                 cuts
             })
             .collect()
+    }
+
+    /// What light `index` sends to a path that carries `wavelength`
+    /// (micrometres), per unit of its intensity: its colour, or, for a
+    /// light with a spectrum, its value at that wavelength.
+    #[inline]
+    pub(crate) fn light_colour(&self, index: usize, wavelength: Option<f64>) -> Rgb {
+        let spectra = &self.spectra;
+        match (wavelength, spectra.of_light.get(index).copied().flatten()) {
+            (Some(um), Some(k)) => spectra.sampled[k as usize].at_wavelength(um * 1000.0),
+            _ => self.lights[index].color,
+        }
     }
 
     /// The wall a laser sits on, which its photons leave without meeting
