@@ -258,6 +258,70 @@ impl SegmentSet {
         }
     }
 
+    /// Calls `visit(index)` for every segment whose bounding box meets the
+    /// box from `min` to `max` (closed), each once, in ascending index
+    /// order; for brute force, every segment. What a region query needs
+    /// before its own exact test (the walls in front of a line or circle
+    /// light, for instance). `scratch` holds the indices while they are
+    /// sorted; it allocates nothing once it has grown.
+    pub fn for_each_in_box(
+        &self,
+        min: DVec2,
+        max: DVec2,
+        scratch: &mut Vec<u32>,
+        visit: impl FnMut(u32),
+    ) {
+        if self.nodes.is_empty() {
+            (0..self.segments.len() as u32).for_each(visit);
+            return;
+        }
+        scratch.clear();
+        let overlaps = |node: &Node| {
+            node.min.x <= max.x && node.min.y <= max.y && node.max.x >= min.x && node.max.y >= min.y
+        };
+        if !overlaps(&self.nodes[0]) {
+            return;
+        }
+        let mut stack = [0u32; STACK];
+        let mut top = 0;
+        let mut node_index = 0u32;
+        loop {
+            let node = self.nodes[node_index as usize];
+            if node.count > 0 {
+                for slot in Self::leaf(&node) {
+                    let index = self.lanes.order[slot];
+                    let s = &self.segments[index as usize];
+                    let (lo, hi) = (s.a.min(s.b), s.a.max(s.b));
+                    if lo.x <= max.x && lo.y <= max.y && hi.x >= min.x && hi.y >= min.y {
+                        scratch.push(index);
+                    }
+                }
+            } else {
+                let (l, r) = (node.first, node.first + 1);
+                let (a, b) = (
+                    overlaps(&self.nodes[l as usize]),
+                    overlaps(&self.nodes[r as usize]),
+                );
+                if a && b {
+                    stack[top] = r;
+                    top += 1;
+                    node_index = l;
+                    continue;
+                } else if a || b {
+                    node_index = if a { l } else { r };
+                    continue;
+                }
+            }
+            if top == 0 {
+                break;
+            }
+            top -= 1;
+            node_index = stack[top];
+        }
+        scratch.sort_unstable();
+        scratch.iter().copied().for_each(visit);
+    }
+
     /// Calls `visit(index, hit)` for every crossing with `0 < t < t_max`
     /// until `visit` returns `false`. Returns `false` when it was stopped
     /// early. The order of the calls is fixed for a given set and ray, but

@@ -1,5 +1,5 @@
 //! The wall memo converges to the model: its bins average the irradiance
-//! over a pixel of wall and take a line light at 64 fixed points, a bias
+//! over a pixel of wall (the irradiance at each bin's centre), a bias
 //! where the light on a wall has an edge (at corners, under sun and spot)
 //! that more samples alone would not take away. One read in 16 is
 //! checked by next-event estimation (`flatray_cache::checked`), unbiased, so

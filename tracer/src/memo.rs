@@ -80,7 +80,6 @@ pub(crate) fn build_wall_memo(
     let junctions = scene.junctions();
     let bin_length = options.bin_length / scale;
     let rays = AtomicU64::new(0);
-    let line_samples = options.line_samples.max(1);
     let memo = WallMemo::build(
         &lengths,
         &junctions,
@@ -98,37 +97,17 @@ pub(crate) fn build_wall_memo(
                 wall: Some(wall),
                 shadow_walls: None,
             };
-            let light = &scene.lights[light_index];
             let mut local = Stats::default();
-            // A light that takes a number gets `line_samples` of them,
-            // stratified; the others one sample.
-            let value = match light.shape.numbers() {
-                1.. => {
-                    let mut sum = Rgb::ZERO;
-                    for k in 0..line_samples {
-                        let v = (k as f64 + 0.5) / line_samples as f64;
-                        sum += light_contribution(
-                            scene,
-                            light_index,
-                            x,
-                            receiver,
-                            v,
-                            Visibility::of(shadows),
-                            &mut local,
-                        );
-                    }
-                    sum / line_samples as f64
-                }
-                _ => light_contribution(
-                    scene,
-                    light_index,
-                    x,
-                    receiver,
-                    0.0,
-                    Visibility::of(shadows),
-                    &mut local,
-                ),
-            };
+            // Lines and circles in closed form, every light one call.
+            let value = light_contribution(
+                scene,
+                light_index,
+                x,
+                receiver,
+                0.0,
+                Visibility::of(shadows),
+                &mut local,
+            );
             rays.fetch_add(local.work.shadow_rays, Ordering::Relaxed);
             to_value(value)
         },

@@ -24,9 +24,6 @@ pub struct MemoOptions {
     /// floor's direct light. A pass takes at least as many points as
     /// samples, so the error keeps falling as the samples grow.
     pub floor_samples: u32,
-    /// Stratified points per line or circle light for a wall bin's
-    /// irradiance.
-    pub line_samples: u32,
     /// Whether, with the memo on and more than one bounce, paths end at
     /// their first diffuse wall and read the rest of their light from the
     /// onward memo (`onward.rs`), rather than being followed from wall to
@@ -52,7 +49,6 @@ impl Default for MemoOptions {
             enabled: true,
             bin_length: 1.0,
             floor_samples: 1,
-            line_samples: 64,
             onward: true,
         }
     }

@@ -545,8 +545,8 @@ fn wall_irradiance(
             let read = memo_irradiance(memo, index, side, u);
             if trace.memo_checks && flatray_cache::checked(index, u) {
                 // The memo's error, estimated where a hash of the hit
-                // picks it: unbiased, so the memo's bias (its bins, its
-                // fixed line-light points) falls out.
+                // picks it: unbiased, so the memo's bias (its bins hold
+                // the irradiance at their centres only) falls out.
                 stats.work.memo_checks += 1;
                 let direct =
                     direct_light(scene, x, receiver(), shadows, light_table, stream, stats);

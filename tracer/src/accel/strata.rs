@@ -1,37 +1,31 @@
 //! A fast path beside the model: the floor memo's direct light computed
 //! light by light over all of a pixel's strata (point lights whose
-//! visibility is known in one loop, line lights' angle samples in lanes
-//! of points), each value exactly as `direct::direct_light_points`
-//! computes it, point by point.
+//! visibility is known in one loop), each value exactly as
+//! `direct::direct_light_points` computes it, point by point.
 
-use flatray_geometry::{DVec2, Ray};
+use flatray_geometry::DVec2;
 
 use crate::direct::{Strata, direct_light_chosen};
 use crate::lights::choice::{LightTable, NUMBERS};
-use crate::lights::{Emitter, line};
+use crate::lights::Emitter;
 use crate::lights::{
-    Receiver, Visibility, arriving, light_contribution, point_incident, transmittance,
+    Receiver, Visibility, arriving, light_contribution, point_incident,
 };
-use crate::sampling::angle_sample_lanes;
 use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
-
-/// The floor strata a line light's angle samples take at once.
-const ANGLE_LANES: usize = 4;
 
 /// [`direct_light_with`] at every point of `strata`, on the floor, each
 /// value computed exactly as it would be there (the same operations in
 /// the same order), but light by light over all points, so that work on
 /// one light runs without the branches of the others.
 ///
-/// Two kinds have loops of their own, named here: a point light whose
-/// visibility is known (the floor's most common case), and line lights,
-/// whose angle samples are drawn in lanes of points. Every other light
-/// goes through [`light_contribution`], point by point.
+/// A point light whose visibility is known (the floor's most common
+/// case) has a loop of its own. Every other light goes through
+/// [`light_contribution`], point by point (lines and circles in closed
+/// form).
 /// With `shadow_walls` (per light: the walls its shadow rays from these
 /// points can cross, or `None` for every wall), shadow rays test only
-/// those. Inlined always, with the line lights' angle samples, into the
-/// pixel loop compiled with AVX2.
+/// those. Inlined always into the pixel loop compiled with AVX2.
 #[inline(always)]
 pub(crate) fn direct_light_strata(
     scene: &Scene,
@@ -75,55 +69,10 @@ pub(crate) fn direct_light_strata(
             ) => {
                 add_point_known(light, at, known, points, values, r0);
             }
-            (Emitter::Segment { segment, one_sided }, _) => {
-                // As `light_contribution` computes it for the floor, with
-                // the angle samples drawn in lanes of points and the line
-                // light's own functions (`lights::line`); a test holds the
-                // two to the same bits.
-                let skip = receiver.skip(scene.light_wall[index]);
-                let count = points.len();
-                for first in (0..count).step_by(ANGLE_LANES) {
-                    // A last part lane is filled with the last point again.
-                    let at = |k: usize| (first + k).min(count - 1);
-                    let px = std::array::from_fn(|k| points[at(k)].x);
-                    let py = std::array::from_fn(|k| points[at(k)].y);
-                    let us = std::array::from_fn(|k| numbers[at(k) * per_point + taken]);
-                    let lanes = angle_sample_lanes::<ANGLE_LANES>(&px, &py, &us, &segment);
-                    for k in 0..ANGLE_LANES.min(count - first) {
-                        let (x, value) = (points[first + k], &mut values[first + k]);
-                        if !(line::lights(&segment, one_sided, x) && lanes.valid[k]) {
-                            continue;
-                        }
-                        // The line light's own incident sample, from the
-                        // lane's angle sample.
-                        let sample = (
-                            DVec2::new(lanes.x[k], lanes.y[k]),
-                            lanes.distance[k],
-                            lanes.subtended[k],
-                        );
-                        let s = line::incident_of(light, x, sample, r0);
-                        let v = arriving(light.intensity, s.value, 1.0, s.pdf);
-                        if v == 0.0 {
-                            continue;
-                        }
-                        let vis = match vis {
-                            Visibility::Known(known) => known,
-                            Visibility::Trace => transmittance(
-                                scene,
-                                &Ray::new(x, s.to),
-                                s.t_max,
-                                skip,
-                                receiver.walls_towards(index),
-                                stats,
-                            ),
-                        };
-                        *value += Rgb::splat(v) * vis * light.color;
-                    }
-                }
-            }
             (
                 Emitter::Point { .. }
                 | Emitter::Direction(_)
+                | Emitter::Segment { .. }
                 | Emitter::Disk { .. }
                 | Emitter::Parallel { .. },
                 _,
@@ -271,7 +220,7 @@ pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
     if let Some(no) = Decision::allowed(facts.options, FastPath::StrataLoops, "strata-loops") {
         return no;
     }
-    Decision::runs("the floor cache's points light by light, line lights' samples in lanes")
+    Decision::runs("the floor cache's points light by light, a point light of known transmittance in one loop")
 }
 
 #[cfg(test)]

@@ -71,11 +71,14 @@ impl Visibility {
     }
 }
 
-/// The light that reaches `x` from one light, coloured: the light's
+/// The light that reaches `x` from one light, coloured. A line or circle
+/// light gives it in closed form (`lights::exact`): every direction it
+/// sends `x`, less the walls in front of it. Any other light gives its
 /// [`Incident`] sample, times the receiver's cosine over its pdf, times
-/// the transmittance of one shadow ray (none when `vis` is known: the plan
+/// the transmittance of one shadow ray. Where `vis` is known (the plan
 /// found nothing that occludes, or the floor's coherence masks know the
-/// answer). `u` in `[0, 1)` is the light's number, if it takes one.
+/// answer), no wall is looked at. `u` in `[0, 1)` is the light's number,
+/// if it takes one; a line or circle light ignores it.
 #[inline]
 pub(crate) fn light_contribution(
     scene: &Scene,
@@ -86,6 +89,17 @@ pub(crate) fn light_contribution(
     vis: Visibility,
     stats: &mut Stats,
 ) -> Rgb {
+    let light = &scene.lights[index];
+    if super::is_exact(&light.shape) {
+        // A line or a circle: in closed form, with no sample (`u` unused).
+        if let Some(w) = receiver.wall
+            && light.shape.grazes(w, &scene.walls[w as usize].segment)
+        {
+            return Rgb::ZERO;
+        }
+        let value = super::exact::exact_light(scene, index, x, receiver, vis, stats);
+        return value.unwrap_or(Rgb::ZERO) * light.color;
+    }
     weighed_contribution(scene, index, x, receiver, u, vis, stats, |_, v| {
         Some(Rgb::splat(v))
     })

@@ -30,6 +30,8 @@
 
 mod beam;
 mod contribution;
+mod exact;
+pub(crate) use exact::is_exact;
 mod kernel;
 pub(crate) use contribution::{
     Receiver, Visibility, light_contribution, transmittance, weighed_contribution,

@@ -1,0 +1,1161 @@
+//! Direct light from a line or circle light in closed form.
+//!
+//! What a receiver point `x` sees of a light with an area is a set of
+//! directions: the angle the light subtends, less the parts that walls in
+//! front of it cover (and tinted where panes cover it). The light brings
+//! `I G(r) r` per radian of that set (`Falloff::per_radian`), times the
+//! receiver's cosine at a wall. Both the set and the integral are
+//! computed here, not sampled:
+//!
+//! - a line light is cut at the positions `s` along it where a wall's
+//!   shadow begins or ends (each wall's shadow on the light's segment is
+//!   one interval, found by clipping `[0, 1]` against three half-planes,
+//!   linear in `s`), and each visible piece is integrated by its
+//!   antiderivative in the distance `u` along the light's line, for every
+//!   falloff and both receivers;
+//! - a circle light is cut along the near rim it shows `x` at every angle
+//!   where a wall's shadow can begin or end, each piece is tested at its
+//!   middle, and integrated exactly under `Flatland` (the angle, or the
+//!   sine of the cosine's antiderivative) and by 12-point Gauss-Legendre in
+//!   the rim's angle, split where the falloff has a kink, for the others.
+//!
+//! The answer does not depend on a random number: next-event estimation
+//! with it has no variance from the light's sampling, only from where the
+//! receiver point is. `docs/model.md` ("Direct light in closed form")
+//! states where it is used and where the light stays sampled.
+
+use std::cell::RefCell;
+
+use flatray_geometry::{DVec2, Ray, Segment, cross, intersect};
+
+use super::{Receiver, Visibility};
+use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Scene};
+use crate::{Rgb, Stats};
+
+/// A span of the light (positions along a line light, `[0, 1]`; angles
+/// of a circle light's rim about the direction to `x`) and what of the
+/// light gets through there.
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    from: f64,
+    to: f64,
+    through: Rgb,
+}
+
+/// A wall in front of the light, as the sweep over the light's spans
+/// takes it.
+#[derive(Clone, Copy, Debug)]
+struct Cover {
+    from: f64,
+    to: f64,
+    /// `None`: opaque; else a pane's tint.
+    tint: Option<Rgb>,
+    wall: u32,
+}
+
+/// Reused buffers, one set per thread: the walls near the light, the
+/// covers they cast and the visible spans. They grow with the walls in
+/// front of one light, never with the render.
+#[derive(Default)]
+struct Scratch {
+    walls: Vec<u32>,
+    query: Vec<u32>,
+    covers: Vec<Cover>,
+    spans: Vec<Span>,
+    cuts: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// Pieces of a light (and shadows on it) no wider than this share of the
+/// light's whole span count for nothing: a shadow that grazes the
+/// light's end, or a gap that rounding leaves between two walls that
+/// share a corner, or between a wall and the horizon of a receiver on its
+/// neighbour, changes neither the image nor, when nothing else is in the
+/// way, the bits of the whole light's integral.
+const SLIVER: f64 = 1e-9;
+
+/// Whether light `shape` is given in closed form: lines and circles.
+#[inline]
+pub(crate) fn is_exact(shape: &LightShape) -> bool {
+    matches!(shape, LightShape::Line { .. } | LightShape::Circle { .. })
+}
+
+/// The light that line or circle light `index` brings `x`, uncoloured by
+/// the light's colour but tinted by the panes it crosses: fluence on the
+/// floor, irradiance on a wall side (`receiver.normal`). With
+/// `Visibility::Trace` the walls in front of the light are found and
+/// taken out (those in `receiver.walls_towards(index)` where known, else
+/// the walls whose boxes meet the box around `x` and the light); with
+/// `Visibility::Known(t)`, the whole light times `t`. `None` for a light
+/// that is not a line or a circle.
+pub(crate) fn exact_light(
+    scene: &Scene,
+    index: usize,
+    x: DVec2,
+    receiver: Receiver,
+    vis: Visibility,
+    stats: &mut Stats,
+) -> Option<Rgb> {
+    let light = &scene.lights[index];
+    let r0 = scene.small_radius;
+    let value = match light.shape {
+        LightShape::Line {
+            segment, one_sided, ..
+        } => {
+            if one_sided && segment.side_of(x) != Some(EMITTING_SIDE) {
+                return Some(Rgb::ZERO);
+            }
+            let line = LineView::new(x, &segment)?;
+            let Some(whole) = line.receiving(receiver.normal) else {
+                return Some(Rgb::ZERO);
+            };
+            SCRATCH.with(|scratch| {
+                let scratch = &mut *scratch.borrow_mut();
+                scratch.spans.clear();
+                match vis {
+                    Visibility::Known(t) => scratch.spans.push(Span {
+                        from: whole.0,
+                        to: whole.1,
+                        through: t,
+                    }),
+                    Visibility::Trace => {
+                        let hull = [x, segment.a, segment.b];
+                        find_walls(scene, index, receiver, &hull, scratch, stats);
+                        scratch.covers.clear();
+                        for &w in &scratch.walls {
+                            let wall = &scene.walls[w as usize];
+                            if let Some((from, to)) = line.shadow_of(&wall.segment, whole)
+                                && to - from > SLIVER
+                            {
+                                scratch.covers.push(Cover {
+                                    from,
+                                    to,
+                                    tint: wall.material.pane_tint(),
+                                    wall: w,
+                                });
+                            }
+                        }
+                        sweep(whole, scratch);
+                    }
+                }
+                let mut sum = Rgb::ZERO;
+                for span in &scratch.spans {
+                    let v = line.integral(span.from, span.to, receiver.normal, light.falloff, r0);
+                    sum += span.through * v;
+                }
+                sum
+            })
+        }
+        LightShape::Circle { at, radius } => {
+            let disk = DiskView::new(x, at, radius)?;
+            SCRATCH.with(|scratch| {
+                let scratch = &mut *scratch.borrow_mut();
+                let whole = (-disk.half, disk.half);
+                scratch.covers.clear();
+                let trace = vis == Visibility::Trace;
+                if trace {
+                    let (lo, hi) = (at - DVec2::splat(radius), at + DVec2::splat(radius));
+                    let hull = [x, lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+                    find_walls(scene, index, receiver, &hull, scratch, stats);
+                }
+                // Every angle where what the rim shows `x` can change:
+                // where a wall's shadow begins or ends, where the
+                // receiver's cosine turns, where the falloff has a kink.
+                let mut kink_cuts = [f64::NAN; 4];
+                if light.falloff != Falloff::Flatland {
+                    for (k, rho) in kinks(light.falloff, r0).enumerate().take(2) {
+                        if let Some(t) = disk.at_distance(rho) {
+                            kink_cuts[2 * k] = -t;
+                            kink_cuts[2 * k + 1] = t;
+                        }
+                    }
+                    kink_cuts.sort_unstable_by(f64::total_cmp);
+                }
+                let cuts = &mut scratch.cuts;
+                cuts.clear();
+                cuts.extend([whole.0, whole.1]);
+                if let Some(n) = receiver.normal {
+                    disk.cuts_by_line(x, n.perp(), cuts);
+                }
+                if trace {
+                    for &w in &scratch.walls {
+                        let s = &scene.walls[w as usize].segment;
+                        disk.cuts_by_line(s.a, s.b - s.a, cuts);
+                        disk.cuts_by_ray(x, s.a - x, cuts);
+                        disk.cuts_by_ray(x, s.b - x, cuts);
+                    }
+                }
+                cuts.retain(|t| *t >= whole.0 && *t <= whole.1);
+                cuts.sort_unstable_by(f64::total_cmp);
+                cuts.dedup();
+                // Each piece is seen as its middle is; neighbours seen
+                // alike are one span, so that walls that hide nothing
+                // leave the integral's bits as they are.
+                let sliver = SLIVER * (whole.1 - whole.0);
+                scratch.spans.clear();
+                for k in 1..scratch.cuts.len() {
+                    let (a, b) = (scratch.cuts[k - 1], scratch.cuts[k]);
+                    if b - a <= sliver {
+                        continue;
+                    }
+                    let mid = disk.rim(0.5 * (a + b));
+                    let seen = receiver.normal.is_none_or(|n| n.dot(mid - x) > 0.0);
+                    let through = match vis {
+                        _ if !seen => Rgb::ZERO,
+                        Visibility::Known(t) => t,
+                        Visibility::Trace => {
+                            through_walls(scene, &scratch.walls, x, mid, receiver, index)
+                        }
+                    };
+                    if through == Rgb::ZERO {
+                        continue;
+                    }
+                    match scratch.spans.last_mut() {
+                        Some(last) if last.to == a && last.through == through => last.to = b,
+                        _ => scratch.spans.push(Span {
+                            from: a,
+                            to: b,
+                            through,
+                        }),
+                    }
+                }
+                let mut sum = Rgb::ZERO;
+                for span in &scratch.spans {
+                    // Integrated between the kinks, where it is smooth.
+                    let (mut a, b) = (span.from, span.to);
+                    for &cut in kink_cuts.iter() {
+                        if cut > a && cut < b {
+                            sum += span.through
+                                * disk.integral(a, cut, receiver.normal, light.falloff, r0);
+                            a = cut;
+                        }
+                    }
+                    sum += span.through * disk.integral(a, b, receiver.normal, light.falloff, r0);
+                }
+                sum
+            })
+        }
+        _ => return None,
+    };
+    Some(value * light.intensity)
+}
+
+/// The candidate walls in front of light `index` seen from the receiver:
+/// its list where known, else those whose boxes meet the box around
+/// `hull` (padded by a relative `1e-9`), without the receiver's wall and
+/// the light's own. Counts one shadow query.
+fn find_walls(
+    scene: &Scene,
+    index: usize,
+    receiver: Receiver,
+    hull: &[DVec2],
+    scratch: &mut Scratch,
+    stats: &mut Stats,
+) {
+    stats.work.shadow_rays += 1;
+    let skip = receiver.skip(scene.light_wall[index]);
+    scratch.walls.clear();
+    match receiver.walls_towards(index) {
+        Some(list) => {
+            stats.work.listed_shadow_rays += 1;
+            scratch
+                .walls
+                .extend(list.iter().copied().filter(|&w| !skip.contains(w)));
+        }
+        None => {
+            let (mut lo, mut hi) = (hull[0], hull[0]);
+            for &p in hull {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+            let pad = DVec2::splat(1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element()));
+            let Scratch { walls, query, .. } = scratch;
+            scene
+                .segments
+                .for_each_in_box(lo - pad, hi + pad, query, |w| {
+                    if !skip.contains(w) {
+                        walls.push(w);
+                    }
+                });
+        }
+    }
+    // Walls that let everything through need no shadow of their own.
+    scratch
+        .walls
+        .retain(|&w| scene.walls[w as usize].material.pane_tint() != Some(Rgb::ONE));
+}
+
+/// The product of the tints of `walls` that the segment from `x` to `p`
+/// crosses (in the walls' order), zero at the first opaque one.
+fn through_walls(
+    scene: &Scene,
+    walls: &[u32],
+    x: DVec2,
+    p: DVec2,
+    receiver: Receiver,
+    index: usize,
+) -> Rgb {
+    let ray = Ray::new(x, p - x);
+    let skip = receiver.skip(scene.light_wall[index]);
+    let mut through = Rgb::ONE;
+    for &w in walls {
+        if skip.contains(w) {
+            continue;
+        }
+        let wall = &scene.walls[w as usize];
+        if let Some(hit) = intersect(&ray, &wall.segment)
+            && hit.t > 0.0
+            && hit.t < 1.0
+        {
+            match wall.material.pane_tint() {
+                Some(tint) => through *= tint,
+                None => return Rgb::ZERO,
+            }
+        }
+    }
+    through
+}
+
+/// Turns the covers of `scratch` into the visible spans of `whole`: where
+/// no opaque cover lies, with the product of the panes' tints over each
+/// span (in the order of their walls' indices).
+fn sweep(whole: (f64, f64), scratch: &mut Scratch) {
+    let Scratch {
+        covers,
+        spans,
+        cuts,
+        ..
+    } = scratch;
+    spans.clear();
+    if covers.is_empty() {
+        spans.push(Span {
+            from: whole.0,
+            to: whole.1,
+            through: Rgb::ONE,
+        });
+        return;
+    }
+    covers.sort_unstable_by_key(|c| c.wall);
+    cuts.clear();
+    cuts.extend([whole.0, whole.1]);
+    for c in covers.iter() {
+        cuts.extend([c.from, c.to]);
+    }
+    cuts.sort_unstable_by(f64::total_cmp);
+    cuts.dedup();
+    let sliver = SLIVER * (whole.1 - whole.0);
+    for pair in cuts.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        if b <= a || a < whole.0 || b > whole.1 {
+            continue;
+        }
+        let mut through = Rgb::ONE;
+        for c in covers.iter() {
+            if c.from <= a && c.to >= b {
+                match c.tint {
+                    Some(tint) => through *= tint,
+                    None => {
+                        through = Rgb::ZERO;
+                        break;
+                    }
+                }
+            }
+        }
+        if through == Rgb::ZERO || b - a <= sliver {
+            continue;
+        }
+        // Neighbours that let the same through are one span: a light
+        // with no wall in front of it is one span, whatever cuts it.
+        match spans.last_mut() {
+            Some(last) if last.to == a && last.through == through => last.to = b,
+            _ => spans.push(Span {
+                from: a,
+                to: b,
+                through,
+            }),
+        }
+    }
+}
+
+/// The distances at which `falloff.per_radian` has a kink: the small
+/// radius (inside it, the distance is clamped), and a window's range
+/// (beyond it, nothing).
+fn kinks(falloff: Falloff, r0: f64) -> impl Iterator<Item = f64> {
+    let range = match falloff {
+        Falloff::Window { range } => Some(range),
+        _ => None,
+    };
+    std::iter::once(r0)
+        .chain(range)
+        .filter(|r| r.is_finite() && *r > 0.0)
+}
+
+/// A line light seen from `x`: its points `A + s (B - A)`, and the
+/// coordinates that its integrals take: `u`, the signed distance along
+/// its line from the foot of the perpendicular from `x`, and `h`, that
+/// perpendicular's length.
+struct LineView {
+    x: DVec2,
+    a: DVec2,
+    edge: DVec2,
+    /// Unit, along the light.
+    along: DVec2,
+    length: f64,
+    /// `u` at `s = 0`.
+    u0: f64,
+    h: f64,
+    /// From `x` to the foot of the perpendicular.
+    foot: DVec2,
+}
+
+impl LineView {
+    /// `None` where the light's segment has no length; a point on the
+    /// light's line sees none of it (every direction grazes), which the
+    /// caller gets as `h == 0` and an empty integral.
+    fn new(x: DVec2, segment: &Segment) -> Option<LineView> {
+        let edge = segment.b - segment.a;
+        let length = edge.length();
+        if !(length > 0.0) {
+            return None;
+        }
+        let along = edge / length;
+        let va = segment.a - x;
+        let u0 = va.dot(along);
+        let foot = va - along * u0;
+        let h = cross(along, va).abs();
+        Some(LineView {
+            x,
+            a: segment.a,
+            edge,
+            along,
+            length,
+            u0,
+            h,
+            foot,
+        })
+    }
+
+    #[inline]
+    fn point(&self, s: f64) -> DVec2 {
+        self.a + self.edge * s
+    }
+
+    /// The part of `[0, 1]` that a receiver of unit normal `normal` can
+    /// receive from: where the light lies on the normal's side of the
+    /// receiver (all of it for the floor). `None` where nothing is left,
+    /// or `x` lies on the light's line.
+    fn receiving(&self, normal: Option<DVec2>) -> Option<(f64, f64)> {
+        if !(self.h > 0.0) {
+            return None;
+        }
+        let whole = (0.0, 1.0);
+        match normal {
+            None => Some(whole),
+            Some(n) => {
+                let at = |p: DVec2| n.dot(p - self.x);
+                clip(whole, at(self.point(0.0)), at(self.point(1.0)), false)
+            }
+        }
+    }
+
+    /// The positions `s` in `within` where `wall` lies strictly between
+    /// `x` and the light: inside the angle the wall subtends at `x`, and
+    /// beyond the wall's line from `x`. One interval, since both are
+    /// convex; `None` where the wall covers none of the light.
+    fn shadow_of(&self, wall: &Segment, within: (f64, f64)) -> Option<(f64, f64)> {
+        let (p, q) = (wall.a - self.x, wall.b - self.x);
+        let turn = cross(p, q);
+        if turn == 0.0 {
+            // `x` lies on the wall's line: the wall is seen edge-on.
+            return None;
+        }
+        let sign = turn.signum();
+        let (la, lb) = (self.point(0.0) - self.x, self.point(1.0) - self.x);
+        // Inside the angle from `p` to `q`.
+        let span = clip(within, sign * cross(p, la), sign * cross(p, lb), false)?;
+        let span = clip(span, sign * cross(la, q), sign * cross(lb, q), false)?;
+        // Strictly beyond the wall's line: on the other side from `x`
+        // (whose side is `sign`). A light point on that line is not
+        // hidden: a shadow ray to it ends there.
+        let e = q - p;
+        clip(
+            span,
+            -sign * cross(e, la - p),
+            -sign * cross(e, lb - p),
+            true,
+        )
+    }
+
+    /// `∫ per_radian(r) cos dphi` over the light's positions `s` from
+    /// `from` to `to`: the angle (or, on a wall of unit normal `normal`,
+    /// the receiver's cosine) weighed by what the falloff brings per
+    /// radian, by antiderivatives in `u`, split where the falloff has a
+    /// kink.
+    fn integral(
+        &self,
+        from: f64,
+        to: f64,
+        normal: Option<DVec2>,
+        falloff: Falloff,
+        r0: f64,
+    ) -> f64 {
+        if !(to > from) || !(self.h > 0.0) {
+            return 0.0;
+        }
+        let (ua, ub) = (self.u0 + from * self.length, self.u0 + to * self.length);
+        // The receiver's cosine is `(alpha + beta u) / r` on a wall.
+        let cosine = normal.map(|n| (n.dot(self.foot), n.dot(self.along)));
+        // The integrands are positive: integrate from the lower `u` up.
+        let (lo, hi) = if ua <= ub { (ua, ub) } else { (ub, ua) };
+        if falloff == Falloff::Flatland {
+            // One per radian at every distance, the clamp included.
+            return match cosine {
+                None => angle_between(self.point(from) - self.x, self.point(to) - self.x),
+                Some(c) => flat_wall(self.h, c, lo, hi),
+            };
+        }
+        // Cuts where `r` crosses a kink's distance: `u = +-sqrt(rho^2 - h^2)`.
+        let mut cuts = [lo, hi, lo, lo, lo, lo];
+        let mut n = 2;
+        for rho in kinks(falloff, r0) {
+            if rho > self.h {
+                let w = (rho * rho - self.h * self.h).sqrt();
+                for u in [-w, w] {
+                    if u > lo && u < hi {
+                        cuts[n] = u;
+                        n += 1;
+                    }
+                }
+            }
+        }
+        let cuts = &mut cuts[..n];
+        cuts.sort_unstable_by(f64::total_cmp);
+        let mut sum = 0.0;
+        for pair in cuts.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            if b <= a {
+                continue;
+            }
+            let mid = 0.5 * (a + b);
+            let r_mid = (self.h * self.h + mid * mid).sqrt();
+            sum += if r_mid < r0 {
+                // Clamped: a constant per radian.
+                let c0 = falloff.per_radian(r0, r0);
+                c0 * match cosine {
+                    None => flat_floor(self.h, a, b),
+                    Some(c) => flat_wall(self.h, c, a, b),
+                }
+            } else {
+                match falloff {
+                    Falloff::Window { range } if r_mid >= range => 0.0,
+                    _ => {
+                        let f = |u: f64| antiderivative(falloff, self.h, cosine, u);
+                        f(b) - f(a)
+                    }
+                }
+            };
+        }
+        sum
+    }
+}
+
+/// `∫ dphi` from `u = a` to `b` along a line at distance `h`.
+#[inline]
+fn flat_floor(h: f64, a: f64, b: f64) -> f64 {
+    (b / h).atan() - (a / h).atan()
+}
+
+/// `∫ cos dphi` on a wall, the cosine `(alpha + beta u) / r`: with
+/// `dphi = h du / r^2`, `alpha u / (h r) - beta h / r`.
+#[inline]
+fn flat_wall(h: f64, (alpha, beta): (f64, f64), a: f64, b: f64) -> f64 {
+    let f = |u: f64| {
+        let r = (h * h + u * u).sqrt();
+        alpha * u / (h * r) - beta * h / r
+    };
+    f(b) - f(a)
+}
+
+/// An antiderivative in `u` of `G(r) r * cos * h / r^2` for a falloff
+/// other than `Flatland`, outside the small radius and inside a window's
+/// range: `cos` is 1 on the floor, `(alpha + beta u) / r` on a wall.
+fn antiderivative(falloff: Falloff, h: f64, cosine: Option<(f64, f64)>, u: f64) -> f64 {
+    let r2 = h * h + u * u;
+    let r = r2.sqrt();
+    match (falloff, cosine) {
+        // G r = 1 / r.
+        (Falloff::InverseSquare, None) => u / (h * r),
+        (Falloff::InverseSquare, Some((alpha, beta))) => {
+            let atan = (u / h).atan();
+            h * (alpha * (u / (2.0 * h * h * r2) + atan / (2.0 * h * h * h)) - beta / (2.0 * r2))
+        }
+        // G r = r.
+        (Falloff::Constant, None) => h * asinh(h, u, r),
+        (Falloff::Constant, Some((alpha, beta))) => alpha * (u / h).atan() + beta * h * r.ln(),
+        // G r = (1 - r / R)^2 r = r - 2 r^2 / R + r^3 / R^2.
+        (Falloff::Window { range }, None) => {
+            let asinh = asinh(h, u, r);
+            h * (asinh - 2.0 * u / range + (u * r + h * h * asinh) / (2.0 * range * range))
+        }
+        (Falloff::Window { range }, Some((alpha, beta))) => {
+            let (asinh, atan) = (asinh(h, u, r), (u / h).atan());
+            h * (alpha * (atan / h - 2.0 * asinh / range + u / (range * range))
+                + beta * (r.ln() - 2.0 * r / range + u * u / (2.0 * range * range)))
+        }
+        (Falloff::Flatland, None) => (u / h).atan(),
+        (Falloff::Flatland, Some((alpha, beta))) => alpha * u / (h * r) - beta * h / r,
+    }
+}
+
+/// `asinh(u / h)` given `r = sqrt(h^2 + u^2)`: `ln((u + r) / h)`, with
+/// `u + r` written `h^2 / (r - u)` for negative `u`, where the sum would
+/// cancel.
+#[inline]
+fn asinh(h: f64, u: f64, r: f64) -> f64 {
+    if u >= 0.0 {
+        ((u + r) / h).ln()
+    } else {
+        (h / (r - u)).ln()
+    }
+}
+
+/// The angle between two directions, in `[0, pi]`.
+#[inline]
+fn angle_between(a: DVec2, b: DVec2) -> f64 {
+    cross(a, b).abs().atan2(a.dot(b))
+}
+
+/// Clips `span` (of a parameter `s`) to where a value linear in `s`, `g0`
+/// at `s = 0` and `g1` at `s = 1`, is at least 0 (greater, when
+/// `strict`). `None` where nothing is left.
+fn clip(span: (f64, f64), g0: f64, g1: f64, strict: bool) -> Option<(f64, f64)> {
+    let keeps = |g: f64| if strict { g > 0.0 } else { g >= 0.0 };
+    let (mut from, mut to) = span;
+    match (keeps(g0), keeps(g1)) {
+        (true, true) => {}
+        (false, false) => return None,
+        (true, false) => to = to.min(g0 / (g0 - g1)),
+        (false, true) => from = from.max(g0 / (g0 - g1)),
+    }
+    (to > from).then_some((from, to))
+}
+
+/// A circle light seen from `x` outside it: the near rim's points
+/// `c + R (cos, sin)(psi0 + t)` for `t` in `(-half, half)`, `psi0` the
+/// direction from the centre to `x`, `half = acos(R / d)`.
+struct DiskView {
+    x: DVec2,
+    c: DVec2,
+    radius: f64,
+    /// Unit, from the centre towards `x`.
+    out: DVec2,
+    d: f64,
+    half: f64,
+}
+
+/// Nodes and weights of 12-point Gauss-Legendre quadrature on `[-1, 1]`
+/// (the positive half; the rule is symmetric).
+const GAUSS_12: [(f64, f64); 6] = [
+    (0.125_233_408_511_468_9, 0.249_147_045_813_402_8),
+    (0.367_831_498_998_180_2, 0.233_492_536_538_354_8),
+    (0.587_317_954_286_617_4, 0.203_167_426_723_065_9),
+    (0.769_902_674_194_304_7, 0.160_078_328_543_346_2),
+    (0.904_117_256_370_474_9, 0.106_939_325_995_318_4),
+    (0.981_560_634_246_719_3, 0.047_175_336_386_511_8),
+];
+
+impl DiskView {
+    /// `None` on or inside the rim: the rim emits outward only.
+    fn new(x: DVec2, c: DVec2, radius: f64) -> Option<DiskView> {
+        let v = x - c;
+        let d = v.length();
+        if !(d > radius) {
+            return None;
+        }
+        Some(DiskView {
+            x,
+            c,
+            radius,
+            out: v / d,
+            d,
+            half: (radius / d).clamp(-1.0, 1.0).acos(),
+        })
+    }
+
+    /// The rim's point at `t`.
+    #[inline]
+    fn rim(&self, t: f64) -> DVec2 {
+        let (s, c) = t.sin_cos();
+        self.c + (self.out * c + self.out.perp() * s) * self.radius
+    }
+
+    /// The `t` of a point `p` of the rim.
+    #[inline]
+    fn t_of(&self, p: DVec2) -> f64 {
+        let v = p - self.c;
+        cross(self.out, v).atan2(self.out.dot(v))
+    }
+
+    /// Adds the `t` of the points where the line through `p` along `dir`
+    /// meets the rim.
+    fn cuts_by_line(&self, p: DVec2, dir: DVec2, cuts: &mut Vec<f64>) {
+        for lambda in self.line_roots(p, dir).into_iter().flatten() {
+            cuts.push(self.t_of(p + dir * lambda));
+        }
+    }
+
+    /// Adds the `t` of the near point where the ray from `x` along `dir`
+    /// meets the rim, if it does.
+    fn cuts_by_ray(&self, x: DVec2, dir: DVec2, cuts: &mut Vec<f64>) {
+        let roots = self.line_roots(x, dir).unwrap_or([-1.0; 2]);
+        let near = roots
+            .into_iter()
+            .filter(|l| *l > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if near.is_finite() {
+            cuts.push(self.t_of(x + dir * near));
+        }
+    }
+
+    /// The `lambda` where `p + lambda dir` lies on the rim (none, or two
+    /// that may be equal).
+    fn line_roots(&self, p: DVec2, dir: DVec2) -> Option<[f64; 2]> {
+        let o = p - self.c;
+        let a = dir.length_squared();
+        let b = o.dot(dir);
+        let c = o.length_squared() - self.radius * self.radius;
+        let disc = b * b - a * c;
+        if !(a > 0.0) || !(disc >= 0.0) {
+            return None;
+        }
+        // The stable pair: the root of larger magnitude first.
+        let q = -(b + if b < 0.0 { -1.0 } else { 1.0 } * disc.sqrt());
+        if q == 0.0 {
+            return Some([0.0, 0.0]);
+        }
+        Some([q / a, c / q])
+    }
+
+    /// The `t >= 0` where the rim is `rho` from `x` (at `-t` too).
+    fn at_distance(&self, rho: f64) -> Option<f64> {
+        let cos = (self.radius * self.radius + self.d * self.d - rho * rho)
+            / (2.0 * self.radius * self.d);
+        (cos.abs() <= 1.0).then(|| cos.acos())
+    }
+
+    /// `∫ per_radian(r) cos dphi` over the rim from `t = a` to `b` (the
+    /// receiver's cosine on a wall of unit normal `normal`, 1 on the
+    /// floor), where it is positive and the falloff smooth: exactly under
+    /// `Flatland`, else by Gauss-Legendre in `t`, where the angle seen
+    /// from `x` grows by `cos_e R dt / r`.
+    fn integral(&self, a: f64, b: f64, normal: Option<DVec2>, falloff: Falloff, r0: f64) -> f64 {
+        let (pa, pb) = (self.rim(a) - self.x, self.rim(b) - self.x);
+        if falloff == Falloff::Flatland {
+            return match normal {
+                None => angle_between(pa, pb),
+                Some(n) => {
+                    // The antiderivative of cos(phi - phi_n) is
+                    // sin(phi - phi_n): `n . perp(d)` with a sign for the
+                    // direction of the turn from `pa` to `pb`.
+                    let (da, db) = (pa.normalize(), pb.normalize());
+                    let turn = cross(da, db).signum();
+                    turn * n.dot(da.perp() - db.perp())
+                }
+            };
+        }
+        let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+        let f = |t: f64| {
+            let p = self.rim(t);
+            let v = p - self.x;
+            let r = v.length();
+            let normal_rim = (p - self.c) / self.radius;
+            let cos_e = -normal_rim.dot(v) / r;
+            let cos_r = normal.map_or(1.0, |n| (n.dot(v) / r).max(0.0));
+            falloff.per_radian(r, r0) * cos_r * cos_e.max(0.0) * self.radius / r
+        };
+        let mut sum = 0.0;
+        for (node, weight) in GAUSS_12 {
+            sum += weight * (f(mid - half * node) + f(mid + half * node));
+        }
+        sum * half
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Simpson's rule with many steps: the reference for the
+    /// antiderivatives.
+    fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+        let n = 20_000;
+        let h = (b - a) / n as f64;
+        let mut sum = f(a) + f(b);
+        for k in 1..n {
+            let w = if k % 2 == 1 { 4.0 } else { 2.0 };
+            sum += w * f(a + h * k as f64);
+        }
+        sum * h / 3.0
+    }
+
+    /// Every falloff's integral over a line light, floor and wall, against
+    /// Simpson's rule in the angle; the kinks (small radius, window)
+    /// inside the light.
+    #[test]
+    fn line_integrals_match_quadrature_for_every_falloff() {
+        let falloffs = [
+            Falloff::Flatland,
+            Falloff::InverseSquare,
+            Falloff::Constant,
+            Falloff::Window { range: 6.0 },
+        ];
+        let segment = Segment::new(DVec2::new(-3.0, 2.0), DVec2::new(5.0, 3.5));
+        for x in [DVec2::new(0.3, 0.1), DVec2::new(1.0, 2.5), DVec2::new(-4.0, -1.0)] {
+            let line = LineView::new(x, &segment).expect("a line");
+            for normal in [None, Some(DVec2::new(0.6, 0.8)), Some(DVec2::new(-0.8, 0.6))] {
+                for falloff in falloffs {
+                    for r0 in [0.5, 1.5] {
+                        let (from, to) = (0.1, 0.85);
+                        // The integral takes the part the receiver faces.
+                        let exact = match line.receiving(normal) {
+                            Some((a, b)) if b.min(to) > a.max(from) => {
+                                line.integral(a.max(from), b.min(to), normal, falloff, r0)
+                            }
+                            _ => 0.0,
+                        };
+                        // In the angle: direction from x to the light point.
+                        let (pa, pb) = (line.point(from) - x, line.point(to) - x);
+                        let fa = pa.y.atan2(pa.x);
+                        let fb = fa + cross(pa, pb).atan2(pa.dot(pb));
+                        let reference = simpson(
+                            |phi| {
+                                let d = DVec2::new(phi.cos(), phi.sin());
+                                let t = cross(segment.a - x, segment.b - segment.a)
+                                    / cross(d, segment.b - segment.a);
+                                let cos = normal.map_or(1.0, |n| n.dot(d).max(0.0));
+                                falloff.per_radian(t, r0) * cos
+                            },
+                            fa.min(fb),
+                            fa.max(fb),
+                        );
+                        let got = exact.abs();
+                        assert!(
+                            (got - reference).abs() <= 1e-7 * (1.0 + reference.abs()),
+                            "{falloff:?}, r0 {r0}, {normal:?} at {x}: {got} against {reference}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The circle's integral against Simpson's rule in the angle seen from
+    /// `x`, with the near rim's distance.
+    #[test]
+    fn circle_integrals_match_quadrature_for_every_falloff() {
+        let c = DVec2::new(1.0, 2.0);
+        let radius = 1.2;
+        for x in [DVec2::new(4.0, 0.5), DVec2::new(1.3, 3.6)] {
+            let disk = DiskView::new(x, c, radius).expect("outside");
+            for normal in [None, Some((c - x).normalize()), Some(DVec2::new(0.0, 1.0))] {
+                for falloff in [
+                    Falloff::Flatland,
+                    Falloff::InverseSquare,
+                    Falloff::Constant,
+                    Falloff::Window { range: 3.5 },
+                ] {
+                    let r0 = 0.5;
+                    let mut cuts = vec![-disk.half, disk.half];
+                    if let Some(n) = normal {
+                        disk.cuts_by_line(x, n.perp(), &mut cuts);
+                    }
+                    for rho in kinks(falloff, r0) {
+                        if let Some(t) = disk.at_distance(rho) {
+                            cuts.extend([-t, t]);
+                        }
+                    }
+                    cuts.retain(|t| t.abs() <= disk.half);
+                    cuts.sort_by(f64::total_cmp);
+                    let mut exact = 0.0;
+                    for w in cuts.windows(2) {
+                        let mid = disk.rim(0.5 * (w[0] + w[1]));
+                        if normal.is_some_and(|n| n.dot(mid - x) <= 0.0) {
+                            continue;
+                        }
+                        exact += disk.integral(w[0], w[1], normal, falloff, r0);
+                    }
+                    let to_c = c - x;
+                    let centre = to_c.y.atan2(to_c.x);
+                    let half = (radius / to_c.length()).asin();
+                    let reference = simpson(
+                        |phi| {
+                            let d = DVec2::new(phi.cos(), phi.sin());
+                            let b = to_c.dot(d);
+                            let t = b - (b * b - to_c.length_squared() + radius * radius)
+                                .max(0.0)
+                                .sqrt();
+                            let cos = normal.map_or(1.0, |n| n.dot(d).max(0.0));
+                            falloff.per_radian(t, r0) * cos
+                        },
+                        centre - half,
+                        centre + half,
+                    );
+                    assert!(
+                        (exact - reference).abs() <= 1e-5 * (1.0 + reference.abs()),
+                        "{falloff:?}, {normal:?} at {x}: {exact} against {reference}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// A wall across the middle of a line light, seen from below: its
+    /// shadow on the light is where the lines from `x` through its ends
+    /// meet the light, by hand.
+    #[test]
+    fn a_walls_shadow_on_a_line_light_is_where_its_ends_project() {
+        let x = DVec2::new(0.0, 0.0);
+        let light = Segment::new(DVec2::new(-4.0, 4.0), DVec2::new(4.0, 4.0));
+        let line = LineView::new(x, &light).expect("a line");
+        // A wall from (-1, 2) to (1, 2): its ends project to x = -2 and 2
+        // on the light, s = 0.25 and 0.75.
+        let wall = Segment::new(DVec2::new(-1.0, 2.0), DVec2::new(1.0, 2.0));
+        let (from, to) = line.shadow_of(&wall, (0.0, 1.0)).expect("a shadow");
+        assert!((from - 0.25).abs() < 1e-15 && (to - 0.75).abs() < 1e-15);
+        // Behind the light: no shadow.
+        let behind = Segment::new(DVec2::new(-1.0, 5.0), DVec2::new(1.0, 5.0));
+        assert!(line.shadow_of(&behind, (0.0, 1.0)).is_none());
+        // Crossing the light: only the part in front of it hides it.
+        let across = Segment::new(DVec2::new(0.0, 3.0), DVec2::new(2.0, 5.0));
+        let (from, to) = line.shadow_of(&across, (0.0, 1.0)).expect("a shadow");
+        // The wall meets the light at (1, 4), s = 5/8; its near end (0, 3)
+        // projects to (0, 4), s = 1/2.
+        assert!((from - 0.5).abs() < 1e-15 && (to - 0.625).abs() < 1e-15, "{from} {to}");
+        // Seen edge-on: nothing.
+        let edge_on = Segment::new(DVec2::new(0.0, 1.0), DVec2::new(0.0, 3.0));
+        assert!(line.shadow_of(&edge_on, (0.0, 1.0)).is_none());
+    }
+}
+
+/// The closed form through a scene: walls found, shadows swept, tints
+/// multiplied; each case worked out by hand.
+#[cfg(test)]
+mod closed_forms {
+    use super::*;
+    use crate::scene::{Canvas, Floor, Light, Material, Wall};
+
+    fn scene(walls: Vec<Wall>, lights: Vec<Light>) -> Scene {
+        let canvas = Canvas {
+            width: 100,
+            height: 100,
+            origin: DVec2::new(-50.0, -50.0),
+        };
+        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene")
+    }
+
+    fn line(a: DVec2, b: DVec2, falloff: Falloff) -> Light {
+        Light {
+            shape: LightShape::Line {
+                segment: Segment::new(a, b),
+                one_sided: false,
+                wall: None,
+            },
+            color: Rgb::ONE,
+            intensity: 1.0,
+            falloff,
+            spectrum: None,
+        }
+    }
+
+    fn wall(a: DVec2, b: DVec2, material: Material) -> Wall {
+        Wall {
+            segment: Segment::new(a, b),
+            material,
+        }
+    }
+
+    const OPAQUE: Material = Material::Diffuse { albedo: None };
+
+    fn at(scene: &Scene, x: DVec2, normal: Option<DVec2>, wall: Option<u32>) -> Rgb {
+        let receiver = Receiver {
+            normal,
+            wall,
+            shadow_walls: None,
+        };
+        let mut stats = Stats::default();
+        exact_light(scene, 0, x, receiver, Visibility::Trace, &mut stats).expect("an area light")
+    }
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-12 * (1.0 + b.abs())
+    }
+
+    /// A line light from (-4, 10) to (4, 10) seen from the origin, and a
+    /// wall from (0, 5) to (10, 5) hiding its right half: under
+    /// `Flatland` the fluence is the angle from the light's left end to
+    /// the wall's end, `atan(4 / 10)`, and on a wall facing up, the sine
+    /// of it.
+    #[test]
+    fn a_line_light_half_hidden_by_a_wall_gives_its_visible_angle() {
+        let o = DVec2::ZERO;
+        let s = scene(
+            vec![wall(DVec2::new(0.0, 5.0), DVec2::new(10.0, 5.0), OPAQUE)],
+            vec![line(
+                DVec2::new(-4.0, 10.0),
+                DVec2::new(4.0, 10.0),
+                Falloff::Flatland,
+            )],
+        );
+        let visible = (0.4f64).atan();
+        assert!(close(at(&s, o, None, None).x, visible));
+        // Facing up, cos(phi) over the angle from the vertical to the
+        // left end: sin(atan(0.4)).
+        let up = Some(DVec2::new(0.0, 1.0));
+        assert!(close(at(&s, o, up, None).x, visible.sin()));
+        // Facing right, only the part right of the vertical counts, and
+        // the wall hides all of it.
+        let right = Some(DVec2::new(1.0, 0.0));
+        assert_eq!(at(&s, o, right, None), Rgb::ZERO);
+    }
+
+    /// The same light under every other falloff: the integral of
+    /// `G(r) r` over the visible angle, against Simpson's rule over that
+    /// angle by hand.
+    #[test]
+    fn every_falloff_integrates_over_the_visible_angle_only() {
+        for falloff in [
+            Falloff::InverseSquare,
+            Falloff::Constant,
+            Falloff::Window { range: 10.5 },
+        ] {
+            let s = scene(
+                vec![wall(DVec2::new(0.0, 5.0), DVec2::new(10.0, 5.0), OPAQUE)],
+                vec![line(DVec2::new(-4.0, 10.0), DVec2::new(4.0, 10.0), falloff)],
+            );
+            let got = at(&s, DVec2::ZERO, None, None).x;
+            // From the left end (angle atan(4/10) left of vertical) to the
+            // vertical; the distance to the light is 10 / cos.
+            let n = 20_000;
+            let top = (0.4f64).atan();
+            let h = top / n as f64;
+            let f = |phi: f64| falloff.per_radian(10.0 / phi.cos(), 0.5);
+            let mut sum = f(0.0) + f(top);
+            for k in 1..n {
+                sum += if k % 2 == 1 { 4.0 } else { 2.0 } * f(h * k as f64);
+            }
+            let reference = sum * h / 3.0;
+            assert!(
+                (got - reference).abs() <= 1e-9 * reference,
+                "{falloff:?}: {got} against {reference}"
+            );
+        }
+    }
+
+    /// A pane of tint (0.5, 0.25, 1) across the light's left half, and an
+    /// opaque wall across the right quarter: `t a1 + a2` with `a1` the
+    /// angle behind the pane and `a2` the open one.
+    #[test]
+    fn a_tinted_pane_tints_the_part_of_the_light_it_covers() {
+        let tint = Rgb::new(0.5, 0.25, 1.0);
+        let s = scene(
+            vec![
+                wall(
+                    DVec2::new(-10.0, 5.0),
+                    DVec2::new(0.0, 5.0),
+                    Material::Transparent { tint },
+                ),
+                wall(DVec2::new(1.0, 5.0), DVec2::new(10.0, 5.0), OPAQUE),
+            ],
+            vec![line(
+                DVec2::new(-4.0, 10.0),
+                DVec2::new(4.0, 10.0),
+                Falloff::Flatland,
+            )],
+        );
+        let got = at(&s, DVec2::ZERO, None, None);
+        let behind_pane = (0.4f64).atan();
+        // Open from the vertical to the opaque wall's end at (1, 5),
+        // which projects to (2, 10).
+        let open = (0.2f64).atan();
+        for (c, t) in [(got.x, 0.5), (got.y, 0.25), (got.z, 1.0)] {
+            assert!(close(c, t * behind_pane + open), "{got:?}");
+        }
+    }
+
+    /// A circle light of radius 2 at (0, 10) seen from the origin, a wall
+    /// ending at (0, 5) hiding its right half: the visible angle is half
+    /// the disk's, `asin(2 / 10)`; a wall ending at (-0.25, 5) leaves
+    /// the angle from the disk's left tangent to its end.
+    #[test]
+    fn a_circle_light_behind_a_walls_end_gives_its_visible_angle() {
+        let disk = Light {
+            shape: LightShape::Circle {
+                at: DVec2::new(0.0, 10.0),
+                radius: 2.0,
+            },
+            ..line(DVec2::ZERO, DVec2::X, Falloff::Flatland)
+        };
+        for (end, visible) in [
+            (0.0, (0.2f64).asin()),
+            (-0.25, (0.2f64).asin() - (0.05f64).atan()),
+        ] {
+            let s = scene(
+                vec![wall(DVec2::new(end, 5.0), DVec2::new(10.0, 5.0), OPAQUE)],
+                vec![disk],
+            );
+            let got = at(&s, DVec2::ZERO, None, None).x;
+            assert!(close(got, visible), "end {end}: {got} against {visible}");
+        }
+    }
+
+    /// A closed square room turned by an odd angle, its corners shared
+    /// endpoints at coordinates no float holds exactly, a line light and
+    /// a circle light outside: nothing reaches any point inside, exactly.
+    #[test]
+    fn nothing_leaks_into_a_closed_room_through_its_corners() {
+        for degrees in [0.0f64, 17.0, 45.0, 73.3] {
+            let (sin, cos) = degrees.to_radians().sin_cos();
+            let turn = |x: f64, y: f64| DVec2::new(cos * x - sin * y, sin * x + cos * y);
+            let corners = [
+                turn(-10.1, -10.7),
+                turn(10.3, -10.7),
+                turn(10.3, 10.9),
+                turn(-10.1, 10.9),
+            ];
+            let walls = (0..4)
+                .map(|k| wall(corners[k], corners[(k + 1) % 4], OPAQUE))
+                .collect();
+            let lights = vec![
+                line(turn(-30.0, 20.0), turn(30.0, 25.0), Falloff::Flatland),
+                Light {
+                    shape: LightShape::Circle {
+                        at: turn(0.0, -25.0),
+                        radius: 3.0,
+                    },
+                    ..line(DVec2::ZERO, DVec2::X, Falloff::Flatland)
+                },
+            ];
+            let s = scene(walls, lights);
+            let mut stats = Stats::default();
+            for i in 0..41 {
+                for j in 0..41 {
+                    let x = turn(-10.0 + 0.5 * i as f64, -10.6 + 0.5 * j as f64);
+                    for index in 0..2 {
+                        let got = exact_light(
+                            &s,
+                            index,
+                            x,
+                            Receiver::FLOOR,
+                            Visibility::Trace,
+                            &mut stats,
+                        );
+                        assert_eq!(got, Some(Rgb::ZERO), "light {index} at {x}, {degrees} degrees");
+                    }
+                }
+            }
+        }
+    }
+}
