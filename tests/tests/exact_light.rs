@@ -35,7 +35,10 @@ fn room_and_lights(falloff: &str) -> (Scene, impl Fn(DVec2) -> bool) {
         })
         .collect();
     let (a, b) = (at(-26.0, 2.0), at(-3.0, 2.0));
-    walls.push(format!("Wall(a: ({}, {}), b: ({}, {}))", a.x, a.y, b.x, b.y));
+    walls.push(format!(
+        "Wall(a: ({}, {}), b: ({}, {}))",
+        a.x, a.y, b.x, b.y
+    ));
     let (a, b) = (at(4.0, -6.0), at(18.0, -6.0));
     walls.push(format!(
         "Wall(a: ({}, {}), b: ({}, {}), material: Transparent(tint: (0.9, 0.5, 0.2)))",
@@ -73,22 +76,27 @@ fn options(samples: u32, bounces: u32, seed: u64) -> RenderOptions {
     options
 }
 
-/// Two renders of the room's direct light at 16 samples from different
-/// seeds differ only where their floor points fall in each pixel: by at
-/// most 0.5 % relative RMS over the lit pixels (more than 2 units from a
-/// light), soft shadows included.
-/// Sampling the lights (one point of each per floor point) leaves about
-/// 4 % there.
+/// Two renders of the room's direct light at 16 samples and 4 pixels a
+/// unit, from different seeds, differ only where their receiver points
+/// fall in each pixel: by under 2 % relative RMS over the lit pixels
+/// (more than 2 units from a light), soft shadows included; measured,
+/// about 1.2 %, most of it in pixels that a wall or a shadow's sharp end
+/// crosses. Sampling each light once per point, the noise estimate of the
+/// same render is about 5.6 % under the window falloff.
 #[test]
 fn soft_shadows_carry_no_sampling_noise() {
     for falloff in ["Flatland", "Window(range: 60.0)", "InverseSquare"] {
         let (scene, near) = room_and_lights(falloff);
-        let a = render(&scene, &options(16, 0, 1)).image;
-        let b = render(&scene, &options(16, 0, 2)).image;
+        let at = |seed| {
+            let mut options = options(16, 0, seed);
+            options.scale = 4.0;
+            render(&scene, &options).image
+        };
+        let (a, b) = (at(1), at(2));
         let (mut diff, mut sum, mut lit) = (0.0, 0.0, 0);
         for (k, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
             let (x, y) = (k % a.width as usize, k / a.width as usize);
-            if near(DVec2::new(x as f64 + 0.5, y as f64 + 0.5)) {
+            if near(DVec2::new(x as f64 + 0.5, y as f64 + 0.5) / 4.0) {
                 continue;
             }
             let (p, q) = (p[1] as f64, q[1] as f64);
@@ -100,7 +108,11 @@ fn soft_shadows_carry_no_sampling_noise() {
         }
         let relative = (diff / sum).sqrt();
         assert!(lit > 1000, "{falloff}: {lit} lit pixels");
-        assert!(relative < 0.005, "{falloff}: {:.3} % between seeds", 100.0 * relative);
+        assert!(
+            relative < 0.02,
+            "{falloff}: {:.3} % between seeds",
+            100.0 * relative
+        );
     }
 }
 
@@ -126,7 +138,12 @@ fn path_tracing_with_the_closed_form_agrees_with_light_tracing() {
             };
             let mut options = options(8, bounces, 0);
             options.integrator = Integrator::Path;
-            agreement.check(&format!("{falloff}, D = {bounces}"), &scene, options, |_| true);
+            agreement.check(
+                &format!("{falloff}, D = {bounces}"),
+                &scene,
+                options,
+                |_| true,
+            );
         }
     }
 }

@@ -6,11 +6,9 @@
 use flatray_geometry::DVec2;
 
 use crate::direct::{Strata, direct_light_chosen};
-use crate::lights::choice::{LightTable, NUMBERS};
 use crate::lights::Emitter;
-use crate::lights::{
-    Receiver, Visibility, arriving, light_contribution, point_incident,
-};
+use crate::lights::choice::{LightTable, NUMBERS};
+use crate::lights::{Receiver, Visibility, arriving, light_contribution, point_incident};
 use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
 
@@ -220,7 +218,9 @@ pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
     if let Some(no) = Decision::allowed(facts.options, FastPath::StrataLoops, "strata-loops") {
         return no;
     }
-    Decision::runs("the floor cache's points light by light, a point light of known transmittance in one loop")
+    Decision::runs(
+        "the floor cache's points light by light, a point light of known transmittance in one loop",
+    )
 }
 
 #[cfg(test)]

@@ -418,7 +418,7 @@ impl LineView {
     fn new(x: DVec2, segment: &Segment) -> Option<LineView> {
         let edge = segment.b - segment.a;
         let length = edge.length();
-        if !(length > 0.0) {
+        if length.is_nan() || length <= 0.0 {
             return None;
         }
         let along = edge / length;
@@ -448,7 +448,7 @@ impl LineView {
     /// receiver (all of it for the floor). `None` where nothing is left,
     /// or `x` lies on the light's line.
     fn receiving(&self, normal: Option<DVec2>) -> Option<(f64, f64)> {
-        if !(self.h > 0.0) {
+        if self.h.is_nan() || self.h <= 0.0 {
             return None;
         }
         let whole = (0.0, 1.0);
@@ -502,7 +502,7 @@ impl LineView {
         falloff: Falloff,
         r0: f64,
     ) -> f64 {
-        if !(to > from) || !(self.h > 0.0) {
+        if to.is_nan() || to <= from || self.h.is_nan() || self.h <= 0.0 {
             return 0.0;
         }
         let (ua, ub) = (self.u0 + from * self.length, self.u0 + to * self.length);
@@ -672,7 +672,7 @@ impl DiskView {
     fn new(x: DVec2, c: DVec2, radius: f64) -> Option<DiskView> {
         let v = x - c;
         let d = v.length();
-        if !(d > radius) {
+        if d.is_nan() || d <= radius {
             return None;
         }
         Some(DiskView {
@@ -728,7 +728,7 @@ impl DiskView {
         let b = o.dot(dir);
         let c = o.length_squared() - self.radius * self.radius;
         let disc = b * b - a * c;
-        if !(a > 0.0) || !(disc >= 0.0) {
+        if a.is_nan() || a <= 0.0 || disc.is_nan() || disc < 0.0 {
             return None;
         }
         // The stable pair: the root of larger magnitude first.
@@ -813,9 +813,17 @@ mod tests {
             Falloff::Window { range: 6.0 },
         ];
         let segment = Segment::new(DVec2::new(-3.0, 2.0), DVec2::new(5.0, 3.5));
-        for x in [DVec2::new(0.3, 0.1), DVec2::new(1.0, 2.5), DVec2::new(-4.0, -1.0)] {
+        for x in [
+            DVec2::new(0.3, 0.1),
+            DVec2::new(1.0, 2.5),
+            DVec2::new(-4.0, -1.0),
+        ] {
             let line = LineView::new(x, &segment).expect("a line");
-            for normal in [None, Some(DVec2::new(0.6, 0.8)), Some(DVec2::new(-0.8, 0.6))] {
+            for normal in [
+                None,
+                Some(DVec2::new(0.6, 0.8)),
+                Some(DVec2::new(-0.8, 0.6)),
+            ] {
                 for falloff in falloffs {
                     for r0 in [0.5, 1.5] {
                         let (from, to) = (0.1, 0.85);
@@ -894,9 +902,10 @@ mod tests {
                         |phi| {
                             let d = DVec2::new(phi.cos(), phi.sin());
                             let b = to_c.dot(d);
-                            let t = b - (b * b - to_c.length_squared() + radius * radius)
-                                .max(0.0)
-                                .sqrt();
+                            let t = b
+                                - (b * b - to_c.length_squared() + radius * radius)
+                                    .max(0.0)
+                                    .sqrt();
                             let cos = normal.map_or(1.0, |n| n.dot(d).max(0.0));
                             falloff.per_radian(t, r0) * cos
                         },
@@ -933,7 +942,10 @@ mod tests {
         let (from, to) = line.shadow_of(&across, (0.0, 1.0)).expect("a shadow");
         // The wall meets the light at (1, 4), s = 5/8; its near end (0, 3)
         // projects to (0, 4), s = 1/2.
-        assert!((from - 0.5).abs() < 1e-15 && (to - 0.625).abs() < 1e-15, "{from} {to}");
+        assert!(
+            (from - 0.5).abs() < 1e-15 && (to - 0.625).abs() < 1e-15,
+            "{from} {to}"
+        );
         // Seen edge-on: nothing.
         let edge_on = Segment::new(DVec2::new(0.0, 1.0), DVec2::new(0.0, 3.0));
         assert!(line.shadow_of(&edge_on, (0.0, 1.0)).is_none());
@@ -1152,7 +1164,11 @@ mod closed_forms {
                             Visibility::Trace,
                             &mut stats,
                         );
-                        assert_eq!(got, Some(Rgb::ZERO), "light {index} at {x}, {degrees} degrees");
+                        assert_eq!(
+                            got,
+                            Some(Rgb::ZERO),
+                            "light {index} at {x}, {degrees} degrees"
+                        );
                     }
                 }
             }
