@@ -3,14 +3,17 @@
 use flatray_geometry::DVec2;
 
 use crate::lights::choice::{LightTable, NUMBERS};
-use crate::lights::{Receiver, Visibility, light_contribution, weighed_contribution};
+use crate::lights::{
+    Receiver, Visibility, light_contribution, through_mirrors, weighed_contribution,
+};
 use crate::material::{Bsdf, Sampling};
 use crate::sampling::Stream;
 use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
 
 /// The light that reaches `x` directly from every light: fluence for the
-/// floor, irradiance for a wall side. Without a `table`, one shadow ray
+/// floor, irradiance for a wall side; with `mirror_lights`, and every line
+/// and circle light through one flat mirror (`lights::exact`). Without a `table`, one shadow ray
 /// per light, each light drawing its numbers from `stream`
 /// (`LightShape::numbers`); with one, the lights the table chooses, from
 /// [`NUMBERS`] numbers.
@@ -18,18 +21,23 @@ pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
     receiver: Receiver,
-    shadows: bool,
+    (shadows, mirror_lights): (bool, bool),
     table: Option<&LightTable>,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
     let vis = Visibility::of(shadows);
-    match table {
+    let direct = match table {
         Some(table) => {
             let numbers = std::array::from_fn(|_| stream.uniform());
             table.direct_light(scene, x, receiver, &numbers, |_| vis, stats)
         }
         None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
+    };
+    if mirror_lights {
+        direct + through_mirrors(scene, &scene.flat_mirrors, x, receiver, stats)
+    } else {
+        direct
     }
 }
 

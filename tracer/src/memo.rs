@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use flatray_cache::{Value, WallMemo};
 use flatray_geometry::{Ray, Side, Skip};
 
-use crate::lights::{Receiver, Visibility, light_contribution};
+use crate::lights::{Receiver, Visibility, light_contribution, through_mirrors_of};
 use crate::options::MemoOptions;
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
@@ -73,7 +73,7 @@ pub(crate) fn build_wall_memo(
     scene: &Scene,
     options: &MemoOptions,
     scale: f64,
-    shadows: bool,
+    (shadows, mirror_lights): (bool, bool),
     stats: &mut Stats,
 ) -> WallMemo {
     let lengths = scene.diffuse_lengths();
@@ -108,6 +108,12 @@ pub(crate) fn build_wall_memo(
                 Visibility::of(shadows),
                 &mut local,
             );
+            let value = if mirror_lights {
+                let mirrors = &scene.flat_mirrors;
+                value + through_mirrors_of(scene, mirrors, light_index, x, receiver, &mut local)
+            } else {
+                value
+            };
             rays.fetch_add(local.work.shadow_rays, Ordering::Relaxed);
             to_value(value)
         },

@@ -21,8 +21,9 @@ pub struct MemoOptions {
     /// Length of a wall bin, in pixels of the rendered image.
     pub bin_length: f64,
     /// The fewest receiver points per pixel and render pass for the
-    /// floor's direct light. A pass takes at least as many points as
-    /// samples, so the error keeps falling as the samples grow.
+    /// floor's direct light. A pass's points grow with its samples
+    /// (`passes::pass_points`), so the error keeps falling as the
+    /// samples grow.
     pub floor_samples: u32,
     /// Whether, with the memo on and more than one bounce, paths end at
     /// their first diffuse wall and read the rest of their light from the

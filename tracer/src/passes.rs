@@ -36,15 +36,34 @@ pub fn next_pass_end(done: u32) -> u32 {
     }
 }
 
+/// How many of a pass's samples each floor point stands for where every
+/// light's value at a point is exact (no light table): the points then
+/// only average the direct light over the pixel's square, whose error
+/// falls about as fast as the points grow, not as their square root.
+pub const SAMPLES_PER_EXACT_POINT: u32 = 4;
+
+/// The floor memo's points in one pixel for a pass of `count` samples:
+/// as many as its samples where a point's direct light is a random
+/// estimate (`exact` false: a light table draws lights), else a quarter
+/// of them ([`SAMPLES_PER_EXACT_POINT`]) but never fewer than the samples
+/// up to [`FIRST_PASS`]; at least `fewest` either way.
+pub(crate) fn pass_points(count: u32, fewest: u32, exact: bool) -> u32 {
+    let wanted = if exact {
+        (count / SAMPLES_PER_EXACT_POINT).max(count.min(FIRST_PASS))
+    } else {
+        count
+    };
+    wanted.max(fewest)
+}
+
 /// The floor memo's points per pixel over the passes of a render of
-/// `samples`, each pass taking as many as its samples and at least
-/// `fewest`.
-pub(crate) fn floor_points(samples: u32, fewest: u32) -> u64 {
+/// `samples` ([`pass_points`] per pass).
+pub(crate) fn floor_points(samples: u32, fewest: u32, exact: bool) -> u64 {
     let mut done = 0;
     let mut points = 0u64;
     while done < samples {
         let end = next_pass_end(done).min(samples);
-        points += (end - done).max(fewest) as u64;
+        points += pass_points(end - done, fewest, exact) as u64;
         done = end;
     }
     points
@@ -96,12 +115,13 @@ impl Pass {
     pub fn new(
         index: u32,
         samples: Range<u32>,
-        (first_point, fewest_points): (u32, u32),
+        (first_point, fewest_points, exact): (u32, u32, bool),
         seed: u64,
     ) -> Pass {
         let middle = samples.start + (samples.end - samples.start) / 2;
         let count = samples.end - samples.start;
-        let points = first_point..first_point.saturating_add(count.max(fewest_points));
+        let points =
+            first_point..first_point.saturating_add(pass_points(count, fewest_points, exact));
         let seed = match index {
             0 => seed,
             i => crate::sampling::derive_seed(seed, PASS_SEEDS + i as u64),
@@ -283,9 +303,14 @@ mod tests {
         assert_eq!(ends(17), vec![(0, 16), (16, 17)]);
         assert_eq!(ends(100), vec![(0, 16), (16, 32), (32, 64), (64, 100)]);
         assert_eq!(next_pass_end(u32::MAX), u32::MAX);
-        assert_eq!(floor_points(100, 1), 100);
-        assert_eq!(floor_points(100, 20), 20 + 20 + 32 + 36);
-        assert_eq!(floor_points(0, 20), 0);
+        assert_eq!(floor_points(100, 1, false), 100);
+        assert_eq!(floor_points(100, 20, false), 20 + 20 + 32 + 36);
+        assert_eq!(floor_points(0, 20, false), 0);
+        // Passes of 16, 16, 32 and 36 samples: 16 points each (a quarter,
+        // but at least 16), or 20 at least.
+        assert_eq!(floor_points(100, 1, true), 16 + 16 + 16 + 16);
+        assert_eq!(floor_points(100, 20, true), 20 + 20 + 20 + 20);
+        assert_eq!(floor_points(8, 1, true), 8);
     }
 
     #[test]
@@ -300,14 +325,15 @@ mod tests {
 
     #[test]
     fn halves_weigh_each_half_by_its_samples() {
-        let pass = Pass::new(1, 16..21, (36, 36), 7);
+        let pass = Pass::new(1, 16..21, (36, 36, false), 7);
         assert_eq!(pass.points, 36..72);
         assert_eq!((pass.count(), pass.first_count()), (5, 2));
         let sums = pass.weigh_halves((Rgb::splat(1.0), Rgb::splat(3.0)));
         assert_eq!(sums.all, Rgb::splat(2.0 + 9.0));
         assert_eq!(sums.first, Rgb::splat(2.0));
         assert_ne!(pass.seed, 7);
-        assert_eq!(Pass::new(0, 0..16, (0, 1), 7).seed, 7);
-        assert_eq!(Pass::new(0, 0..16, (0, 1), 7).points, 0..16);
+        assert_eq!(Pass::new(0, 0..16, (0, 1, false), 7).seed, 7);
+        assert_eq!(Pass::new(0, 0..16, (0, 1, false), 7).points, 0..16);
+        assert_eq!(Pass::new(6, 512..1024, (0, 1, true), 7).points, 0..128);
     }
 }

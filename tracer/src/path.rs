@@ -15,7 +15,7 @@ use crate::material::{Bsdf, Sampling, Transport};
 use crate::memo::Onward;
 use crate::run::Run;
 use crate::sampling::{Stream, circle_in_arc};
-use crate::scene::Scene;
+use crate::scene::{Material, Scene};
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
@@ -80,7 +80,7 @@ pub(crate) fn path_begin(
             trace.scene,
             p,
             receiver,
-            trace.shadows,
+            (trace.shadows, trace.mirror_lights),
             trace.light_table,
             stream,
             stats,
@@ -207,6 +207,12 @@ pub(crate) fn follow(
     // After a mirror the path can carry light from a line light that no
     // shadow ray found, so emission met by the ray then counts.
     let mut after_mirror = false;
+    // Specular events since the floor or the last diffuse vertex, and
+    // whether the first was a flat mirror: right after exactly that one
+    // mirror, lines and circles were taken in closed form at the vertex
+    // (`Trace::mirror_lights`), and a ray that meets them adds nothing.
+    let mut events = 0u32;
+    let mut first_flat_mirror = false;
     // Where the ray left a glossy wall, and the density of its direction:
     // light with an area that it meets is weighed against next-event
     // estimation there (multiple importance sampling).
@@ -227,7 +233,9 @@ pub(crate) fn follow(
                 .closest_hit_within(&ray, f64::INFINITY, skip, line_walls),
         };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        if mirror_emission && (after_mirror || force || glossy_from.is_some()) {
+        let taken_at_vertex =
+            trace.mirror_lights && events == 1 && first_flat_mirror && glossy_from.is_none();
+        if mirror_emission && (after_mirror || force || glossy_from.is_some()) && !taken_at_vertex {
             stats.work.emission_tests += 1;
             let emitted =
                 emission_crossed(scene, &ray, hit_t, unfolded, glossy_from, glass.wavelength);
@@ -262,6 +270,7 @@ pub(crate) fn follow(
             );
         }
         if (after_mirror || glossy_from.is_some())
+            && !taken_at_vertex
             && let Some(light) = scene.light_of_wall(index)
         {
             fluence += throughput
@@ -381,8 +390,13 @@ pub(crate) fn follow(
             };
             throughput *= weight;
             // After a specular event, light met by the ray counts: no
-            // next-event estimation could have found it.
+            // next-event estimation could have found it (but for one
+            // flat mirror, with `mirror_lights`).
             after_mirror = true;
+            if events == 0 {
+                first_flat_mirror = matches!(wall.material, Material::Mirror { .. });
+            }
+            events = events.saturating_add(1);
             line_walls = if bsdf.is_mirror() {
                 trace
                     .mirror_arcs
@@ -396,6 +410,7 @@ pub(crate) fn follow(
         } else {
             run = Run::new(throughput);
             after_mirror = false;
+            events = 0;
             unfolded = 0.0;
             line_walls = None;
         }
@@ -436,6 +451,10 @@ pub(crate) struct Trace<'a> {
     pub shadows: bool,
     /// Whether path rays look for line lights after a mirror.
     pub mirror_emission: bool,
+    /// Whether receivers take line and circle lights through one flat
+    /// mirror in closed form (`Plan::mirror_lights`); path rays then add
+    /// nothing from them right after exactly that one mirror.
+    pub mirror_lights: bool,
     /// Per wall side, whether a path goes on past its last diffuse bounce
     /// there, to meet such lights after mirrors or glass
     /// (`run::last_leg_sides`); `None`: it never does.
@@ -548,14 +567,29 @@ fn wall_irradiance(
                 // picks it: unbiased, so the memo's bias (its bins hold
                 // the irradiance at their centres only) falls out.
                 stats.work.memo_checks += 1;
-                let direct =
-                    direct_light(scene, x, receiver(), shadows, light_table, stream, stats);
+                let direct = direct_light(
+                    scene,
+                    x,
+                    receiver(),
+                    (shadows, trace.mirror_lights),
+                    light_table,
+                    stream,
+                    stats,
+                );
                 read + (direct - read) * flatray_cache::CHECK_RATE as f64
             } else {
                 read
             }
         }
-        None => direct_light(scene, x, receiver(), shadows, light_table, stream, stats),
+        None => direct_light(
+            scene,
+            x,
+            receiver(),
+            (shadows, trace.mirror_lights),
+            light_table,
+            stream,
+            stats,
+        ),
     };
     add_caustics(trace, irradiance, (index, side, u), diffuse)
 }

@@ -16,7 +16,7 @@ use crate::accel::shortcut::memo_bounce;
 use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::direct::{direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::film::PixelSums;
-use crate::lights::{Receiver, Visibility};
+use crate::lights::{Receiver, Visibility, through_mirrors};
 use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
 use crate::path::{Trace, path_begin, path_finish, path_sample};
@@ -250,6 +250,14 @@ pub(crate) fn render_pixel(
                 direct_light_strata(scene, floor, visibility, shadow_walls, stats)
             }
             None => direct_light_points(scene, floor, visibility, stats),
+        }
+        if trace.mirror_lights {
+            // Lines and circles seen in one flat mirror, in closed form
+            // at every point (`lights::exact`).
+            let floor = &mut batch.floor;
+            for (value, &x) in floor.values.iter_mut().zip(&floor.points) {
+                *value += through_mirrors(scene, &scene.flat_mirrors, x, Receiver::FLOOR, stats);
+            }
         }
     }
     // Every pass's path samples, arc by arc over all of them.

@@ -62,12 +62,14 @@ struct Cursor {
 }
 
 impl Cursor {
-    /// The pass from here to `end` samples per pixel.
-    fn pass(self, end: u32, options: &RenderOptions) -> Pass {
+    /// The pass from here to `end` samples per pixel; `exact`: a floor
+    /// point's direct light is exact (no light table draws lights), and
+    /// the pass takes fewer points (`passes::pass_points`).
+    fn pass(self, end: u32, options: &RenderOptions, exact: bool) -> Pass {
         Pass::new(
             self.index,
             self.samples..end,
-            (self.points, options.memo.floor_samples),
+            (self.points, options.memo.floor_samples, exact),
             options.seed,
         )
     }
@@ -116,6 +118,12 @@ impl<'a> Passes<'a> {
         self.totals.samples
     }
 
+    /// Whether a floor point's direct light is exact: no light table
+    /// draws the lights it takes.
+    fn exact_points(&self) -> bool {
+        self.shared.as_ref().is_some_and(|s| !s.plan.light_table)
+    }
+
     pub fn size(&self) -> (u32, u32) {
         self.totals.size
     }
@@ -132,7 +140,7 @@ impl<'a> Passes<'a> {
             Some(next) if end > done && end <= next => self.closed = end < next,
             _ => return false,
         }
-        let pass = self.cursor.pass(end, &self.options);
+        let pass = self.cursor.pass(end, &self.options, self.exact_points());
         self.run(&[pass], progress);
         true
     }
@@ -147,7 +155,7 @@ impl<'a> Passes<'a> {
         let (mut bytes, mut points) = (0, 0);
         while !self.closed && cursor.samples < samples {
             let next = crate::passes::next_pass_end(cursor.samples);
-            let pass = cursor.pass(next.min(samples), &self.options);
+            let pass = cursor.pass(next.min(samples), &self.options, self.exact_points());
             let pass_bytes = self.fill_bytes();
             let pass_points = pass.points.len() as u64;
             if !group.is_empty()

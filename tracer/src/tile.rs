@@ -47,9 +47,10 @@ impl Shared {
     pub(crate) fn new(scene: &Scene, options: &RenderOptions, stats: &mut Stats) -> Shared {
         let (width, height) = image_size(scene, options.scale);
         let plan = Plan::new(scene, options);
-        let memo = plan
-            .wall_memo
-            .then(|| build_wall_memo(scene, &options.memo, options.scale, plan.shadows, stats));
+        let memo = plan.wall_memo.then(|| {
+            let shadows = (plan.shadows, plan.mirror_lights);
+            build_wall_memo(scene, &options.memo, options.scale, shadows, stats)
+        });
         // Rays off mirrors are culled wherever the floor's are, and so
         // are the onward memo's gathers.
         let mirror_arcs = plan
@@ -400,6 +401,7 @@ pub(crate) fn trace_with<'a>(
         memo_checks: true,
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
+        mirror_lights: plan.mirror_lights,
         last_leg_sides: last_leg_sides.filter(|_| plan.last_legs),
         force,
         tables: plan.fast.tables.runs,
@@ -436,7 +438,12 @@ pub fn pixel_sample(
     // The render's own table, built again: the same from the same seed.
     let light_table = light_table_for(scene, &options, &plan);
     let last_leg_sides = plan.last_legs.then(|| crate::run::last_leg_sides(scene));
-    let pass = Pass::new(0, sample..sample.saturating_add(1), (0, 0), options.seed);
+    let pass = Pass::new(
+        0,
+        sample..sample.saturating_add(1),
+        (0, 0, false),
+        options.seed,
+    );
     let context = Context {
         options: &options,
         pass: &pass,

@@ -26,10 +26,10 @@
 
 use std::cell::RefCell;
 
-use flatray_geometry::{DVec2, Ray, Segment, cross, intersect};
+use flatray_geometry::{DVec2, Ray, Segment, Skip, cross, intersect};
 
 use super::{Receiver, Visibility};
-use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Scene};
+use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
 /// A span of the light (positions along a line light, `[0, 1]`; angles
@@ -241,6 +241,378 @@ pub(crate) fn exact_light(
         _ => return None,
     };
     Some(value * light.intensity)
+}
+
+/// Most pairs of a flat mirror and a line or circle light that receivers
+/// take in closed form through the mirror (`Plan::mirror_lights`): each
+/// pair costs every receiver point a look at the walls around the mirror
+/// and the light.
+pub const MAX_MIRROR_PAIRS: usize = 64;
+
+/// The light that every line and circle light brings `x` after exactly
+/// one reflection off one of `mirrors` (flat mirrors; their tints), in
+/// closed form: the light seen from `x` reflected in the mirror's line,
+/// through the mirror's segment as a window, with the walls before the
+/// mirror (reflected) and after it in the way. Tinted by the light's
+/// colour. `docs/model.md`, "Lines and circles in a mirror".
+pub(crate) fn through_mirrors(
+    scene: &Scene,
+    mirrors: &[u32],
+    x: DVec2,
+    receiver: Receiver,
+    stats: &mut Stats,
+) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    for index in 0..scene.lights.len() {
+        if is_exact(&scene.lights[index].shape) {
+            sum += through_mirrors_of(scene, mirrors, index, x, receiver, stats);
+        }
+    }
+    sum
+}
+
+/// [`through_mirrors`] for light `index` alone (nothing for a light that
+/// is not a line or a circle).
+pub(crate) fn through_mirrors_of(
+    scene: &Scene,
+    mirrors: &[u32],
+    index: usize,
+    x: DVec2,
+    receiver: Receiver,
+    stats: &mut Stats,
+) -> Rgb {
+    let light = &scene.lights[index];
+    if !is_exact(&light.shape) {
+        return Rgb::ZERO;
+    }
+    let mut sum = Rgb::ZERO;
+    for &m in mirrors {
+        let wall = &scene.walls[m as usize];
+        let Material::Mirror { tint } = wall.material else {
+            continue;
+        };
+        if receiver.wall == Some(m) {
+            continue;
+        }
+        let v = in_mirror(scene, index, m, &wall.segment, x, receiver, stats);
+        sum += v * tint;
+    }
+    sum * light.color
+}
+
+/// What a line or circle light as seen from one side of a mirror: the
+/// light's points from a viewpoint, the cuts where what is seen can
+/// change, and the integral over a piece.
+enum View {
+    Line(LineView),
+    Disk(DiskView),
+}
+
+impl View {
+    fn point(&self, t: f64) -> DVec2 {
+        match self {
+            View::Line(l) => l.point(t),
+            View::Disk(d) => d.rim(t),
+        }
+    }
+
+    /// Adds the cut where the ray from the viewpoint through `p` meets
+    /// the light.
+    fn cut_toward(&self, p: DVec2, cuts: &mut Vec<f64>) {
+        match self {
+            View::Line(l) => {
+                let d = p - l.x;
+                let s = cross(d, l.a - l.x) / cross(l.edge, d);
+                if s.is_finite() {
+                    cuts.push(s);
+                }
+            }
+            View::Disk(disk) => disk.cuts_by_ray(disk.x, p - disk.x, cuts),
+        }
+    }
+
+    /// Adds the cuts where the line through `p` along `dir` meets the
+    /// light.
+    fn cut_line(&self, p: DVec2, dir: DVec2, cuts: &mut Vec<f64>) {
+        match self {
+            View::Line(l) => {
+                let s = cross(p - l.a, dir) / cross(l.edge, dir);
+                if s.is_finite() {
+                    cuts.push(s);
+                }
+            }
+            View::Disk(disk) => disk.cuts_by_line(p, dir, cuts),
+        }
+    }
+}
+
+/// Reflects `p` across the line of `mirror`.
+#[inline]
+fn reflect_point(mirror: &Segment, p: DVec2) -> DVec2 {
+    let e = mirror.b - mirror.a;
+    let foot = mirror.a + e * ((p - mirror.a).dot(e) / e.length_squared());
+    2.0 * foot - p
+}
+
+/// The light `index` brings `x` off mirror `m` (its segment `mirror`),
+/// uncoloured and untinted by the mirror, times the light's intensity.
+fn in_mirror(
+    scene: &Scene,
+    index: usize,
+    m: u32,
+    mirror: &Segment,
+    x: DVec2,
+    receiver: Receiver,
+    stats: &mut Stats,
+) -> Rgb {
+    let light = &scene.lights[index];
+    let r0 = scene.small_radius;
+    // A point on the mirror's line sees it edge-on.
+    let side = mirror.side_value(x);
+    if side == 0.0 || !side.is_finite() {
+        return Rgb::ZERO;
+    }
+    let image = reflect_point(mirror, x);
+    let e = mirror.b - mirror.a;
+    // The receiver's normal reflected in the mirror's line, as the image sees it.
+    let normal = receiver
+        .normal
+        .map(|n| 2.0 * e * (n.dot(e) / e.length_squared()) - n);
+    let (view, whole, hull) = match light.shape {
+        LightShape::Line {
+            segment, one_sided, ..
+        } => {
+            // A light wholly behind the mirror's line sends nothing to
+            // this side by it.
+            let (sa, sb) = (mirror.side_value(segment.a), mirror.side_value(segment.b));
+            if sa * side <= 0.0 && sb * side <= 0.0 {
+                return Rgb::ZERO;
+            }
+            if one_sided && segment.side_of(image) != Some(EMITTING_SIDE) {
+                return Rgb::ZERO;
+            }
+            let Some(line) = LineView::new(image, &segment) else {
+                return Rgb::ZERO;
+            };
+            let Some(whole) = line.receiving(normal) else {
+                return Rgb::ZERO;
+            };
+            (
+                View::Line(line),
+                whole,
+                [segment.a, segment.b, segment.a, segment.b],
+            )
+        }
+        LightShape::Circle { at, radius } => {
+            if mirror.side_value(at) * side <= 0.0 {
+                return Rgb::ZERO;
+            }
+            let Some(disk) = DiskView::new(image, at, radius) else {
+                return Rgb::ZERO;
+            };
+            let whole = (-disk.half, disk.half);
+            let r = DVec2::splat(radius);
+            (View::Disk(disk), whole, [at - r, at + r, at - r, at + r])
+        }
+        _ => return Rgb::ZERO,
+    };
+    // The part of the light seen through the mirror's segment: for a
+    // line, the mirror's own shadow on it seen from the image.
+    let whole = match &view {
+        View::Line(line) => match line.shadow_of(mirror, whole) {
+            Some(window) if window.1 - window.0 > SLIVER => window,
+            _ => return Rgb::ZERO,
+        },
+        View::Disk(_) => whole,
+    };
+    SCRATCH.with(|scratch| {
+        let scratch = &mut *scratch.borrow_mut();
+        let points = [x, mirror.a, mirror.b, hull[0], hull[1]];
+        find_walls(scene, index, Receiver::FLOOR, &points, scratch, stats);
+        if let View::Line(line) = &view {
+            // Each wall's part on this side of the mirror's line hides
+            // one interval of the light twice over: itself, after the
+            // mirror, and its image, before it (but the receiver's own
+            // wall, which the first leg leaves from).
+            scratch.covers.clear();
+            for &w in &scratch.walls {
+                if w == m {
+                    continue;
+                }
+                let wall = &scene.walls[w as usize];
+                let Some(front) = front_part(mirror, side, &wall.segment) else {
+                    continue;
+                };
+                let image_of = Segment::new(
+                    reflect_point(mirror, front.a),
+                    reflect_point(mirror, front.b),
+                );
+                let legs = [(front, false), (image_of, true)];
+                for (segment, first_leg) in legs {
+                    if first_leg && receiver.wall == Some(w) {
+                        continue;
+                    }
+                    if let Some((from, to)) = line.shadow_of(&segment, whole)
+                        && to - from > SLIVER
+                    {
+                        scratch.covers.push(Cover {
+                            from,
+                            to,
+                            tint: wall.material.pane_tint(),
+                            wall: w,
+                        });
+                    }
+                }
+            }
+            sweep(whole, scratch);
+            let mut sum = Rgb::ZERO;
+            for span in &scratch.spans {
+                let v = line.integral(span.from, span.to, normal, light.falloff, r0);
+                sum += span.through * v;
+            }
+            return sum * light.intensity;
+        }
+        let cuts = &mut scratch.cuts;
+        cuts.clear();
+        cuts.extend([whole.0, whole.1]);
+        view.cut_toward(mirror.a, cuts);
+        view.cut_toward(mirror.b, cuts);
+        if let Some(n) = normal {
+            view.cut_line(image, n.perp(), cuts);
+        }
+        for &w in &scratch.walls {
+            if w == m {
+                continue;
+            }
+            let s = scene.walls[w as usize].segment;
+            let (a, b) = (reflect_point(mirror, s.a), reflect_point(mirror, s.b));
+            for p in [s.a, s.b, a, b] {
+                view.cut_toward(p, cuts);
+            }
+            view.cut_line(s.a, s.b - s.a, cuts);
+            view.cut_line(a, b - a, cuts);
+            // Where the wall crosses the mirror's line, it passes from
+            // one leg to the other.
+            if let Some(h) = flatray_geometry::line_crossing(&Ray::new(s.a, s.b - s.a), mirror) {
+                view.cut_toward(s.a + (s.b - s.a) * h.t, cuts);
+            }
+        }
+        let mut kink_cuts = [f64::NAN; 4];
+        if let View::Disk(disk) = &view
+            && light.falloff != Falloff::Flatland
+        {
+            for (k, rho) in kinks(light.falloff, r0).enumerate().take(2) {
+                if let Some(t) = disk.at_distance(rho) {
+                    kink_cuts[2 * k] = -t;
+                    kink_cuts[2 * k + 1] = t;
+                }
+            }
+            kink_cuts.sort_unstable_by(f64::total_cmp);
+        }
+        cuts.retain(|t| *t >= whole.0 && *t <= whole.1);
+        cuts.sort_unstable_by(f64::total_cmp);
+        cuts.dedup();
+        let sliver = SLIVER * (whole.1 - whole.0);
+        scratch.spans.clear();
+        let skip_leg_one = Skip(receiver.wall.unwrap_or(u32::MAX), m);
+        let skip_leg_two = Skip(m, scene.light_wall[index].unwrap_or(u32::MAX));
+        for k in 1..scratch.cuts.len() {
+            let (a, b) = (scratch.cuts[k - 1], scratch.cuts[k]);
+            if b - a <= sliver {
+                continue;
+            }
+            let p = view.point(0.5 * (a + b));
+            if normal.is_some_and(|n| n.dot(p - image) <= 0.0) {
+                continue;
+            }
+            // Where the unfolded ray from the image meets the mirror.
+            let Some(h) = intersect(&Ray::new(image, p - image), mirror) else {
+                continue;
+            };
+            if !(h.t > 0.0 && h.t < 1.0) {
+                continue;
+            }
+            let at = image + (p - image) * h.t;
+            let through = legs(scene, &scratch.walls, (x, at), skip_leg_one)
+                * legs(scene, &scratch.walls, (at, p), skip_leg_two);
+            if through == Rgb::ZERO {
+                continue;
+            }
+            match scratch.spans.last_mut() {
+                Some(last) if last.to == a && last.through == through => last.to = b,
+                _ => scratch.spans.push(Span {
+                    from: a,
+                    to: b,
+                    through,
+                }),
+            }
+        }
+        let mut sum = Rgb::ZERO;
+        for span in &scratch.spans {
+            sum += span.through
+                * match &view {
+                    View::Line(line) => {
+                        line.integral(span.from, span.to, normal, light.falloff, r0)
+                    }
+                    View::Disk(disk) => {
+                        let (mut a, b) = (span.from, span.to);
+                        let mut v = 0.0;
+                        for &cut in kink_cuts.iter() {
+                            if cut > a && cut < b {
+                                v += disk.integral(a, cut, normal, light.falloff, r0);
+                                a = cut;
+                            }
+                        }
+                        v + disk.integral(a, b, normal, light.falloff, r0)
+                    }
+                };
+        }
+        sum * light.intensity
+    })
+}
+
+/// The part of `segment` on the side of `mirror`'s line whose side value
+/// has the sign of `side`, if any.
+fn front_part(mirror: &Segment, side: f64, segment: &Segment) -> Option<Segment> {
+    let (sa, sb) = (
+        mirror.side_value(segment.a) * side.signum(),
+        mirror.side_value(segment.b) * side.signum(),
+    );
+    match (sa > 0.0, sb > 0.0) {
+        (true, true) => Some(*segment),
+        (false, false) => None,
+        _ => {
+            let cut = segment.a + (segment.b - segment.a) * (sa / (sa - sb));
+            Some(if sa > 0.0 {
+                Segment::new(segment.a, cut)
+            } else {
+                Segment::new(cut, segment.b)
+            })
+        }
+    }
+}
+
+/// The product of the tints of `walls` (but those `skip` names) that the
+/// segment from `from` to `to` crosses, zero at the first opaque one.
+fn legs(scene: &Scene, walls: &[u32], (from, to): (DVec2, DVec2), skip: Skip) -> Rgb {
+    let ray = Ray::new(from, to - from);
+    let mut through = Rgb::ONE;
+    for &w in walls {
+        if skip.contains(w) {
+            continue;
+        }
+        let wall = &scene.walls[w as usize];
+        if let Some(hit) = intersect(&ray, &wall.segment)
+            && hit.t > 0.0
+            && hit.t < 1.0
+        {
+            match wall.material.pane_tint() {
+                Some(tint) => through *= tint,
+                None => return Rgb::ZERO,
+            }
+        }
+    }
+    through
 }
 
 /// The candidate walls in front of light `index` seen from the receiver:

@@ -31,7 +31,7 @@
 mod beam;
 mod contribution;
 mod exact;
-pub(crate) use exact::is_exact;
+pub(crate) use exact::{MAX_MIRROR_PAIRS, is_exact, through_mirrors, through_mirrors_of};
 mod kernel;
 pub(crate) use contribution::{
     Receiver, Visibility, light_contribution, transmittance, weighed_contribution,

@@ -122,6 +122,12 @@ pub struct Plan {
     /// Lights with an area met by a path ray after a mirror or glass, or
     /// off a rough mirror.
     pub mirror_emission: bool,
+    /// Line and circle lights taken in closed form through one flat
+    /// mirror at every receiver, and left out of path rays that meet
+    /// them right after that mirror (`lights::exact::through_mirrors`).
+    pub mirror_lights: bool,
+    /// Pairs of a flat mirror and a line or circle light.
+    pub mirror_pairs: usize,
     /// Paths go on past their last diffuse bounce, to meet lights with an
     /// area after mirrors and glass.
     pub last_legs: bool,
@@ -194,6 +200,18 @@ impl Plan {
         let glossy_paths = options.bounces > 0 && rough_mirrors > 0;
         let mirror_emission =
             indirect && (force || ((specular_paths || glossy_paths) && areas > 0));
+        // Lines and circles seen in one flat mirror, in closed form at
+        // each receiver, up to a budget of (mirror, light) pairs.
+        let mirror_pairs = scene.flat_mirrors.len()
+            * scene
+                .lights
+                .iter()
+                .filter(|l| crate::lights::is_exact(&l.shape))
+                .count();
+        let mirror_lights = shadows
+            && options.specular > 0
+            && mirror_pairs > 0
+            && mirror_pairs <= crate::lights::MAX_MIRROR_PAIRS;
         // Past its last diffuse bounce a path goes on only where such a
         // light could be met; not forced, as it would find none.
         let last_legs = indirect && specular_paths && areas > 0;
@@ -287,13 +305,19 @@ impl Plan {
             memo_enabled: options.memo.enabled,
             caustics_enabled: options.caustics,
             bin_length: options.memo.bin_length.to_string(),
-            floor_points: crate::passes::floor_points(options.samples, options.memo.floor_samples),
+            floor_points: crate::passes::floor_points(
+                options.samples,
+                options.memo.floor_samples,
+                !light_table,
+            ),
             wall_memo_fits,
             pairs,
             mask_cells,
             shadows,
             indirect,
             mirror_emission,
+            mirror_lights,
+            mirror_pairs,
             last_legs,
             caustics,
             wall_memo,

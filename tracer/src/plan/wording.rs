@@ -79,6 +79,8 @@ impl Plan {
             shadows,
             indirect,
             mirror_emission,
+            mirror_lights,
+            mirror_pairs,
             caustics,
             wall_memo,
             onward,
@@ -256,6 +258,36 @@ impl Plan {
                 n(rough_mirrors, "rough mirror")
             },
         );
+        add(
+            "lines and circles in a mirror, closed form",
+            mirror_lights,
+            if mirror_lights {
+                format!(
+                    "{}: every floor and wall point takes them exactly; path rays add them only after more than one mirror or glass event",
+                    n(
+                        mirror_pairs,
+                        "pair of a flat mirror and a line or circle light"
+                    )
+                )
+            } else if tracing_light {
+                "light tracing does not take it".into()
+            } else if mirror_pairs == 0 {
+                "no flat mirror and line or circle light in the scene".into()
+            } else if specular_limit == 0 {
+                "specular = 0: no light is reflected".into()
+            } else if mirror_pairs > crate::lights::MAX_MIRROR_PAIRS {
+                format!(
+                    "{}, over {}: path rays find them",
+                    n(
+                        mirror_pairs,
+                        "pair of a flat mirror and a line or circle light"
+                    ),
+                    crate::lights::MAX_MIRROR_PAIRS
+                )
+            } else {
+                "no shadow rays are cast".into()
+            },
+        );
         let glossy = rough_mirrors > 0 && bounces > 0;
         add(
             "lines and circles seen in mirrors or glass",
@@ -367,9 +399,13 @@ impl Plan {
                 "the cache is switched off (--cache off)".into()
             } else if !indirect {
                 "no indirect path would reuse it".into()
+            } else if light_table {
+                format!(
+                    "{floor_points} stratified points per pixel (as many as the samples: a light table draws each point's lights)"
+                )
             } else {
                 format!(
-                    "{floor_points} stratified points per pixel (at least as many as the samples)"
+                    "{floor_points} stratified points per pixel (a quarter of the samples, at least 16 a pass: each point's direct light is exact)"
                 )
             },
         );

@@ -822,6 +822,9 @@ pub struct Scene {
     /// a solid line light's own wall, or the first wall that a point or
     /// spot light lies on (to within rounding).
     pub(crate) light_wall: Vec<Option<u32>>,
+    /// The walls that are flat, perfect mirrors (`Material::Mirror`), in
+    /// index order.
+    pub(crate) flat_mirrors: Vec<u32>,
     /// The walls' segments, indexed like `walls`.
     pub(crate) segments: SegmentSet,
     /// The floor's albedo along the walls that take it.
@@ -1027,6 +1030,9 @@ impl Scene {
             .collect();
         let segments = SegmentSet::new(walls.iter().map(|w| w.segment).collect());
         let albedo_along = AlbedoAlong::new(&canvas, &floor, &walls);
+        let flat_mirrors = (0..walls.len() as u32)
+            .filter(|&w| matches!(walls[w as usize].material, Material::Mirror { .. }))
+            .collect();
         Scene {
             canvas,
             floor,
@@ -1037,6 +1043,7 @@ impl Scene {
             merged,
             wall_light,
             light_wall,
+            flat_mirrors,
             segments,
             albedo_along,
             spectra,
