@@ -1495,6 +1495,61 @@ mod closed_forms {
         }
     }
 
+    /// A line light from (-2, 5) to (2, 5) and a mirror along y = 0 of
+    /// tint 0.8: from (0, 3) the light's image, seen from the point's
+    /// image (0, -3), subtends `2 atan(2 / 8)` through the mirror. A wall
+    /// from (0, 1) to (5, 1) between the point and the mirror hides the
+    /// half whose first leg runs right of the vertical; on a wall facing
+    /// down, the cosine's integral is `2 sin(atan(1 / 4))`.
+    #[test]
+    fn a_line_light_in_a_mirror_gives_its_images_visible_angle() {
+        let tint = Rgb::splat(0.8);
+        let mirror = wall(
+            DVec2::new(-10.0, 0.0),
+            DVec2::new(10.0, 0.0),
+            Material::Mirror { tint },
+        );
+        let light = line(
+            DVec2::new(-2.0, 5.0),
+            DVec2::new(2.0, 5.0),
+            Falloff::Flatland,
+        );
+        let x = DVec2::new(0.0, 3.0);
+        let mut stats = Stats::default();
+        let s = scene(vec![mirror], vec![light]);
+        let mut through = |s: &Scene, normal: Option<DVec2>| {
+            let receiver = Receiver {
+                normal,
+                wall: None,
+                shadow_walls: None,
+            };
+            through_mirrors(s, &s.flat_mirrors, x, receiver, &mut stats).x
+        };
+        let angle = 2.0 * (0.25f64).atan();
+        assert!(close(through(&s, None), 0.8 * angle));
+        let down = Some(DVec2::new(0.0, -1.0));
+        assert!(close(through(&s, down), 0.8 * 2.0 * (0.25f64).atan().sin()));
+        // Facing up: the mirror is behind the receiver.
+        assert_eq!(through(&s, Some(DVec2::new(0.0, 1.0))), 0.0);
+        let half = scene(
+            vec![
+                mirror,
+                wall(DVec2::new(0.0, 1.0), DVec2::new(5.0, 1.0), OPAQUE),
+            ],
+            vec![light],
+        );
+        assert!(close(through(&half, None), 0.8 * angle / 2.0));
+        // The same wall above the light hides nothing.
+        let above = scene(
+            vec![
+                mirror,
+                wall(DVec2::new(0.0, 6.0), DVec2::new(5.0, 6.0), OPAQUE),
+            ],
+            vec![light],
+        );
+        assert!(close(through(&above, None), 0.8 * angle));
+    }
+
     /// A closed square room turned by an odd angle, its corners shared
     /// endpoints at coordinates no float holds exactly, a line light and
     /// a circle light outside: nothing reaches any point inside, exactly.
