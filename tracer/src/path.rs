@@ -558,6 +558,10 @@ fn wall_irradiance(
         wall: Some(index),
         shadow_walls: None,
     };
+    let direct = |stream: &mut Stream, stats: &mut Stats| {
+        let shadows = (shadows, trace.mirror_lights);
+        direct_light(scene, x, receiver(), shadows, light_table, stream, stats)
+    };
     let irradiance = match memo {
         Some(memo) => {
             stats.work.memo_lookups += 1;
@@ -567,29 +571,13 @@ fn wall_irradiance(
                 // picks it: unbiased, so the memo's bias (its bins hold
                 // the irradiance at their centres only) falls out.
                 stats.work.memo_checks += 1;
-                let direct = direct_light(
-                    scene,
-                    x,
-                    receiver(),
-                    (shadows, trace.mirror_lights),
-                    light_table,
-                    stream,
-                    stats,
-                );
+                let direct = direct(stream, stats);
                 read + (direct - read) * flatray_cache::CHECK_RATE as f64
             } else {
                 read
             }
         }
-        None => direct_light(
-            scene,
-            x,
-            receiver(),
-            (shadows, trace.mirror_lights),
-            light_table,
-            stream,
-            stats,
-        ),
+        None => direct(stream, stats),
     };
     add_caustics(trace, irradiance, (index, side, u), diffuse)
 }

@@ -670,25 +670,7 @@ fn through_walls(
     receiver: Receiver,
     index: usize,
 ) -> Rgb {
-    let ray = Ray::new(x, p - x);
-    let skip = receiver.skip(scene.light_wall[index]);
-    let mut through = Rgb::ONE;
-    for &w in walls {
-        if skip.contains(w) {
-            continue;
-        }
-        let wall = &scene.walls[w as usize];
-        if let Some(hit) = intersect(&ray, &wall.segment)
-            && hit.t > 0.0
-            && hit.t < 1.0
-        {
-            match wall.material.pane_tint() {
-                Some(tint) => through *= tint,
-                None => return Rgb::ZERO,
-            }
-        }
-    }
-    through
+    legs(scene, walls, (x, p), receiver.skip(scene.light_wall[index]))
 }
 
 /// Turns the covers of `scratch` into the visible spans of `whole`: where
