@@ -292,6 +292,17 @@ struct RenderArgs {
     /// that a long render can be looked at as it goes.
     #[arg(long, requires = "passes")]
     write_passes: bool,
+    /// Adaptive passes: from the third pass (32 spp) on, each pass adds
+    /// samples only where a pixel's estimated noise, averaged with its
+    /// neighbours', is at least a quarter of the image's mean
+    /// (docs/model.md, "Adaptive passes"). --spp is then the most any
+    /// pixel takes.
+    #[arg(long)]
+    adaptive: bool,
+    /// Write a picture of the samples each pixel took to this PNG file:
+    /// grey in proportion, white the most.
+    #[arg(long, value_name = "PNG")]
+    write_spp: Option<PathBuf>,
     /// Print the statistics as --stats does, and also how the work was
     /// done (the full plan, culling, cache hits, shared shadow rays).
     #[arg(long, short)]
@@ -887,8 +898,24 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         options.light_choice = args
             .lights
             .map_or(loaded.options.light_choice, LightsArg::choice);
+        options.adaptive = args.adaptive;
         options
     };
+    if let Some(map) = &args.write_spp {
+        if Format::from_path(map).map_err(Failure::usage)? != Format::Png {
+            return Err(Failure::usage(format!(
+                "--write-spp: the map of samples is a PNG image; {} is not a .png",
+                map.display()
+            )));
+        }
+        if map == &output {
+            return Err(Failure::usage(format!(
+                "--write-spp: {} is also the rendered image",
+                map.display()
+            )));
+        }
+        check_output(map, &loaded.inputs, "render")?;
+    }
     let (width, height) = checked_size(&loaded, options.scale)?;
     let pixels = width as u64 * height as u64;
     let loaded_at = Instant::now();
@@ -989,7 +1016,12 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     let rendered_at = Instant::now();
     write(&rendered)?;
     kept(None);
+    if let Some(map) = &args.write_spp {
+        write_samples_map(&rendered, (width, height), map).map_err(Failure::other)?;
+    }
     let written_at = Instant::now();
+    let mean_samples = rendered.samples.iter().map(|&n| n as f64).sum::<f64>()
+        / rendered.samples.len().max(1) as f64;
 
     if args.json {
         let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
@@ -999,6 +1031,7 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         object["width"] = width.into();
         object["height"] = height.into();
         object["samples"] = options.samples.into();
+        object["mean_samples"] = mean_samples.into();
         object["passes"] = passes.into();
         object["plan"] = json::plan(&plan, &options);
         object["warnings"] = json::warnings(&loaded.warnings);
@@ -1015,7 +1048,11 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         out,
         "wrote {} ({width} x {height}, {} spp, {} bounce{}{}) in {:.2} s; noise {}",
         output.display(),
-        options.samples,
+        if options.adaptive {
+            format!("{mean_samples:.0} (at most {})", options.samples)
+        } else {
+            options.samples.to_string()
+        },
         options.bounces,
         if options.bounces == 1 { "" } else { "s" },
         if passes > 1 {
@@ -1301,6 +1338,21 @@ pub fn exit_cleanly_on_interrupt() {
 /// What an interrupt leaves behind, said when it comes: the image of the
 /// last finished pass that `--write-passes` wrote.
 static KEPT: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// Writes the samples each pixel of `rendered` took as a grey PNG, white
+/// for the most.
+fn write_samples_map(
+    rendered: &flatray_tracer::Rendered,
+    (width, height): (u32, u32),
+    path: &Path,
+) -> Result<(), String> {
+    let most = rendered.samples.iter().copied().max().unwrap_or(0).max(1) as f32;
+    let mut image = flatray_tracer::Image::new(width, height);
+    for (pixel, &n) in image.pixels.iter_mut().zip(&rendered.samples) {
+        *pixel = [n as f32 / most; 3];
+    }
+    flatray_io::write_png(&image, flatray_io::ToneMap::Clamp, path).map_err(|e| e.to_string())
+}
 
 fn kept(what: Option<String>) {
     if let Ok(mut k) = KEPT.lock() {

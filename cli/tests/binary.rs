@@ -751,3 +751,59 @@ fn every_subcommand_has_examples_and_a_manual_page() {
     assert_eq!(wrong.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&wrong.stderr).contains("did you mean `render`?"));
 }
+
+/// `--adaptive --write-spp MAP.png`: the image, and beside it a grey map
+/// of the samples each pixel took, white for the most; the summary gives
+/// the mean. A map that is not a PNG, or that is the image, is refused
+/// before anything is rendered.
+#[test]
+fn adaptive_renders_write_a_map_of_their_samples() {
+    let dir = scratch("spp-map");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    let (out, map) = (dir.join("room.png"), dir.join("spp.png"));
+    let output = flatray()
+        .args([
+            "render",
+            room.to_str().unwrap(),
+            "--scale",
+            "0.2",
+            "--spp",
+            "128",
+        ])
+        .args(["--adaptive", "--write-spp"])
+        .arg(&map)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("(at most 128) spp"), "{stdout}");
+    let grey = image::open(&map).unwrap().to_luma8();
+    assert_eq!(grey.dimensions(), (100, 100));
+    let (darkest, lightest) = grey
+        .pixels()
+        .fold((255u8, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
+    // White where pixels took every pass, grey where they stopped at 32.
+    assert_eq!(lightest, 255);
+    assert!(darkest < 200, "{darkest}");
+    for bad in [dir.join("spp.exr"), out.clone()] {
+        let refused = flatray()
+            .args([
+                "render",
+                room.to_str().unwrap(),
+                "--scale",
+                "0.1",
+                "--write-spp",
+            ])
+            .arg(&bad)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(refused.status.code(), Some(2), "{refused:?}");
+        let stderr = String::from_utf8_lossy(&refused.stderr);
+        assert!(stderr.contains("--write-spp"), "{stderr}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

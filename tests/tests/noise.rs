@@ -10,6 +10,11 @@ use flatray_tracer::metrics::compare;
 
 /// The estimate over the true error, for `scene` at `scale` and `samples`.
 fn ratio(name: &str, scale: f64, samples: u32, integrator: Integrator) -> f64 {
+    ratio_of(name, scale, samples, integrator, false)
+}
+
+/// [`ratio`], the render's passes adaptive or not (the reference's never).
+fn ratio_of(name: &str, scale: f64, samples: u32, integrator: Integrator, adaptive: bool) -> f64 {
     let loaded = flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron")))
         .unwrap_or_else(|e| panic!("{e}"));
     let options = |samples: u32, seed: u64| {
@@ -20,7 +25,11 @@ fn ratio(name: &str, scale: f64, samples: u32, integrator: Integrator) -> f64 {
         options.integrator = integrator;
         options
     };
-    let rendered = render(&loaded.scene, &options(samples, 1));
+    let rendered = render(&loaded.scene, &{
+        let mut options = options(samples, 1);
+        options.adaptive = adaptive;
+        options
+    });
     let reference = render(&loaded.scene, &options(samples * 64, 2));
     let estimate = rendered
         .stats
@@ -51,6 +60,19 @@ fn the_noise_estimate_agrees_with_the_true_error() {
         assert!(
             (0.7..=1.4).contains(&r),
             "{name}, {integrator:?}, {samples} spp: estimate / true error = {r}"
+        );
+    }
+}
+
+/// With adaptive passes each pixel's halves are its own: every pass it
+/// took before its last, against its last.
+#[test]
+fn the_noise_estimate_of_an_adaptive_render_agrees_with_the_true_error() {
+    for (name, scale) in [("room", 0.2), ("first-flat", 0.25)] {
+        let r = ratio_of(name, scale, 64, Integrator::Path, true);
+        assert!(
+            (0.7..=1.4).contains(&r),
+            "{name}, adaptive, 64 spp: estimate / true error = {r}"
         );
     }
 }

@@ -60,7 +60,7 @@ pub use options::{
 /// bits.
 #[doc(hidden)]
 pub use options::{FastPath, FastPaths};
-pub use passes::{FIRST_PASS, next_pass_end};
+pub use passes::{ADAPT_FROM, ADAPT_SHARE, FIRST_PASS, next_pass_end};
 pub use plan::Plan;
 pub use render::{Progressive, render};
 pub use run::ROULETTE_FROM;

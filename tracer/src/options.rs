@@ -151,6 +151,12 @@ pub struct RenderOptions {
     /// bit. The path estimators skip the tiles outside the window; the
     /// light tracer traces every path and keeps the window's pixels.
     pub window: Option<Window>,
+    /// Adaptive passes (path estimators): from the third pass on, a pass
+    /// takes only the pixels whose estimated error, averaged over their
+    /// 3 x 3 neighbours, is at least a quarter of the image's mean
+    /// (`passes::ADAPT_FROM`, `passes::adaptive_mask`); the others keep
+    /// the samples they have. Passes are then taken one at a time.
+    pub adaptive: bool,
 }
 
 /// A rectangle of an image's pixels: columns `x0..x1`, rows `y0..y1`.
@@ -314,6 +320,7 @@ impl Default for RenderOptions {
             fast_paths: FastPaths::ALL,
             light_choice: LightChoice::Auto,
             window: None,
+            adaptive: false,
         }
     }
 }
@@ -346,6 +353,9 @@ impl Image {
 pub struct Rendered {
     pub image: Image,
     pub stats: Stats,
+    /// The samples each pixel took, row by row: all the same but with
+    /// [`RenderOptions::adaptive`].
+    pub samples: Vec<u32>,
 }
 
 /// The side of a square tile in pixels.

@@ -178,11 +178,24 @@ pub(crate) fn fold(total: PixelSums, pass: PixelSums) -> PixelSums {
     }
 }
 
+/// The first pass (counted from 0) that adaptive passes take for some
+/// pixels only: every pixel takes the first two, 32 samples.
+pub const ADAPT_FROM: u32 = 2;
+
+/// A pixel takes an adaptive pass where its estimated squared error,
+/// averaged over its 3 x 3 neighbours, is at least this share of the
+/// image's mean.
+pub const ADAPT_SHARE: f64 = 0.25;
+
 /// The running totals of a render's passes.
 pub(crate) struct Totals {
     pub size: (u32, u32),
     /// Per pixel, row by row.
     pub sums: Vec<PixelSums>,
+    /// Per pixel, with adaptive passes: its samples and how many of them
+    /// are in its noise estimate's first half (every pass it took before
+    /// its last, or its first pass's first half).
+    pub counts: Option<Vec<(u32, u32)>>,
     /// Samples per pixel so far, and how many are in the noise estimate's
     /// first half (a share of one, for a light tracer's first pass).
     pub samples: u32,
@@ -195,6 +208,7 @@ impl Totals {
         Totals {
             size,
             sums: Vec::new(),
+            counts: None,
             samples: 0,
             first: 0.0,
             stats,
@@ -227,6 +241,75 @@ impl Totals {
         self.stats.merge(stats);
     }
 
+    /// Takes the totals after adaptive pass `pass`, which the pixels of
+    /// `mask` took (every pixel, without one), and what it counted.
+    pub fn replace_masked(
+        &mut self,
+        pass: &Pass,
+        sums: Vec<PixelSums>,
+        stats: &Stats,
+        mask: Option<&[bool]>,
+    ) {
+        let pixels = sums.len();
+        let counts = self.counts.get_or_insert_with(|| vec![(0, 0); pixels]);
+        for (k, count) in counts.iter_mut().enumerate() {
+            if mask.is_none_or(|m| m.get(k) == Some(&true)) {
+                *count = match count.0 {
+                    0 => (pass.count(), pass.first_count()),
+                    n => (n + pass.count(), n),
+                };
+            }
+        }
+        self.replace(std::slice::from_ref(pass), sums, stats);
+    }
+
+    /// Which pixels take the next adaptive pass: those whose estimated
+    /// squared error (the difference of their halves, weighed as the
+    /// noise estimate weighs it), averaged over their 3 x 3 neighbours,
+    /// is at least [`ADAPT_SHARE`] of the image's mean. `None`: every
+    /// pixel (before [`ADAPT_FROM`] passes, or without an estimate).
+    pub fn adaptive_mask(&self, passes: u32) -> Option<Vec<bool>> {
+        let counts = self.counts.as_ref()?;
+        if passes < ADAPT_FROM || self.sums.len() != counts.len() {
+            return None;
+        }
+        let (width, height) = (self.size.0 as usize, self.size.1 as usize);
+        let errors: Vec<f64> = self
+            .sums
+            .iter()
+            .zip(counts)
+            .map(|(sums, &(n, n1))| {
+                let (n, n1) = (n as f64, n1 as f64);
+                let n2 = n - n1;
+                if n1 <= 0.0 || n2 <= 0.0 {
+                    return 0.0;
+                }
+                let d = sums.first / n1 - (sums.all - sums.first) / n2;
+                let e = d.length_squared() * n1 * n2 / (n * n);
+                if e.is_finite() { e } else { 0.0 }
+            })
+            .collect();
+        let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
+        if mean <= 0.0 || errors.len() != width * height {
+            return None;
+        }
+        let at = |x: usize, y: usize| errors[y * width + x];
+        let mask = (0..height)
+            .flat_map(|y| (0..width).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let (mut sum, mut count) = (0.0, 0.0);
+                for j in y.saturating_sub(1)..(y + 2).min(height) {
+                    for i in x.saturating_sub(1)..(x + 2).min(width) {
+                        sum += at(i, j);
+                        count += 1.0;
+                    }
+                }
+                sum / count >= ADAPT_SHARE * mean
+            })
+            .collect();
+        Some(mask)
+    }
+
     /// Counts `pass`'s samples: in the first half, the first pass's
     /// `first` while it is the only pass, then every pass before the last.
     fn count(&mut self, pass: &Pass, first: f64) {
@@ -247,6 +330,7 @@ impl Totals {
             return Rendered {
                 image: Image::new(width, height),
                 stats,
+                samples: vec![self.samples; width as usize * height as usize],
             };
         }
         let n = self.samples as f64;
@@ -255,6 +339,7 @@ impl Totals {
         // Each row is written in place: the image is held once, beside
         // the sums.
         let mut image = Image::new(width, height);
+        let counts = self.counts.as_deref();
         let rows: Vec<Stats> = image
             .pixels
             .par_chunks_mut(width as usize)
@@ -263,10 +348,20 @@ impl Totals {
             .map(|(y, (out, row))| {
                 let mut stats = Stats::default();
                 for (x, (pixel, sums)) in out.iter_mut().zip(row).enumerate() {
+                    let k = y * width as usize + x;
                     let (x, y) = (x as u32, y as u32);
                     if window.is_some_and(|w| !w.contains((x, y))) {
                         continue;
                     }
+                    // With adaptive passes, each pixel's own samples.
+                    let (n, n1, weight) = match counts.and_then(|c| c.get(k)) {
+                        Some(&(m, m1)) => {
+                            let (m, m1) = (m as f64, m1 as f64);
+                            (m, m1, m1 * (m - m1) / (m * m))
+                        }
+                        None => (n, n1, weight),
+                    };
+                    let n2 = n - n1;
                     let scale = pixel_scale(scene, self.size, (x, y), exposure);
                     let value = sums.all / n * scale;
                     if n1 > 0.0 && n2 > 0.0 {
@@ -286,7 +381,15 @@ impl Totals {
         for row_stats in rows {
             stats.merge(&row_stats);
         }
-        Rendered { image, stats }
+        let samples = match counts {
+            Some(counts) => counts.iter().map(|c| c.0).collect(),
+            None => vec![self.samples; self.sums.len()],
+        };
+        Rendered {
+            image,
+            stats,
+            samples,
+        }
     }
 }
 

@@ -118,6 +118,11 @@ impl<'a> Passes<'a> {
         self.totals.samples
     }
 
+    /// Whether passes are adaptive: asked for, and a path estimator.
+    fn adaptive(&self) -> bool {
+        self.options.adaptive && self.shared.is_some()
+    }
+
     /// Whether a floor point's direct light is exact: no light table
     /// draws the lights it takes.
     fn exact_points(&self) -> bool {
@@ -150,6 +155,18 @@ impl<'a> Passes<'a> {
     /// turn, sharing its culling lists, floor points and shared shadow
     /// rays. The same sums as pass by pass.
     pub fn run_to(&mut self, samples: u32, progress: &(dyn Fn(u64) + Sync)) {
+        if self.adaptive() {
+            // Each pass's pixels are chosen from the image before it.
+            while !self.closed && self.cursor.samples < samples {
+                let next = crate::passes::next_pass_end(self.cursor.samples);
+                let pass = self
+                    .cursor
+                    .pass(next.min(samples), &self.options, self.exact_points());
+                self.closed = pass.samples.end < next;
+                self.run(&[pass], progress);
+            }
+            return;
+        }
         let mut group: Vec<Pass> = Vec::new();
         let mut cursor = self.cursor;
         let (mut bytes, mut points) = (0, 0);
@@ -200,13 +217,28 @@ impl<'a> Passes<'a> {
             return;
         };
         match &self.shared {
+            Some(shared) if self.options.adaptive => {
+                for pass in group {
+                    let mask = self.totals.adaptive_mask(pass.index);
+                    let (sums, stats) = path_passes(
+                        self.scene,
+                        &self.options,
+                        shared,
+                        std::slice::from_ref(pass),
+                        (&self.totals.sums, mask.as_deref()),
+                        progress,
+                    );
+                    self.totals
+                        .replace_masked(pass, sums, &stats, mask.as_deref());
+                }
+            }
             Some(shared) => {
                 let (sums, stats) = path_passes(
                     self.scene,
                     &self.options,
                     shared,
                     group,
-                    &self.totals.sums,
+                    (&self.totals.sums, None),
                     progress,
                 );
                 self.totals.replace(group, sums, &stats);

@@ -155,7 +155,7 @@ pub(crate) fn path_passes(
     options: &RenderOptions,
     shared: &Shared,
     group: &[Pass],
-    previous: &[PixelSums],
+    (previous, mask): (&[PixelSums], Option<&[bool]>),
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<PixelSums>, Stats) {
     let (width, height) = image_size(scene, options.scale);
@@ -201,6 +201,7 @@ pub(crate) fn path_passes(
             contexts,
             tiles: &shared.tiles,
             previous,
+            mask,
         },
         stats,
         progress,
@@ -217,6 +218,9 @@ pub(crate) struct PixelEstimator<'a> {
     pub(crate) tiles: &'a [(u32, u32)],
     /// The pixels' totals before these passes (empty before the first).
     pub(crate) previous: &'a [PixelSums],
+    /// With adaptive passes, the pixels that take them; the others keep
+    /// their totals.
+    pub(crate) mask: Option<&'a [bool]>,
 }
 
 impl Estimator for PixelEstimator<'_> {
@@ -309,6 +313,11 @@ impl Estimator for PixelEstimator<'_> {
                     for x in bx..bx1 {
                         let k = (y * width + x) as usize;
                         let total = self.previous.get(k).copied();
+                        if self.mask.is_some_and(|m| m.get(k) == Some(&false)) {
+                            values[((y - y0) * tile_width + x - x0) as usize] =
+                                total.unwrap_or_default();
+                            continue;
+                        }
                         values[((y - y0) * tile_width + x - x0) as usize] = (context.render_pixel)(
                             contexts,
                             total,
