@@ -62,14 +62,13 @@ struct Cursor {
 }
 
 impl Cursor {
-    /// The pass from here to `end` samples per pixel; `exact`: a floor
-    /// point's direct light is exact (no light table draws lights), and
-    /// the pass takes fewer points (`passes::pass_points`).
-    fn pass(self, end: u32, options: &RenderOptions, exact: bool) -> Pass {
+    /// The pass from here to `end` samples per pixel, a floor point for
+    /// every `per_point` of its samples (`passes::samples_per_point`).
+    fn pass(self, end: u32, options: &RenderOptions, per_point: u32) -> Pass {
         Pass::new(
             self.index,
             self.samples..end,
-            (self.points, options.memo.floor_samples, exact),
+            (self.points, options.memo.floor_samples, per_point),
             options.seed,
         )
     }
@@ -123,10 +122,11 @@ impl<'a> Passes<'a> {
         self.options.adaptive && self.shared.is_some()
     }
 
-    /// Whether a floor point's direct light is exact: no light table
-    /// draws the lights it takes.
-    fn exact_points(&self) -> bool {
-        self.shared.as_ref().is_some_and(|s| !s.plan.light_table)
+    /// How many samples a floor point stands for
+    /// (`passes::samples_per_point`).
+    fn exact_points(&self) -> u32 {
+        let table = self.shared.as_ref().is_none_or(|s| s.plan.light_table);
+        crate::passes::samples_per_point(table, self.options.bounces)
     }
 
     pub fn size(&self) -> (u32, u32) {

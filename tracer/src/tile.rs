@@ -447,12 +447,7 @@ pub fn pixel_sample(
     // The render's own table, built again: the same from the same seed.
     let light_table = light_table_for(scene, &options, &plan);
     let last_leg_sides = plan.last_legs.then(|| crate::run::last_leg_sides(scene));
-    let pass = Pass::new(
-        0,
-        sample..sample.saturating_add(1),
-        (0, 0, false),
-        options.seed,
-    );
+    let pass = Pass::new(0, sample..sample.saturating_add(1), (0, 0, 1), options.seed);
     let context = Context {
         options: &options,
         pass: &pass,

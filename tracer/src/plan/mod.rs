@@ -308,7 +308,7 @@ impl Plan {
             floor_points: crate::passes::floor_points(
                 options.samples,
                 options.memo.floor_samples,
-                !light_table,
+                crate::passes::samples_per_point(light_table, options.bounces),
             ),
             wall_memo_fits,
             pairs,
