@@ -22,7 +22,7 @@ pub struct MemoOptions {
     pub bin_length: f64,
     /// The fewest receiver points per pixel and render pass for the
     /// floor's direct light. A pass's points grow with its samples
-    /// (`passes::pass_points`), so the error keeps falling as the
+    /// (`passes::samples_per_point`), so the error keeps falling as the
     /// samples grow.
     pub floor_samples: u32,
     /// Whether, with the memo on and more than one bounce, paths end at

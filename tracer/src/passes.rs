@@ -56,7 +56,7 @@ pub(crate) fn samples_per_point(light_table: bool, bounces: u32) -> u32 {
 
 /// The fewest floor points a pass takes where a point stands for more
 /// than one sample: a 2 x 2 grid of the pixel (or its samples, if fewer).
-pub const FEWEST_EXACT_POINTS: u32 = 4;
+pub const FEWEST_EXACT_POINTS: u32 = 16;
 
 /// The floor memo's points in one pixel for a pass of `count` samples,
 /// each point standing for `per_point` of them ([`samples_per_point`]):
