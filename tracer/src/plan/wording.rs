@@ -405,7 +405,7 @@ impl Plan {
                 )
             } else {
                 format!(
-                    "{floor_points} stratified points per pixel ({}, at least 4 a pass: each point's direct light is exact)",
+                    "{floor_points} stratified points per pixel ({}, at least 16 a pass: each point's direct light is exact)",
                     if bounces == 0 {
                         "a quarter of the samples"
                     } else {
