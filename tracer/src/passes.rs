@@ -40,19 +40,12 @@ pub fn next_pass_end(done: u32) -> u32 {
 /// light table draws the lights a point takes, its direct light is a
 /// random estimate: one point per sample. Elsewhere every light's value
 /// at a point is exact, and the points only average it over the pixel's
-/// square, an error that falls about as fast as the points grow rather
-/// than as their square root: a point per 4 samples without a bounce,
-/// where the direct light is most of the image's noise, and per 16 with
-/// one or more, where the bounce's noise is. On the room at 512 spp: 16
-/// with a bounce takes 0.67 of the time of 4 for the same noise (0.81 %
-/// against 0.80 %); without one, 4 gives 0.08 % where 16 gives 0.21 %.
-/// A pass never takes fewer than [`FEWEST_EXACT_POINTS`].
-pub(crate) fn samples_per_point(light_table: bool, bounces: u32) -> u32 {
-    match (light_table, bounces) {
-        (true, _) => 1,
-        (false, 0) => 4,
-        (false, _) => 16,
-    }
+/// square: a point per 4 samples. (Per 16 the room at one bounce took
+/// two thirds of the time for the same noise, but a point light's hard
+/// shadow edge stopped converging: a later pass's few points weigh as
+/// much as its many samples, `direct_light.rs`.)
+pub(crate) fn samples_per_point(light_table: bool) -> u32 {
+    if light_table { 1 } else { 4 }
 }
 
 /// The fewest floor points a pass takes where a point stands for more

@@ -126,7 +126,7 @@ impl<'a> Passes<'a> {
     /// (`passes::samples_per_point`).
     fn exact_points(&self) -> u32 {
         let table = self.shared.as_ref().is_none_or(|s| s.plan.light_table);
-        crate::passes::samples_per_point(table, self.options.bounces)
+        crate::passes::samples_per_point(table)
     }
 
     pub fn size(&self) -> (u32, u32) {

@@ -308,7 +308,7 @@ impl Plan {
             floor_points: crate::passes::floor_points(
                 options.samples,
                 options.memo.floor_samples,
-                crate::passes::samples_per_point(light_table, options.bounces),
+                crate::passes::samples_per_point(light_table),
             ),
             wall_memo_fits,
             pairs,

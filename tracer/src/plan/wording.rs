@@ -405,12 +405,7 @@ impl Plan {
                 )
             } else {
                 format!(
-                    "{floor_points} stratified points per pixel ({}, at least 16 a pass: each point's direct light is exact)",
-                    if bounces == 0 {
-                        "a quarter of the samples"
-                    } else {
-                        "a sixteenth of the samples"
-                    }
+                    "{floor_points} stratified points per pixel (a quarter of the samples, at least 16 a pass: each point's direct light is exact)"
                 )
             },
         );
