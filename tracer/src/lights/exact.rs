@@ -126,27 +126,13 @@ pub(crate) fn exact_light(
                         find_walls(scene, index, receiver, &hull, scratch, stats);
                         scratch.covers.clear();
                         for &w in &scratch.walls {
-                            let wall = &scene.walls[w as usize];
-                            if let Some((from, to)) = line.shadow_of(&wall.segment, whole)
-                                && to - from > SLIVER
-                            {
-                                scratch.covers.push(Cover {
-                                    from,
-                                    to,
-                                    tint: wall.material.pane_tint(),
-                                    wall: w,
-                                });
-                            }
+                            let segment = &scene.walls[w as usize].segment;
+                            line.cover(scene, w, segment, whole, &mut scratch.covers);
                         }
                         sweep(whole, scratch);
                     }
                 }
-                let mut sum = Rgb::ZERO;
-                for span in &scratch.spans {
-                    let v = line.integral(span.from, span.to, receiver.normal, light.falloff, r0);
-                    sum += span.through * v;
-                }
-                sum
+                line.spans_integral(&scratch.spans, receiver.normal, light.falloff, r0)
             })
         }
         LightShape::Circle { at, radius } => {
@@ -452,25 +438,12 @@ fn in_mirror(
                     if first_leg && receiver.wall == Some(w) {
                         continue;
                     }
-                    if let Some((from, to)) = line.shadow_of(&segment, whole)
-                        && to - from > SLIVER
-                    {
-                        scratch.covers.push(Cover {
-                            from,
-                            to,
-                            tint: wall.material.pane_tint(),
-                            wall: w,
-                        });
-                    }
+                    line.cover(scene, w, &segment, whole, &mut scratch.covers);
                 }
             }
             sweep(whole, scratch);
-            let mut sum = Rgb::ZERO;
-            for span in &scratch.spans {
-                let v = line.integral(span.from, span.to, normal, light.falloff, r0);
-                sum += span.through * v;
-            }
-            return sum * light.intensity;
+            return line.spans_integral(&scratch.spans, normal, light.falloff, r0)
+                * light.intensity;
         }
         let cuts = &mut scratch.cuts;
         cuts.clear();
@@ -841,6 +814,44 @@ impl LineView {
             -sign * cross(e, lb - p),
             true,
         )
+    }
+
+    /// Adds to `covers` the shadow that `segment` (wall `w`'s, or a part
+    /// or image of it) casts on `within`, if it is wider than a sliver.
+    fn cover(
+        &self,
+        scene: &Scene,
+        w: u32,
+        segment: &Segment,
+        within: (f64, f64),
+        covers: &mut Vec<Cover>,
+    ) {
+        if let Some((from, to)) = self.shadow_of(segment, within)
+            && to - from > SLIVER
+        {
+            covers.push(Cover {
+                from,
+                to,
+                tint: scene.walls[w as usize].material.pane_tint(),
+                wall: w,
+            });
+        }
+    }
+
+    /// The sum over `spans` of what gets through each times its integral.
+    fn spans_integral(
+        &self,
+        spans: &[Span],
+        normal: Option<DVec2>,
+        falloff: Falloff,
+        r0: f64,
+    ) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        for span in spans {
+            let v = self.integral(span.from, span.to, normal, falloff, r0);
+            sum += span.through * v;
+        }
+        sum
     }
 
     /// `∫ per_radian(r) cos dphi` over the light's positions `s` from
