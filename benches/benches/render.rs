@@ -3,8 +3,9 @@
 //! BVH), four rays at a time, rays culled by direction as the floor's are,
 //! where the BVH starts to pay, and the room
 //! rendered end to end at a reduced size with the memo on and off (in rays
-//! per second), and a generated plan of 17 to 193 lights with a shadow ray
-//! to every light and with the light table.
+//! per second), a generated plan of 17 to 193 lights with a shadow ray
+//! to every light and with the light table, and arcs against the segments
+//! they replace.
 //!
 //! Run: `cargo bench -p flatray-benches` (all), or with a filter, e.g.
 //! `cargo bench -p flatray-benches -- closest_hit`.
@@ -252,12 +253,78 @@ fn many_lights(c: &mut Criterion) {
     group.finish();
 }
 
+/// What an arc costs against the segments it replaces: rays from inside a
+/// circle of radius 100 against the circle as one arc and as a polygon of
+/// 32 and 96 segments (brute force and BVH), and the lens of
+/// `scenes/lens.ron` (two arcs) against `scenes/lens-polygon.ron` (96
+/// facets), light traced at half size.
+fn arcs(c: &mut Criterion) {
+    use flatray_geometry::{Arc, Shape};
+    let mut group = c.benchmark_group("arcs");
+    let mut inputs = Inputs::new(5);
+    let centre = DVec2::new(250.0, 250.0);
+    let rays: Vec<Ray> = (0..4096)
+        .map(|_| {
+            let o = centre + DVec2::new(inputs.uniform() - 0.5, inputs.uniform() - 0.5) * 100.0;
+            let a = inputs.uniform() * std::f64::consts::TAU;
+            Ray::new(o, DVec2::new(a.cos(), a.sin()))
+        })
+        .collect();
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    let circle = SegmentSet::of_shapes(vec![Shape::Arc(Arc::circle(centre, 100.0, 0.0))]);
+    bench_set(
+        &mut group,
+        BenchmarkId::new("circle", "1 arc"),
+        &circle,
+        &rays,
+    );
+    for n in [32, 96] {
+        let corner = |k: usize| {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            centre + 100.0 * DVec2::new(a.cos(), a.sin())
+        };
+        let polygon: Vec<Segment> = (0..n)
+            .map(|k| Segment::new(corner(k), corner(k + 1)))
+            .collect();
+        for strategy in [Strategy::BruteForce, Strategy::Bvh] {
+            let set = SegmentSet::with_strategy(polygon.clone(), strategy);
+            bench_set(
+                &mut group,
+                BenchmarkId::new("circle", format!("{n} segments, {strategy:?}")),
+                &set,
+                &rays,
+            );
+        }
+    }
+    group.sample_size(10);
+    for name in ["lens", "lens-polygon"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.ron"));
+        let loaded = match flatray_io::load(&path) {
+            Ok(l) => l,
+            Err(e) => panic!("{e}"),
+        };
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 8;
+            options.scale = 0.5;
+            options.integrator = flatray_tracer::Integrator::Light;
+            options
+        };
+        group.throughput(Throughput::Elements(1));
+        group.bench_function(BenchmarkId::new("render", name), |b| {
+            b.iter(|| flatray_tracer::render(&loaded.scene, &options, &|_| {}))
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     closest_hit,
     bvh_threshold,
     room_render,
     plan,
-    many_lights
+    many_lights,
+    arcs
 );
 criterion_main!(benches);

@@ -18,6 +18,10 @@
 //! corners and by the box edges that face away from the cone. A segment
 //! misses it exactly when one of those lines, or the segment's own line,
 //! separates the two (the separating axis theorem).
+//!
+//! A circular arc among the walls is listed in every list: a superset, as
+//! the lists need, without a geometric test of its own; it never counts as
+//! blocking in [`ArcCandidates::drop_blocked`].
 
 use crate::lanes::{Best, visit_crossings};
 use crate::{DVec2, Hit, Ray, Segment, SegmentSet, Skip, cross, crossing_parts};
@@ -84,6 +88,11 @@ impl ArcCandidates {
             for (k, &(d0, d1)) in self.edges.iter().enumerate() {
                 let wedge = Wedge::new(lo, hi, d0, d1);
                 for &index in parent.arc(k) {
+                    if set.arc(index).is_some() {
+                        // Arcs stay in every list (below).
+                        self.indices.push(index);
+                        continue;
+                    }
                     let segment = set.get(index);
                     let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
                     if wedge.meets(segment.a, segment.b, DISTANCE_MARGIN * (1.0 + extent)) {
@@ -101,6 +110,15 @@ impl ArcCandidates {
             bucket.clear();
         }
         for index in 0..set.len() as u32 {
+            if set.arc(index).is_some() {
+                // A circular arc is listed in every arc of directions: a
+                // superset, as culling needs, without a wedge test of its
+                // own.
+                for bucket in &mut self.buckets[..arcs] {
+                    bucket.push(index);
+                }
+                continue;
+            }
             let segment = set.get(index);
             let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
             let margin = DISTANCE_MARGIN * (1.0 + extent);
@@ -148,7 +166,8 @@ impl ArcCandidates {
             // The nearest distance beyond which a blocker stops every ray.
             let mut reach = f64::INFINITY;
             for &index in &self.indices[start..end] {
-                if blocks(index) {
+                // Arcs block nothing here (their crossing is not linear).
+                if blocks(index) && set.arc(index).is_none() {
                     let s = set.get(index);
                     if let Some(t) = blocked_beyond(s.a, s.b, &corners, d0, d1, scale) {
                         reach = reach.min(t);
@@ -159,7 +178,10 @@ impl ArcCandidates {
                 let index = self.indices[j];
                 let s = set.get(index);
                 let extent = scale.max(s.a.abs().max(s.b.abs()).max_element());
-                let hidden = gap(lo, hi, s.a, s.b) > reach + 1e-6 * extent;
+                // An arc is kept: its chord is no bound on how near it
+                // comes.
+                let hidden =
+                    set.arc(index).is_none() && gap(lo, hi, s.a, s.b) > reach + 1e-6 * extent;
                 if !hidden {
                     self.indices[kept] = index;
                     kept += 1;
@@ -427,6 +449,11 @@ pub fn hull_candidates(set: &SegmentSet, points: &[DVec2], out: &mut Vec<u32>) {
         .iter()
         .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
     for index in 0..set.len() as u32 {
+        if set.arc(index).is_some() {
+            // Every arc: a superset.
+            out.push(index);
+            continue;
+        }
         let segment = set.get(index);
         let extent = scale.max(segment.a.abs().max(segment.b.abs()).max_element());
         if meets_polygon(hull, segment.a, segment.b, DISTANCE_MARGIN * (1.0 + extent)) {
@@ -562,6 +589,26 @@ impl SegmentSet {
         candidates: &[u32],
         mut visit: impl FnMut(u32, Hit) -> bool,
     ) -> bool {
+        if self.has_arcs() {
+            for &index in candidates {
+                let go_on = if self.arc(index).is_some() {
+                    self.arc_crossings_visit(ray, t_max, skip, Some(index), &mut visit)
+                } else {
+                    let s = self.get(index);
+                    visit_crossings(
+                        ray,
+                        t_max,
+                        skip,
+                        std::iter::once((index, s.a, s.b)),
+                        &mut visit,
+                    )
+                };
+                if !go_on {
+                    return false;
+                }
+            }
+            return true;
+        }
         let segments = candidates.iter().map(|&index| {
             let segment = self.get(index);
             (index, segment.a, segment.b)
@@ -615,6 +662,36 @@ impl SegmentSet {
         candidates: &[u32],
     ) -> Option<(u32, Hit)> {
         let mut best = Best::new(t_max);
+        if self.has_arcs() {
+            for &index in candidates {
+                if self.arc(index).is_some() {
+                    self.arc_crossings_visit(ray, t_max, skip, Some(index), &mut |i, hit| {
+                        if hit.t < best.t {
+                            best = Best {
+                                t: hit.t,
+                                index: i,
+                                u: hit.u,
+                            };
+                        }
+                        false
+                    });
+                    continue;
+                }
+                let segment = self.get(index);
+                if let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, segment.a, segment.b)
+                    && t > 0.0
+                    && t < best.t
+                    && !skip.contains(index)
+                {
+                    best = Best {
+                        t,
+                        index,
+                        u: sa / (sa - sb),
+                    };
+                }
+            }
+            return best.found();
+        }
         for &index in candidates {
             let segment = self.get(index);
             let Some((t, sa, sb)) = crossing_parts(ray.origin, ray.dir, segment.a, segment.b)
@@ -699,6 +776,22 @@ impl SegmentSet {
         rays: &RayLanes<N>,
         candidates: &[u32],
     ) -> HitLanes<N> {
+        if self.has_arcs() {
+            // Arcs have no lane kernel: each ray alone.
+            let mut out = HitLanes {
+                index: [u32::MAX; N],
+                t: [f64::INFINITY; N],
+                u: [0.0; N],
+            };
+            for k in 0..N {
+                if let Some((index, hit)) =
+                    self.closest_hit_among(&rays.ray(k), f64::INFINITY, Skip::NONE, candidates)
+                {
+                    (out.index[k], out.t[k], out.u[k]) = (index, hit.t, hit.u);
+                }
+            }
+            return out;
+        }
         if let Some(hits) =
             crate::lanes::closest_hits_avx(self.kernel(), self.segments(), rays, candidates)
         {
@@ -750,6 +843,14 @@ impl SegmentSet {
     #[inline(always)]
     pub fn closest_hit_among_wide(&self, ray: &Ray, candidates: &[u32]) -> HitLanes<1> {
         const W: usize = 4;
+        if self.has_arcs() {
+            let hit = self.closest_hit_among(ray, f64::INFINITY, Skip::NONE, candidates);
+            return HitLanes {
+                index: [hit.map_or(u32::MAX, |h| h.0)],
+                t: [hit.map_or(f64::INFINITY, |h| h.1.t)],
+                u: [hit.map_or(0.0, |h| h.1.u)],
+            };
+        }
         let segments = self.segments();
         let none = Segment {
             a: DVec2::NAN,

@@ -1,5 +1,5 @@
-//! Plane geometry for flatray: points, segments, rays, and the ray-segment
-//! queries every integrator is built on.
+//! Plane geometry for flatray: points, segments, circular arcs, rays,
+//! and the ray queries every integrator is built on.
 //!
 //! What it is for: one vector formula for every orientation of a wall (no
 //! special case for vertical, horizontal or diagonal segments), exact
@@ -9,7 +9,7 @@
 //! that leave a small box.
 //!
 //! What it never does: colour, randomness, files or threads. It knows
-//! nothing of materials or lights; a segment is identified by its index in
+//! nothing of materials or lights; a shape is identified by its index in
 //! a [`SegmentSet`], and callers attach meaning to that index. Its only
 //! `unsafe` code is the AVX kernel in `lanes.rs`, run only where the
 //! processor reports AVX, and checked bit for bit against the scalar one.
@@ -27,12 +27,22 @@
 //! Crossings count for `t > 0`: a ray never meets a wall at its own origin,
 //! so a wall drawn twice does not trap a ray that leaves one copy.
 
+//!
+//! # Arcs
+//!
+//! A circular arc ([`Arc`]) keeps its ends exactly and meets rays by the
+//! same signs at its ends as a segment, so an arc and a wall that share an
+//! end leave no gap; a ray can meet an arc twice, and meets the arc it
+//! leaves again where the arc curves back (`arc.rs` states both rules).
+
 pub use glam::DVec2;
 
+mod arc;
 mod cull;
 mod lanes;
 pub mod overlap;
 mod segment_set;
+pub use arc::{Arc, NotAnArc, arc_crossings, intersect_arc};
 pub use cull::{ArcCandidates, HitLanes, MAX_HULL_POINTS, RayLanes, hull_candidates};
 pub use lanes::{Kernel, portable_forced};
 pub use segment_set::{BVH_THRESHOLD, SegmentSet, Skip, Strategy};
@@ -198,6 +208,126 @@ impl Segment {
             Some(Side::Negative)
         } else {
             None
+        }
+    }
+}
+
+/// The shape of a wall: a segment or a circular arc.
+///
+/// A position `u` runs from 0 at its first end to 1 at its last, in
+/// proportion to length; its normal on the `Positive` side is the
+/// segment's (`cross(b - a, n) > 0`) or, on an arc, away from the centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    Segment(Segment),
+    Arc(Arc),
+}
+
+impl From<Segment> for Shape {
+    fn from(segment: Segment) -> Shape {
+        Shape::Segment(segment)
+    }
+}
+
+impl From<Arc> for Shape {
+    fn from(arc: Arc) -> Shape {
+        Shape::Arc(arc)
+    }
+}
+
+impl Shape {
+    /// The first end.
+    #[inline]
+    pub fn a(&self) -> DVec2 {
+        match self {
+            Shape::Segment(s) => s.a,
+            Shape::Arc(arc) => arc.a,
+        }
+    }
+
+    /// The last end.
+    #[inline]
+    pub fn b(&self) -> DVec2 {
+        match self {
+            Shape::Segment(s) => s.b,
+            Shape::Arc(arc) => arc.b,
+        }
+    }
+
+    /// The segment from end to end: the segment itself, or an arc's chord.
+    #[inline]
+    pub fn chord(&self) -> Segment {
+        Segment::new(self.a(), self.b())
+    }
+
+    #[inline]
+    pub fn as_segment(&self) -> Option<&Segment> {
+        match self {
+            Shape::Segment(s) => Some(s),
+            Shape::Arc(_) => None,
+        }
+    }
+
+    #[inline]
+    pub fn as_arc(&self) -> Option<&Arc> {
+        match self {
+            Shape::Segment(_) => None,
+            Shape::Arc(arc) => Some(arc),
+        }
+    }
+
+    #[inline]
+    pub fn length(&self) -> f64 {
+        match self {
+            Shape::Segment(s) => s.length(),
+            Shape::Arc(arc) => arc.length(),
+        }
+    }
+
+    /// The point at position `u`.
+    #[inline]
+    pub fn point_at(&self, u: f64) -> DVec2 {
+        match self {
+            Shape::Segment(s) => s.point_at(u),
+            Shape::Arc(arc) => arc.point_at(u),
+        }
+    }
+
+    /// The unit normal into `side` at point `p` of the shape.
+    #[inline]
+    pub fn normal_on(&self, side: Side, p: DVec2) -> DVec2 {
+        match self {
+            Shape::Segment(s) => s.normal_on(side),
+            Shape::Arc(arc) => arc.normal_on(side, p),
+        }
+    }
+
+    /// The side from which a ray travelling in `d` arrives at point `p` of
+    /// the shape, or `None` along it (parallel, or tangent).
+    #[inline]
+    pub fn arrival_side(&self, p: DVec2, d: DVec2) -> Option<Side> {
+        match self {
+            Shape::Segment(s) => s.arrival_side(d),
+            Shape::Arc(arc) => arc.arrival_side(p, d),
+        }
+    }
+
+    /// The side of the shape `p` is on: of a segment's line, or of an
+    /// arc's circle (`Positive` outside); `None` on it.
+    #[inline]
+    pub fn side_of(&self, p: DVec2) -> Option<Side> {
+        match self {
+            Shape::Segment(s) => s.side_of(p),
+            Shape::Arc(arc) => arc.side_of(p),
+        }
+    }
+
+    /// The bounding box.
+    #[inline]
+    pub fn bounds(&self) -> (DVec2, DVec2) {
+        match self {
+            Shape::Segment(s) => (s.a.min(s.b), s.a.max(s.b)),
+            Shape::Arc(arc) => arc.bounds(),
         }
     }
 }

@@ -3,13 +3,17 @@
 //! a time where the processor has AVX), a bounding volume
 //! hierarchy for large ones. All give exactly the same answers.
 
+use crate::arc::arc_crossings;
 use crate::lanes::{Best, Kernel, Lanes};
-use crate::{DVec2, Hit, Ray, Segment};
+use crate::{Arc, DVec2, Hit, Ray, Segment, Shape};
 
-/// Up to two segment indices that a query ignores: the wall a ray leaves
-/// from, and the wall a light sample lies on. A ray that starts on a
-/// segment can never meet that same segment again (a straight line meets
-/// another line at most once), so skipping it is exact, not an epsilon.
+/// Up to two indices that a query ignores: the wall a ray leaves from
+/// (the first), and the wall its end lies on (the second: a light
+/// sample's). A ray that starts on a segment can never meet that same
+/// segment again (a straight line meets another line at most once), so
+/// skipping it is exact, not an epsilon. An arc is not skipped whole: a
+/// ray can meet the arc it leaves again, and only its root at the origin
+/// (or at `t_max`) is dropped (`arc.rs`, "Leaving an arc").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Skip(pub u32, pub u32);
 
@@ -48,15 +52,23 @@ pub enum Strategy {
 /// test only a few walls each.
 pub const BVH_THRESHOLD: usize = 32;
 
-/// The segments of a scene, stored once, queried by brute force or through
-/// a BVH.
+/// The walls' shapes of a scene, stored once, queried by brute force or
+/// through a BVH: segments, and circular arcs beside them.
 ///
-/// Segment indices are positions in the vector given to [`SegmentSet::new`].
-/// Ties in the closest hit go to the lower index, so both strategies (and
-/// both kernels) return identical answers.
+/// Indices are positions in the vector given to [`SegmentSet::new`] or
+/// [`SegmentSet::of_shapes`]. Ties in the closest hit go to the lower
+/// index, so both strategies (and both kernels) return identical answers.
+/// Arcs are tested after the segments, each behind a test of its box: a
+/// scene without arcs pays one empty check per query.
 #[derive(Clone, Debug, Default)]
 pub struct SegmentSet {
+    /// Per index, the segment, or an arc's chord (`arcs` holds the arc).
     segments: Vec<Segment>,
+    /// The arcs, in index order, with their indices and padded boxes.
+    arcs: Vec<(u32, Arc, DVec2, DVec2)>,
+    /// Per index, its place in `arcs`, or `u32::MAX` for a segment;
+    /// empty when there are no arcs.
+    arc_slot: Vec<u32>,
     /// The segments as the kernels read them: in index order and padded
     /// to whole blocks for brute force; in leaf order for the BVH, whose
     /// leaves are tested one segment at a time (measured: four-wide
@@ -89,37 +101,148 @@ impl SegmentSet {
     /// A set that picks its strategy by size alone ([`BVH_THRESHOLD`]),
     /// and the fastest kernel the processor runs.
     pub fn new(segments: Vec<Segment>) -> SegmentSet {
-        let strategy = if segments.len() > BVH_THRESHOLD {
+        SegmentSet::of_shapes(segments.into_iter().map(Shape::Segment).collect())
+    }
+
+    /// A set of segments and arcs that picks its strategy by its number
+    /// of segments ([`BVH_THRESHOLD`]).
+    pub fn of_shapes(shapes: Vec<Shape>) -> SegmentSet {
+        let segments = shapes.iter().filter(|s| s.as_segment().is_some()).count();
+        let strategy = if segments > BVH_THRESHOLD {
             Strategy::Bvh
         } else {
             Strategy::BruteForce
         };
-        SegmentSet::with_strategy(segments, strategy)
+        SegmentSet::shapes_with_strategy(shapes, strategy)
     }
 
     /// A set with the given strategy, and the fastest kernel the processor
     /// runs.
     pub fn with_strategy(segments: Vec<Segment>, strategy: Strategy) -> SegmentSet {
-        let mut order: Vec<u32> = (0..segments.len() as u32).collect();
+        SegmentSet::shapes_with_strategy(
+            segments.into_iter().map(Shape::Segment).collect(),
+            strategy,
+        )
+    }
+
+    /// A set of segments and arcs with the given strategy for its
+    /// segments.
+    pub fn shapes_with_strategy(shapes: Vec<Shape>, strategy: Strategy) -> SegmentSet {
+        let mut arcs = Vec::new();
+        let mut arc_slot = Vec::new();
+        if shapes.iter().any(|s| s.as_arc().is_some()) {
+            arc_slot = vec![u32::MAX; shapes.len()];
+            for (i, shape) in shapes.iter().enumerate() {
+                if let Shape::Arc(arc) = shape {
+                    arc_slot[i] = arcs.len() as u32;
+                    let (lo, hi) = arc.bounds();
+                    let (lo, hi) = pad_box(lo, hi);
+                    arcs.push((i as u32, *arc, lo, hi));
+                }
+            }
+        }
+        let segments: Vec<Segment> = shapes.iter().map(Shape::chord).collect();
+        let mut order: Vec<u32> = (0..segments.len() as u32)
+            .filter(|&i| arc_slot.get(i as usize).is_none_or(|&k| k == u32::MAX))
+            .collect();
         let mut nodes = Vec::new();
         let mut lanes = Lanes::default();
-        if strategy == Strategy::Bvh && !segments.is_empty() {
+        if strategy == Strategy::Bvh && !order.is_empty() {
             build(&segments, &mut order, &mut nodes);
             for &i in &order {
                 lanes.push(&segments[i as usize], i);
             }
         } else {
-            for (i, segment) in segments.iter().enumerate() {
-                lanes.push(segment, i as u32);
+            for &i in &order {
+                lanes.push(&segments[i as usize], i);
             }
             lanes.pad();
         }
         SegmentSet {
             segments,
+            arcs,
+            arc_slot,
             lanes,
             nodes,
             kernel: None,
         }
+    }
+
+    /// Whether any shape is an arc.
+    #[inline]
+    pub fn has_arcs(&self) -> bool {
+        !self.arcs.is_empty()
+    }
+
+    /// The arc of index `index`, if that shape is one.
+    #[inline]
+    pub fn arc(&self, index: u32) -> Option<&Arc> {
+        let k = *self.arc_slot.get(index as usize)?;
+        self.arcs.get(k as usize).map(|(_, arc, _, _)| arc)
+    }
+
+    /// The shape of index `index`.
+    #[inline]
+    pub fn shape(&self, index: u32) -> Shape {
+        match self.arc(index) {
+            Some(arc) => Shape::Arc(*arc),
+            None => Shape::Segment(self.segments[index as usize]),
+        }
+    }
+
+    /// Keeps in `best` the nearest arc crossing below `best.t`, the lower
+    /// index on a tie; `t_max` is the query's, where an arriving ray ends.
+    #[inline]
+    fn closest_arc(&self, ray: &Ray, t_max: f64, skip: Skip, best: &mut Best) {
+        let inv = DVec2::new(1.0 / ray.dir.x, 1.0 / ray.dir.y);
+        for &(index, ref arc, lo, hi) in &self.arcs {
+            if enter_box(lo, hi, ray, inv, best.t).is_none() {
+                continue;
+            }
+            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
+            let (hits, n) = arc_crossings(ray, arc, t_max, leaving, arriving);
+            if let Some(hit) = hits[..n].first()
+                && (hit.t < best.t || (hit.t == best.t && index < best.index))
+            {
+                *best = Best {
+                    t: hit.t,
+                    index,
+                    u: hit.u,
+                };
+            }
+        }
+    }
+
+    /// Calls `visit` for every arc crossing below `t_max`, arcs in index
+    /// order, each arc's nearer first; `false` when `visit` stopped it.
+    #[inline]
+    pub(crate) fn arc_crossings_visit(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        only: Option<u32>,
+        visit: &mut impl FnMut(u32, Hit) -> bool,
+    ) -> bool {
+        let inv = DVec2::new(1.0 / ray.dir.x, 1.0 / ray.dir.y);
+        let arcs = match only.and_then(|i| self.arc_slot.get(i as usize)) {
+            Some(&k) => self.arcs.get(k as usize..k as usize + 1).unwrap_or(&[]),
+            None if only.is_some() => &[],
+            None => &self.arcs[..],
+        };
+        for &(index, ref arc, lo, hi) in arcs {
+            if enter_box(lo, hi, ray, inv, t_max).is_none() {
+                continue;
+            }
+            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
+            let (hits, n) = arc_crossings(ray, arc, t_max, leaving, arriving);
+            for hit in &hits[..n] {
+                if !visit(index, *hit) {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// The same set, answering with `kernel` if this processor runs it
@@ -167,6 +290,7 @@ impl SegmentSet {
         self.segments.is_empty()
     }
 
+    /// The segment of index `index`; for an arc, its chord.
     #[inline]
     pub fn get(&self, index: u32) -> Segment {
         self.segments[index as usize]
@@ -214,6 +338,9 @@ impl SegmentSet {
             let all = 0..self.lanes.order.len();
             self.lanes
                 .closest(self.kernel(), ray, all, t_max, skip, &mut best);
+            if !self.arcs.is_empty() {
+                self.closest_arc(ray, t_max, skip, &mut best);
+            }
             return best.found();
         }
         let inv = DVec2::new(1.0 / ray.dir.x, 1.0 / ray.dir.y);
@@ -246,6 +373,9 @@ impl SegmentSet {
             // Pop the next node that may still hold a nearer hit.
             loop {
                 if top == 0 {
+                    if !self.arcs.is_empty() {
+                        self.closest_arc(ray, t_max, skip, &mut best);
+                    }
                     return best.found();
                 }
                 top -= 1;
@@ -276,10 +406,17 @@ impl SegmentSet {
             return;
         }
         scratch.clear();
+        for &(index, _, lo, hi) in &self.arcs {
+            if lo.x <= max.x && lo.y <= max.y && hi.x >= min.x && hi.y >= min.y {
+                scratch.push(index);
+            }
+        }
         let overlaps = |node: &Node| {
             node.min.x <= max.x && node.min.y <= max.y && node.max.x >= min.x && node.max.y >= min.y
         };
         if !overlaps(&self.nodes[0]) {
+            scratch.sort_unstable();
+            scratch.iter().copied().for_each(visit);
             return;
         }
         let mut stack = [0u32; STACK];
@@ -327,8 +464,23 @@ impl SegmentSet {
     /// early. The order of the calls is fixed for a given set and ray, but
     /// depends on its strategy: brute force calls in index order, the BVH
     /// roughly from near to far (by the boxes it enters), so that a query
-    /// that stops at its first blocker stops early.
+    /// that stops at its first blocker stops early; the arcs' crossings
+    /// come after the segments', arc by arc (an arc can be crossed twice).
     pub fn for_each_crossing(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        mut visit: impl FnMut(u32, Hit) -> bool,
+    ) -> bool {
+        if !self.segment_crossings(ray, t_max, skip, &mut visit) {
+            return false;
+        }
+        self.arcs.is_empty() || self.arc_crossings_visit(ray, t_max, skip, None, &mut visit)
+    }
+
+    /// [`SegmentSet::for_each_crossing`] over the segments alone.
+    fn segment_crossings(
         &self,
         ray: &Ray,
         t_max: f64,
@@ -401,6 +553,35 @@ fn enter(node: &Node, ray: &Ray, inv: DVec2, t_max: f64) -> Option<f64> {
     let lo = t1.x.min(t2.x).max(t1.y.min(t2.y)).max(0.0);
     let hi = t1.x.max(t2.x).min(t1.y.max(t2.y)).min(t_max);
     if lo <= hi { Some(lo) } else { None }
+}
+
+/// Where `ray` enters the box `[lo, hi]` within `[0, t_max]`, if it does
+/// (as [`enter`]).
+#[inline(always)]
+fn enter_box(lo: DVec2, hi: DVec2, ray: &Ray, inv: DVec2, t_max: f64) -> Option<f64> {
+    enter(
+        &Node {
+            min: lo,
+            max: hi,
+            first: 0,
+            count: 0,
+        },
+        ray,
+        inv,
+        t_max,
+    )
+}
+
+/// A box padded as the BVH's are, so that the box test's rounding never
+/// cuts off what it holds.
+fn pad_box(min: DVec2, max: DVec2) -> (DVec2, DVec2) {
+    let scale = min
+        .abs()
+        .max(max.abs())
+        .max_element()
+        .max(f64::MIN_POSITIVE);
+    let pad = DVec2::splat(scale * 8.0 * f64::EPSILON + (max - min).max_element() * 1e-12);
+    (min - pad, max + pad)
 }
 
 /// Builds the BVH over `segments`, reordering `order`, by a binned

@@ -34,7 +34,7 @@ fn render_room(out: &Path) -> Result<f64, Box<dyn std::error::Error>> {
     ];
     let walls = (0..4)
         .map(|k| Wall {
-            segment: Segment::new(corners[k], corners[(k + 1) % 4]),
+            shape: Segment::new(corners[k], corners[(k + 1) % 4]).into(),
             material: if k == 1 {
                 Material::Mirror { tint: Rgb::ONE }
             } else {

@@ -191,6 +191,10 @@ pub struct SceneFile {
 #[serde(deny_unknown_fields, rename = "Glass")]
 pub struct GlassSpec {
     pub points: Vec<Point>,
+    /// Per edge (from point `i` to the next), `Some(p)` where the edge is
+    /// an arc through `p`; empty or all `None` for a polygon.
+    #[serde(default)]
+    pub through: Vec<Option<Point>>,
     /// Index of refraction at 0.55 micrometres.
     #[serde(default = "glass_ior")]
     pub ior: Ior,
@@ -300,22 +304,47 @@ pub enum FalloffSpec {
     Constant,
 }
 
-/// A wall: a segment of non-zero length with a material, optionally
-/// emitting light itself.
+/// A wall with a material, optionally emitting light itself: a segment
+/// of non-zero length from `a` to `b`, a circular arc from `a` through
+/// `through` to `b`, or a full circle of `center` and `radius`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Wall", try_from = "RawWall")]
 pub struct WallSpec {
+    /// The first end (on a full circle, its point at angle 0).
     pub a: Point,
+    /// The last end (on a full circle, `a`).
     pub b: Point,
+    pub shape: WallShape,
     pub material: MaterialSpec,
     pub emit: Option<EmitSpec>,
+}
+
+/// The shape of a wall in the file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WallShape {
+    Segment,
+    /// An arc from `a` through this point to `b`.
+    Through(Point),
+    /// A full circle.
+    Circle {
+        center: Point,
+        radius: f64,
+    },
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Wall")]
 pub struct RawWall {
-    a: Point,
-    b: Point,
+    #[serde(default)]
+    a: Option<Point>,
+    #[serde(default)]
+    b: Option<Point>,
+    #[serde(default)]
+    through: Option<Point>,
+    #[serde(default)]
+    center: Option<Point>,
+    #[serde(default)]
+    radius: Option<Positive>,
     #[serde(default)]
     material: MaterialSpec,
     #[serde(default)]
@@ -325,18 +354,82 @@ pub struct RawWall {
 impl TryFrom<RawWall> for WallSpec {
     type Error = String;
     fn try_from(w: RawWall) -> Result<WallSpec, String> {
-        if w.a == w.b {
-            return Err(format!(
-                "a wall needs two different endpoints, found ({}, {}) twice",
-                w.a.0, w.a.1
-            ));
+        let (a, b, shape) = match (w.a, w.b, w.through, w.center, w.radius) {
+            (Some(a), Some(b), through, None, None) => {
+                if a == b {
+                    return Err(format!(
+                        "a wall needs two different endpoints, found ({}, {}) twice",
+                        a.0, a.1
+                    ));
+                }
+                match through {
+                    None => (a, b, WallShape::Segment),
+                    Some(m) => {
+                        let arc = flatray_geometry::Arc::through(
+                            glam::DVec2::new(a.0, a.1),
+                            glam::DVec2::new(m.0, m.1),
+                            glam::DVec2::new(b.0, b.1),
+                        );
+                        if arc.is_err() {
+                            return Err(format!(
+                                "an arc's three points must not lie on one line, found a ({}, {}), through ({}, {}), b ({}, {})",
+                                a.0, a.1, m.0, m.1, b.0, b.1
+                            ));
+                        }
+                        (a, b, WallShape::Through(m))
+                    }
+                }
+            }
+            (None, None, None, Some(center), Some(radius)) => {
+                let a = Point(center.0 + radius.0, center.1);
+                checks::point(a.0, a.1)?;
+                (
+                    a,
+                    a,
+                    WallShape::Circle {
+                        center,
+                        radius: radius.0,
+                    },
+                )
+            }
+            _ => {
+                return Err(
+                    "expected a wall as `a` and `b` (a segment), `a`, `through` and `b` (an arc), or `center` and `radius` (a circle)"
+                        .to_string(),
+                );
+            }
+        };
+        if shape != WallShape::Segment && w.emit.is_some() {
+            return Err(
+                "an arc or a circle cannot emit: only a straight wall can be a line light"
+                    .to_string(),
+            );
         }
         Ok(WallSpec {
-            a: w.a,
-            b: w.b,
+            a,
+            b,
+            shape,
             material: w.material,
             emit: w.emit,
         })
+    }
+}
+
+impl WallSpec {
+    /// The wall's shape in world units.
+    pub fn geometry(&self) -> flatray_geometry::Shape {
+        use flatray_geometry::{Arc, Segment, Shape};
+        use glam::DVec2;
+        let p = |q: Point| DVec2::new(q.0, q.1);
+        match self.shape {
+            WallShape::Segment => Shape::Segment(Segment::new(p(self.a), p(self.b))),
+            WallShape::Through(m) => match Arc::through(p(self.a), p(m), p(self.b)) {
+                Ok(arc) => Shape::Arc(arc),
+                // Checked when read: never here.
+                Err(_) => Shape::Segment(Segment::new(p(self.a), p(self.b))),
+            },
+            WallShape::Circle { center, radius } => Shape::Arc(Arc::circle(p(center), radius, 0.0)),
+        }
     }
 }
 

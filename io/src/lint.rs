@@ -7,8 +7,8 @@
 //! Each warning names the item by its place in its list, counting from 0,
 //! and stands at the item's line and column.
 
-use flatray_geometry::{DVec2, Segment};
-use flatray_tracer::scene::{Canvas, lies_on};
+use flatray_geometry::{DVec2, Shape};
+use flatray_tracer::scene::{Canvas, lies_on_shape};
 
 use crate::format::{LightSpec, SceneFile};
 use crate::load::{Warning, inside_polygon};
@@ -48,13 +48,10 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
         );
     }
 
-    let walls: Vec<Segment> = file
-        .walls
-        .iter()
-        .map(|w| Segment::new(DVec2::new(w.a.0, w.a.1), DVec2::new(w.b.0, w.b.1)))
-        .collect();
+    let walls: Vec<Shape> = file.walls.iter().map(|w| w.geometry()).collect();
     for (k, wall) in walls.iter().enumerate() {
-        if outside(wall.a, wall.b) {
+        let (lo, hi) = wall.bounds();
+        if outside(lo, hi) {
             at(
                 item(&wall_items, k),
                 format!(
@@ -63,11 +60,7 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
             );
         }
     }
-    let polygons: Vec<Vec<DVec2>> = file
-        .glass
-        .iter()
-        .map(|g| g.points.iter().map(|p| DVec2::new(p.0, p.1)).collect())
-        .collect();
+    let polygons: Vec<Vec<DVec2>> = file.glass.iter().map(crate::load::glass_outline).collect();
     for (k, polygon) in polygons.iter().enumerate() {
         let (min, max) = polygon
             .iter()
@@ -137,7 +130,7 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
             }
         }
         for (j, wall) in walls.iter().enumerate() {
-            if reach == 0.0 && lies_on(centre, wall) {
+            if reach == 0.0 && lies_on_shape(centre, wall) {
                 at(
                     offset,
                     format!(
@@ -157,9 +150,18 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
     out
 }
 
-/// The distance from `p` to the segment.
-fn distance(p: DVec2, s: &Segment) -> f64 {
-    let e = s.edge();
-    let t = ((p - s.a).dot(e) / e.length_squared()).clamp(0.0, 1.0);
-    (s.a + e * t - p).length()
+/// The distance from `p` to a wall's shape: to a segment's nearest point;
+/// to an arc's point at `p`'s angle, or the nearer end.
+fn distance(p: DVec2, shape: &Shape) -> f64 {
+    match shape {
+        Shape::Segment(s) => {
+            let e = s.edge();
+            let t = ((p - s.a).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+            (s.a + e * t - p).length()
+        }
+        Shape::Arc(arc) => {
+            let on = arc.point_at(arc.position_of(p));
+            p.distance(on).min(p.distance(arc.a)).min(p.distance(arc.b))
+        }
+    }
 }

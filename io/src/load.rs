@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use flatray_geometry::{DVec2, Segment, Side};
+use flatray_geometry::{DVec2, Segment, Shape, Side};
 use flatray_tracer::scene::{
     Canvas, Falloff, Floor, GlassBody, Item, Light, LightShape, Material, Scene, Wall,
 };
@@ -308,10 +308,8 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
     let mut walls = Vec::with_capacity(file.walls.len());
     let mut lights = Vec::with_capacity(file.lights.len());
     for (wall_index, wall) in file.walls.iter().enumerate() {
-        let segment = Segment::new(
-            DVec2::new(wall.a.0, wall.a.1),
-            DVec2::new(wall.b.0, wall.b.1),
-        );
+        let shape = wall.geometry();
+        let segment = shape.chord();
         let material = match wall.material {
             MaterialSpec::FloorDiffuse => Material::Diffuse { albedo: None },
             MaterialSpec::Diffuse { albedo } => Material::Diffuse {
@@ -358,7 +356,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 })?,
             });
         }
-        walls.push(Wall { segment, material });
+        walls.push(Wall { shape, material });
     }
     for (k, light) in file.lights.iter().enumerate() {
         let spectrum = light_spectrum(light.spectrum(), light.color())
@@ -428,7 +426,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
                 let wall = if solid {
                     walls.push(Wall {
-                        segment,
+                        shape: Shape::Segment(segment),
                         material: Material::Diffuse {
                             albedo: Some(Rgb::ZERO),
                         },
@@ -529,8 +527,12 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
     let mut bodies = Vec::with_capacity(file.glass.len());
     let mut polygons: Vec<Vec<DVec2>> = Vec::with_capacity(file.glass.len());
     for (k, spec) in file.glass.iter().enumerate() {
-        let points: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
+        let corners: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
         let located = |message: String| source.error(Place::Glass(k), message);
+        let edges = glass_edges(&corners, &spec.through).map_err(located)?;
+        // Arcs are checked as fine polygons: every test below is of the
+        // outline's shape, not of its rays.
+        let points = flattened(&edges);
         validate_polygon(&points).map_err(located)?;
         for (j, other) in polygons.iter().enumerate() {
             if polygons_cross(&points, other) {
@@ -545,16 +547,20 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 )));
             }
         }
-        for i in 0..points.len() {
-            let edge = Segment::new(points[i], points[(i + 1) % points.len()]);
+        for (i, shape) in edges.iter().enumerate() {
+            let Shape::Segment(edge) = *shape else {
+                continue;
+            };
             // Along a wall, by the rule for walls that overlap (rule 8),
             // which glass edges take no part in.
             let along = |w: &Wall| {
-                flatray_geometry::overlap::overlap(
-                    &edge,
-                    &w.segment,
-                    flatray_geometry::overlap::Tolerance::Rounding,
-                )
+                w.as_segment().is_some_and(|s| {
+                    flatray_geometry::overlap::overlap(
+                        &edge,
+                        s,
+                        flatray_geometry::overlap::Tolerance::Rounding,
+                    )
+                })
             };
             if let Some(w) = walls.iter().position(along) {
                 return Err(located(format!(
@@ -570,9 +576,22 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         } else {
             Side::Negative
         };
-        for i in 0..points.len() {
+        for shape in edges {
+            // A segment's `Positive` side is its left; an arc's is away
+            // from its centre, and the glass lies towards the centre where
+            // the outline turns the arc's way.
+            let inside = match shape {
+                Shape::Segment(_) => inside,
+                Shape::Arc(arc) => {
+                    if (inside == Side::Positive) == (arc.turn > 0.0) {
+                        Side::Negative
+                    } else {
+                        Side::Positive
+                    }
+                }
+            };
             walls.push(Wall {
-                segment: Segment::new(points[i], points[(i + 1) % points.len()]),
+                shape,
                 material: Material::Glass {
                     body: bodies.len() as u32,
                     inside,
@@ -660,15 +679,17 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
 /// on top of an earlier one: the two are resolved into walls that do not
 /// overlap (`docs/robustness.md`, rule 8), which may not be what was meant.
 fn overlap_warnings(text: &str, walls: &[Wall], listed: usize) -> Vec<Warning> {
-    let segments: Vec<Segment> = walls.iter().map(|w| w.segment).collect();
-    let groups = flatray_geometry::overlap::overlap_groups(&segments, |i| i < listed);
+    let segments: Vec<Segment> = walls.iter().map(|w| w.shape.chord()).collect();
+    let groups = flatray_geometry::overlap::overlap_groups(&segments, |i| {
+        i < listed && walls[i].as_segment().is_some()
+    });
     if groups.is_empty() {
         return Vec::new();
     }
     let items = locate::list_items(text, "walls");
     let kind = |w: &Wall| w.material.noun();
     let same = |x: &Wall, y: &Wall| {
-        let (p, q) = (x.segment, y.segment);
+        let (p, q) = (x.shape.chord(), y.shape.chord());
         x.material == y.material && ((p.a == q.a && p.b == q.b) || (p.a == q.b && p.b == q.a))
     };
     let mut out = Vec::new();
@@ -754,6 +775,69 @@ fn validate_polygon(points: &[DVec2]) -> Result<(), String> {
         return Err("the glass polygon has no area".to_string());
     }
     Ok(())
+}
+
+/// A glass body's outline as a polygon, its arcs as fine polylines (the
+/// corners alone where its edges are not valid).
+pub(crate) fn glass_outline(spec: &crate::format::GlassSpec) -> Vec<DVec2> {
+    let corners: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
+    match glass_edges(&corners, &spec.through) {
+        Ok(edges) => flattened(&edges),
+        Err(_) => corners,
+    }
+}
+
+/// A glass outline's edges: from each corner to the next, straight, or an
+/// arc through the edge's `through` point.
+fn glass_edges(
+    corners: &[DVec2],
+    through: &[Option<crate::format::Point>],
+) -> Result<Vec<Shape>, String> {
+    let n = corners.len();
+    if !through.is_empty() && through.len() != n {
+        return Err(format!(
+            "expected `through` to give one entry per edge ({n}, as many as points), found {}",
+            through.len()
+        ));
+    }
+    if n < 2 || (n == 2 && through.iter().all(Option::is_none)) {
+        return Err(format!(
+            "a glass body needs at least 3 points, or 2 joined by arcs, found {n}"
+        ));
+    }
+    (0..n)
+        .map(|i| {
+            let (a, b) = (corners[i], corners[(i + 1) % n]);
+            match through.get(i).copied().flatten() {
+                None => Ok(Shape::Segment(Segment::new(a, b))),
+                Some(m) => flatray_geometry::Arc::through(a, DVec2::new(m.0, m.1), b)
+                    .map(Shape::Arc)
+                    .map_err(|_| {
+                        format!(
+                            "glass edge {i}: an arc's three points must not lie on one line, found ({}, {}), through ({}, {}), ({}, {})",
+                            a.x, a.y, m.0, m.1, b.x, b.y
+                        )
+                    }),
+            }
+        })
+        .collect()
+}
+
+/// Points along each arc of an outline: its shape to a
+/// thousandth of its chord, for the tests of its shape.
+const ARC_POINTS: usize = 64;
+
+/// The outline of `edges` as a polygon: each corner, and along each arc
+/// [`ARC_POINTS`] points.
+fn flattened(edges: &[Shape]) -> Vec<DVec2> {
+    let mut points = Vec::new();
+    for edge in edges {
+        points.push(edge.a());
+        if let Shape::Arc(arc) = edge {
+            points.extend((1..ARC_POINTS).map(|k| arc.point_at(k as f64 / ARC_POINTS as f64)));
+        }
+    }
+    points
 }
 
 /// Whether `p` lies inside the polygon `v` (even-odd rule).

@@ -63,7 +63,11 @@ fn draw(
     for (index, wall) in scene.walls().iter().enumerate() {
         let (colour, opacity) = fixed.unwrap_or((wall_colour(scene, index), 1.0));
         let colour = colour.map(|c| c * 255.0);
-        let (a, b) = (to_pixels(wall.segment.a), to_pixels(wall.segment.b));
+        if let Some(arc) = wall.shape.as_arc() {
+            draw_arc(bytes, (w, h), arc, to_pixels, step, half, (colour, opacity));
+            continue;
+        }
+        let (a, b) = (to_pixels(wall.shape.a()), to_pixels(wall.shape.b()));
         if !(a.is_finite() && b.is_finite()) {
             continue;
         }
@@ -119,6 +123,55 @@ fn draw(
     }
 }
 
+/// Most pixels an arc's box may cover: a larger one is drawn in part.
+const MAX_ARC_PIXELS: i64 = 1 << 24;
+
+/// Draws `arc` (in world units, drawn through `to_pixels`) as a line
+/// `2 half` pixels wide: each pixel of its box by its distance to the arc
+/// (to its point at the pixel's angle, or the nearer end), so that its edge is as smooth as a straight wall's.
+fn draw_arc(
+    bytes: &mut [u8],
+    (w, h): (i64, i64),
+    arc: &flatray_geometry::Arc,
+    to_pixels: impl Fn(DVec2) -> DVec2,
+    step: DVec2,
+    half: f64,
+    (colour, opacity): ([f64; 3], f64),
+) {
+    let (lo, hi) = arc.bounds();
+    let (lo, hi) = (to_pixels(lo), to_pixels(hi));
+    if !(lo.is_finite() && hi.is_finite()) {
+        return;
+    }
+    let reach = half + 1.5;
+    let x0 = ((lo.x - reach).floor() as i64).max(0);
+    let y0 = ((lo.y - reach).floor() as i64).max(0);
+    let x1 = ((hi.x + reach).ceil() as i64).min(w - 1);
+    let y1 = ((hi.y + reach).ceil() as i64).min(h - 1);
+    if x1 < x0 || y1 < y0 || (x1 - x0 + 1).saturating_mul(y1 - y0 + 1) > MAX_ARC_PIXELS {
+        return;
+    }
+    let (a, b) = (to_pixels(arc.a), to_pixels(arc.b));
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            // The pixel's centre in world units, for the arc's angle test.
+            let world = arc.center + (p - to_pixels(arc.center)) / step;
+            // Its nearest point by angle: on the circle, or an end.
+            let on = to_pixels(arc.point_at(arc.position_of(world)));
+            let distance = p.distance(on).min(p.distance(a)).min(p.distance(b));
+            let coverage = (half + 0.5 - distance).clamp(0.0, 1.0) * opacity;
+            if coverage > 0.0 {
+                let k = ((y * w + x) * 3) as usize;
+                for c in 0..3 {
+                    let old = bytes[k + c] as f64;
+                    bytes[k + c] = (old + (colour[c] - old) * coverage).round() as u8;
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -128,7 +181,7 @@ mod tests {
     #[test]
     fn a_wall_is_drawn_along_its_line_and_nowhere_else() {
         let wall = |a: (f64, f64), b: (f64, f64), material| Wall {
-            segment: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)),
+            shape: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)).into(),
             material,
         };
         let scene = Scene::new(

@@ -29,7 +29,7 @@ fn lamp(at: DVec2) -> Light {
 
 fn wall(a: (f64, f64), b: (f64, f64)) -> Wall {
     Wall {
-        segment: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)),
+        shape: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)).into(),
         material: Material::Diffuse { albedo: None },
     }
 }

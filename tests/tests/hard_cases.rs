@@ -561,7 +561,7 @@ fn degenerate_input_is_handled_as_documented() {
     };
     let p = DVec2::new(10.0, 10.0);
     let dot = Wall {
-        segment: Segment::new(p, p),
+        shape: Segment::new(p, p).into(),
         material: Material::Diffuse { albedo: None },
     };
     let error = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, vec![dot], vec![]).unwrap_err();

@@ -598,3 +598,121 @@ fn the_imported_flat_is_dark_outside_but_through_its_window() {
         }
     }
 }
+
+/// Circles, round ellipses and a path's arc command become arcs (usvg
+/// draws each as cubic curves of a quarter turn at most; each is an arc
+/// to within the tolerance, its points on the drawn circle), an ellipse
+/// that is no circle is flattened into segments within the tolerance, a
+/// glass circle becomes glass bounded by arcs, and the scene loads; the
+/// round room keeps the lamp's light out.
+#[test]
+fn svg_circles_ellipses_and_arc_commands_become_arcs() {
+    let plan = imported(&fixture("round.svg"), &ImportOptions::default());
+    let on_circle = |c: DVec2, r: f64| {
+        move |w: &&flatray_io::import::ImportedWall| {
+            [w.a, w.b, w.through.unwrap_or(w.a)]
+                .iter()
+                .all(|p| (p.distance(c) - r).abs() < 1e-3)
+        }
+    };
+    let arcs_of = |source: &str| -> Vec<&flatray_io::import::ImportedWall> {
+        plan.walls.iter().filter(|w| w.source == source).collect()
+    };
+    // The room: a circle of quarter arcs.
+    let room = arcs_of("wall-room");
+    assert_eq!(room.len(), 4, "{room:?}");
+    assert!(room.iter().all(|w| w.through.is_some()));
+    assert!(room.iter().all(on_circle(DVec2::new(80.0, 100.0), 60.0)));
+    // The column, an ellipse of equal radii.
+    let column = arcs_of("wall-column");
+    assert!(!column.is_empty() && column.iter().all(|w| w.through.is_some()));
+    assert!(column.iter().all(on_circle(DVec2::new(220.0, 60.0), 12.0)));
+    // The bay: half a circle of radius 40 about (210, 110).
+    let bay = arcs_of("wall-bay");
+    assert!(
+        !bay.is_empty() && bay.iter().all(|w| w.through.is_some()),
+        "{bay:?}"
+    );
+    assert!(bay.iter().all(on_circle(DVec2::new(210.0, 110.0), 40.0)));
+    // The rug is no circle: segments, within the tolerance of the oval.
+    let rug = arcs_of("wall-rug");
+    assert!(
+        rug.len() > 8 && rug.iter().all(|w| w.through.is_none()),
+        "{rug:?}"
+    );
+    // The rod: glass of arcs.
+    assert_eq!(plan.glass.len(), 1);
+    assert!(plan.glass[0].through.iter().all(Option::is_some));
+    assert_eq!(plan.glass[0].through.len(), plan.glass[0].points.len());
+    // The scene loads and holds the arcs as arcs.
+    let loaded = scene_of(&plan);
+    let arcs = loaded
+        .scene
+        .walls()
+        .iter()
+        .filter(|w| w.shape.as_arc().is_some())
+        .count();
+    assert!(arcs >= 4 + 4 + 2 + 4, "{arcs} arcs");
+    // No light gets into the round room from the lamp outside.
+    assert_dark_inside("round room", &plan, |p| {
+        p.distance(DVec2::new(80.0, 100.0)) < 57.0
+    });
+}
+
+/// A Tiled ellipse object whose width is its height is a circle of two
+/// arcs (glass too, by its material), turned with its object; one that
+/// is not is a polygon, with a warning.
+#[test]
+fn tiled_ellipses_become_circles_or_polygons() {
+    let dir = TempDir::new("tiled-ellipses");
+    let path = dir.write(
+        "round.tmx",
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<map version="1.10" orientation="orthogonal" width="20" height="15" tilewidth="16" tileheight="16">
+ <objectgroup id="1" name="walls">
+  <object id="1" name="column" x="100" y="50" width="40" height="40" rotation="30"><ellipse/></object>
+  <object id="2" name="rod" x="200" y="100" width="20" height="20"><properties><property name="material" value="glass"/></properties><ellipse/></object>
+  <object id="3" name="rug" x="40" y="150" width="60" height="20"><ellipse/></object>
+ </objectgroup>
+ <objectgroup id="2" name="lights">
+  <object id="4" name="lamp" x="20" y="20"><point/></object>
+ </objectgroup>
+</map>"#,
+    );
+    let plan = imported(&path, &ImportOptions::default());
+    let column: Vec<_> = plan
+        .walls
+        .iter()
+        .filter(|w| w.source.contains("column"))
+        .collect();
+    assert_eq!(column.len(), 2, "{column:?}");
+    // The circle's centre: the box's centre turned 30 degrees about the
+    // object's position.
+    let (s, c) = 30f64.to_radians().sin_cos();
+    let centre = DVec2::new(100.0 + 20.0 * c - 20.0 * s, 50.0 + 20.0 * s + 20.0 * c);
+    for w in &column {
+        let m = w.through.expect("an arc");
+        for p in [w.a, w.b, m] {
+            assert!(
+                (p.distance(centre) - 20.0).abs() < 1e-9,
+                "{p} off the circle"
+            );
+        }
+    }
+    assert_eq!(plan.glass.len(), 1);
+    assert_eq!(plan.glass[0].points.len(), 2);
+    let rug: Vec<_> = plan
+        .walls
+        .iter()
+        .filter(|w| w.source.contains("rug"))
+        .collect();
+    assert!(rug.len() >= 8 && rug.iter().all(|w| w.through.is_none()));
+    assert!(
+        plan.warnings
+            .iter()
+            .any(|w| w.contains("rug") && w.contains("not a circle")),
+        "{:?}",
+        plan.warnings
+    );
+    scene_of(&plan);
+}

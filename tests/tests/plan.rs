@@ -28,6 +28,7 @@ fn plans_of_the_example_scenes() {
         "lens",
         "prism",
         "first-flat",
+        "round-room",
     ] {
         insta::assert_snapshot!(format!("plan-{name}"), plan_of_file(name));
     }

@@ -304,6 +304,34 @@ struct Emitter {
     cumulative: Vec<f64>,
 }
 
+/// Segments whose apertures hold every direction that meets `shape`: the
+/// segment itself; for an arc, the two tangents of each piece of at most
+/// an eighth of a turn, from its ends to where they meet (the piece lies
+/// in that triangle, so a ray that meets it crosses them). Apertures may
+/// overlap: a photon's density counts every aperture that holds it.
+fn covering(shape: &flatray_geometry::Shape) -> impl Iterator<Item = Segment> + use<> {
+    use flatray_geometry::Shape;
+    let mut out = Vec::new();
+    match shape {
+        Shape::Segment(s) => out.push(*s),
+        Shape::Arc(arc) => {
+            let pieces = (arc.sweep / std::f64::consts::FRAC_PI_4).ceil().max(1.0) as usize;
+            let half = 0.5 * arc.sweep / pieces as f64;
+            for k in 0..pieces {
+                let (u0, u1) = (k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64);
+                let (p, q) = (arc.point_at(u0), arc.point_at(u1));
+                let mid = arc.point_at(0.5 * (u0 + u1));
+                // Where the tangents at `p` and `q` meet: along the
+                // middle's radius, at `r / cos(half)`.
+                let apex = arc.center + (mid - arc.center) / half.cos();
+                out.push(Segment::new(p, apex));
+                out.push(Segment::new(apex, q));
+            }
+        }
+    }
+    out.into_iter()
+}
+
 /// Parts of an aperture tested for whether a diffuse wall hides the target.
 const APERTURE_PARTS: usize = 64;
 
@@ -329,7 +357,7 @@ fn reaching(scene: &Scene, aperture: &Aperture, target: u32) -> Vec<Aperture> {
                 .closest_hit(&ray, f64::INFINITY, Skip::NONE)?;
             // Where the ray meets the target's line (an edge ray aims at
             // its end, and may pass it by a rounding).
-            let s = &scene.walls[target as usize].segment;
+            let s = &scene.walls[target as usize].shape.chord();
             let (e, denom) = (s.edge(), dir.perp_dot(s.edge()));
             let beyond = (s.a - origin).perp_dot(e) / denom;
             if !(beyond.is_finite() && beyond > 0.0) {
@@ -423,11 +451,18 @@ pub(crate) fn trace_caustics(
                 Some(whole) => vec![whole],
                 None => targets
                     .iter()
-                    .filter_map(|&t| {
-                        let target = &scene.walls[t as usize].segment;
-                        light.shape.aperture(scene, target).map(|a| (a, t))
+                    .flat_map(|&t| {
+                        let shape = scene.walls[t as usize].shape;
+                        covering(&shape).filter_map(move |target| {
+                            let aperture = light.shape.aperture(scene, &target)?;
+                            Some((aperture, t, shape.as_arc().is_some()))
+                        })
                     })
-                    .flat_map(|(a, t)| reaching(scene, &a, t))
+                    .flat_map(|(a, t, arc)| {
+                        // An arc's apertures are kept whole: the test of
+                        // what hides a target takes its line.
+                        if arc { vec![a] } else { reaching(scene, &a, t) }
+                    })
                     .collect(),
             };
             let mut sum = 0.0;

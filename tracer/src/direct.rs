@@ -96,10 +96,7 @@ pub(crate) fn glossy_emission_weight(
     (x, wall): (DVec2, u32),
     pdf: f64,
 ) -> f64 {
-    if light
-        .shape
-        .grazes(wall, &scene.walls[wall as usize].segment)
-    {
+    if light.shape.grazes(wall, &scene.walls[wall as usize].shape) {
         return 1.0;
     }
     power_heuristic(pdf, light.shape.pdf_towards(x))

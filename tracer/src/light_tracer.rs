@@ -285,9 +285,12 @@ pub(crate) fn follow_photon(
         // The medium of this flight: known exactly when it ends at a glass
         // edge reached from inside, else the tracked state.
         let body = match hit {
-            Some((index, _)) => {
+            Some((index, h)) => {
                 let wall = &scene.walls[index as usize];
-                let arrival = wall.segment.arrival_side(ray.dir).unwrap_or(Side::Positive);
+                let arrival = wall
+                    .shape
+                    .arrival_side(ray.at(h.t), ray.dir)
+                    .unwrap_or(Side::Positive);
                 glass.flight_body(&wall.material, arrival)
             }
             None => glass.inside,
@@ -318,8 +321,8 @@ pub(crate) fn follow_photon(
             return;
         }
         let wall = &scene.walls[index as usize];
-        let x = wall.segment.point_at(h.u);
-        let Some(side) = wall.segment.arrival_side(ray.dir) else {
+        let x = wall.shape.point_at(h.u);
+        let Some(side) = wall.shape.arrival_side(x, ray.dir) else {
             stats.physics.paths_escaped += 1;
             return;
         };
@@ -368,7 +371,7 @@ pub(crate) fn follow_photon(
         // Photons carry power, which refraction conserves.
         let scattered = bsdf.sample(
             scene,
-            (ray.dir, wall.segment.normal_on(side), side),
+            (ray.dir, wall.shape.normal_on(side, x), side),
             Sampling::Cosine,
             Transport::Power,
             &mut glass,

@@ -7,7 +7,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use flatray_cache::{Value, WallMemo};
-use flatray_geometry::{Ray, Side, Skip};
+use flatray_geometry::Side;
 
 use crate::lights::{Receiver, Visibility, light_contribution, through_mirrors_of};
 use crate::options::MemoOptions;
@@ -37,7 +37,7 @@ pub(crate) fn wall_memo_bytes(
             bytes += per_bin;
             continue;
         }
-        let bins = (w.segment.length() / bin_length).ceil();
+        let bins = (w.shape.length() / bin_length).ceil();
         if !(bins.is_finite() && bins < budget as f64) {
             return None;
         }
@@ -45,18 +45,10 @@ pub(crate) fn wall_memo_bytes(
         if bytes > budget {
             return None;
         }
-        let along = Ray::new(w.segment.a, w.segment.edge());
-        let mut over = false;
-        scene
-            .segments
-            .for_each_crossing(&along, 1.0, Skip::one(index as u32), |_, hit| {
-                if hit.t > 0.0 {
-                    // A junction starts a span: at most one more bin.
-                    bytes += per_bin + SPAN_BYTES;
-                    over = bytes > budget;
-                }
-                !over
-            });
+        // A junction starts a span: at most one more bin.
+        let junctions = scene.junctions_of(index as u32).len() as u64;
+        bytes = bytes.saturating_add(junctions.saturating_mul(per_bin + SPAN_BYTES));
+        let over = bytes > budget;
         if over {
             return None;
         }
@@ -91,9 +83,9 @@ pub(crate) fn build_wall_memo(
                 return [0.0; 3];
             }
             let side = Side::of_index(side);
-            let x = w.segment.point_at(u);
+            let x = w.shape.point_at(u);
             let receiver = Receiver {
-                normal: Some(w.segment.normal_on(side)),
+                normal: Some(w.shape.normal_on(side, x)),
                 wall: Some(wall),
                 shadow_walls: None,
             };

@@ -114,8 +114,8 @@ pub(crate) fn build_onward(
                 let mut stream = Stream::new(seed, key, ONWARD_STREAM + k as u64);
                 // Stratum k of K over the half circle's cosine measure.
                 let fraction = (k as f64 + stream.uniform()) / gathers as f64;
-                let x = w.segment.point_at(u);
-                let dir = cosine_half_circle(w.segment.normal_on(side_of), fraction);
+                let x = w.shape.point_at(u);
+                let dir = cosine_half_circle(w.shape.normal_on(side_of, x), fraction);
                 let leg = Leg {
                     throughput: Rgb::ONE,
                     bounce: bounces - m,

@@ -248,7 +248,8 @@ pub(crate) fn follow(
             break;
         };
         let wall = &scene.walls[index as usize];
-        let Some(side) = wall.segment.arrival_side(ray.dir) else {
+        let x = wall.shape.point_at(h.u);
+        let Some(side) = wall.shape.arrival_side(x, ray.dir) else {
             // A crossing implies the ray is not parallel to the wall.
             stats.physics.paths_escaped += 1;
             break;
@@ -260,7 +261,6 @@ pub(crate) fn follow(
             stats.physics.paths_absorbed += 1;
             break;
         }
-        let x = wall.segment.point_at(h.u);
         unfolded += h.t;
         if !scene.glass.is_empty() {
             // Times exactly 1 in a scene without glass.
@@ -291,7 +291,7 @@ pub(crate) fn follow(
             diffuse += 1;
         }
         // Computed where a branch needs it: a memo read does not.
-        let normal = || wall.segment.normal_on(side);
+        let normal = || wall.shape.normal_on(side, x);
         if let Some(rho) = bsdf.lambertian() {
             // Next-event estimation, at the one non-specular BSDF: f E,
             // with f = rho / 2 and 2pi already in the throughput. The memo

@@ -7,7 +7,7 @@
 //! It never decides what a material does: it only counts the events the
 //! integrators report.
 
-use flatray_geometry::{Segment, Side};
+use flatray_geometry::{Segment, Shape, Side};
 
 use crate::sampling::Stream;
 use crate::scene::Scene;
@@ -165,9 +165,12 @@ pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
         return vec![true; 2 * walls.len()];
     }
     let tolerance = |s: &Segment| 1e-9 * s.a.abs().max(s.b.abs()).max_element().max(1.0);
-    // Whether segment `t` reaches into the half-plane of side `side` of
-    // segment `s`.
-    let in_front = |s: &Segment, side: Side, t: &Segment| {
+    // Whether wall `t` reaches into the half-plane of side `side` of
+    // wall `s`; always, where either is an arc (which curves to both).
+    let in_front = |s: &Shape, side: Side, t: &Shape| {
+        let (Shape::Segment(s), Shape::Segment(t)) = (s, t) else {
+            return true;
+        };
         let n = s.normal_on(side);
         let tol = tolerance(s).max(tolerance(t));
         (t.a - s.a).dot(n).max((t.b - s.a).dot(n)) > -tol
@@ -176,10 +179,9 @@ pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
     let lit: Vec<[bool; 2]> = specular
         .iter()
         .map(|&m| {
-            let ms = &walls[m].segment;
-            if walls[m].material.is_glass() {
+            let (true, Some(ms)) = (!walls[m].material.is_glass(), walls[m].as_segment()) else {
                 return [true; 2];
-            }
+            };
             [Side::Positive, Side::Negative].map(|side| {
                 let n = ms.normal_on(side);
                 scene
@@ -188,7 +190,7 @@ pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
                     .any(|l| l.shape.reaches_in_front(ms.a, n, tolerance(ms)))
                     || specular
                         .iter()
-                        .any(|&o| o != m && in_front(ms, side, &walls[o].segment))
+                        .any(|&o| o != m && in_front(&walls[m].shape, side, &walls[o].shape))
             })
         })
         .collect();
@@ -197,10 +199,10 @@ pub(crate) fn last_leg_sides(scene: &Scene) -> Vec<bool> {
         if !wall.material.is_diffuse() {
             continue;
         }
-        let ws = &wall.segment;
+        let ws = &wall.shape;
         for side in [Side::Positive, Side::Negative] {
             sides[2 * w + side.index()] = specular.iter().zip(&lit).any(|(&m, lit)| {
-                let ms = &walls[m].segment;
+                let ms = &walls[m].shape;
                 in_front(ws, side, ms)
                     && [Side::Positive, Side::Negative]
                         .iter()
@@ -224,7 +226,7 @@ mod tests {
     #[test]
     fn last_legs_only_where_a_mirror_can_send_a_light_back() {
         let wall = |a: (f64, f64), b: (f64, f64), material| Wall {
-            segment: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)),
+            shape: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)).into(),
             material,
         };
         let diffuse = Material::Diffuse { albedo: None };
@@ -263,7 +265,7 @@ mod tests {
         .expect("a valid scene");
         let sides = last_leg_sides(&scene);
         let facing = |w: usize, towards: DVec2| {
-            let s = &scene.walls[w].segment;
+            let s = &scene.walls[w].shape.chord();
             let side = if s.normal().dot(towards) > 0.0 {
                 Side::Positive
             } else {
@@ -283,7 +285,7 @@ mod tests {
         let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, vec![light])
             .expect("a valid scene");
         let sides = last_leg_sides(&scene);
-        let s = &scene.walls[2].segment;
+        let s = &scene.walls[2].shape.chord();
         let towards_mirror = if s.normal().dot(right) > 0.0 {
             Side::Positive
         } else {

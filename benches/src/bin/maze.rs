@@ -26,7 +26,7 @@ fn main() {
         .into_iter()
         .enumerate()
         .map(|(i, segment)| Wall {
-            segment,
+            shape: segment.into(),
             material: Material::Diffuse {
                 albedo: Some(if i % 3 == 0 {
                     Rgb::new(0.8, 0.3, 0.2)

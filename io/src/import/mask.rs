@@ -74,6 +74,7 @@ pub(super) fn read(
             walls.push(ImportedWall {
                 a,
                 b,
+                through: None,
                 kind: WallKind::Diffuse(None),
                 emit: None,
                 source: format!("outline {k}"),

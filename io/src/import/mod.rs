@@ -77,6 +77,9 @@ pub enum WallKind {
 pub struct ImportedWall {
     pub a: DVec2,
     pub b: DVec2,
+    /// A point the wall passes through between its ends, where it is a
+    /// circular arc.
+    pub through: Option<DVec2>,
     pub kind: WallKind,
     /// Light the wall emits: colour (linear) and intensity.
     pub emit: Option<([f64; 3], f64)>,
@@ -106,6 +109,9 @@ pub enum ImportedLight {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportedGlass {
     pub points: Vec<DVec2>,
+    /// Per edge (from point `i` to the next), the point an arc edge passes
+    /// through; empty for a polygon.
+    pub through: Vec<Option<DVec2>>,
     pub ior: f64,
     pub source: String,
 }
@@ -257,7 +263,11 @@ fn cut_openings(imported: &mut Imported, tolerance: f64) {
     use flatray_geometry::{Segment, overlap};
     let walls = std::mem::take(&mut imported.walls);
     let segments: Vec<Segment> = walls.iter().map(|w| Segment::new(w.a, w.b)).collect();
-    let is_opening = |w: &ImportedWall| matches!(w.kind, WallKind::Pane(_) | WallKind::Door);
+    // An arc is neither cut nor an opening: only straight walls lie
+    // along each other.
+    let is_opening = |w: &ImportedWall| {
+        w.through.is_none() && matches!(w.kind, WallKind::Pane(_) | WallKind::Door)
+    };
     let openings: Vec<usize> = (0..walls.len())
         .filter(|&i| is_opening(&walls[i]))
         .collect();
@@ -277,7 +287,7 @@ fn cut_openings(imported: &mut Imported, tolerance: f64) {
     let mut cut: Vec<Option<Vec<ImportedWall>>> = vec![None; walls.len()];
     let mut on_a_wall = vec![false; walls.len()];
     for host in 0..walls.len() {
-        if is_opening(&walls[host]) || walls[host].emit.is_some() {
+        if is_opening(&walls[host]) || walls[host].emit.is_some() || walls[host].through.is_some() {
             continue;
         }
         let on_it: Vec<usize> = openings
@@ -380,6 +390,32 @@ pub(crate) fn parse_hex_color(text: &str) -> Option<[f64; 3]> {
         _ => return None,
     };
     Some(linear(rgb))
+}
+
+/// The edges of an outline with the point each arc edge passes through
+/// (`through[i]` for the edge from point `i`; `None`, or missing, for a
+/// straight one), and its closing edge when closed; none of zero length.
+pub(crate) fn arc_edges(
+    points: &[DVec2],
+    through: &[Option<DVec2>],
+    closed: bool,
+) -> Vec<(DVec2, DVec2, Option<DVec2>)> {
+    let n = points.len();
+    let count = if closed && n > 2 || (closed && n == 2 && through.iter().any(Option::is_some)) {
+        n
+    } else {
+        n.saturating_sub(1)
+    };
+    (0..count)
+        .map(|i| {
+            (
+                points[i],
+                points[(i + 1) % n],
+                through.get(i).copied().flatten(),
+            )
+        })
+        .filter(|(a, b, _)| a != b)
+        .collect()
 }
 
 /// The edges of a polyline, and its closing edge when closed; none of
@@ -539,8 +575,11 @@ impl Imported {
             let emit = wall.emit.map_or(String::new(), |(c, i)| {
                 format!(", emit: (color: {}, intensity: {})", color(c), number(i))
             });
+            let through = wall
+                .through
+                .map_or(String::new(), |m| format!(", through: {}", point(m)));
             out.push_str(&format!(
-                "        Wall(a: {}, b: {}{material}{emit}), // {}\n",
+                "        Wall(a: {}{through}, b: {}{material}{emit}), // {}\n",
                 point(wall.a),
                 point(wall.b),
                 comment(&wall.source)
@@ -582,8 +621,18 @@ impl Imported {
             out.push_str("    glass: [\n");
             for body in &self.glass {
                 let points: Vec<String> = body.points.iter().map(|&p| point(p)).collect();
+                let through = if body.through.iter().any(Option::is_some) {
+                    let each: Vec<String> = body
+                        .through
+                        .iter()
+                        .map(|m| m.map_or("None".to_string(), |m| format!("Some({})", point(m))))
+                        .collect();
+                    format!(", through: [{}]", each.join(", "))
+                } else {
+                    String::new()
+                };
                 out.push_str(&format!(
-                    "        Glass(points: [{}], ior: {}), // {}\n",
+                    "        Glass(points: [{}]{through}, ior: {}), // {}\n",
                     points.join(", "),
                     number(body.ior),
                     comment(&body.source)

@@ -155,6 +155,83 @@ pub(super) fn read(
     Ok(reader.imported)
 }
 
+/// One subpath of a drawing's path, in world units.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Subpath {
+    points: Vec<DVec2>,
+    /// Per edge (from point `i` to the next, the last one closing a closed
+    /// subpath), the point an arc passes through; `None` for a segment.
+    through: Vec<Option<DVec2>>,
+    closed: bool,
+}
+
+impl Subpath {
+    fn at(start: DVec2) -> Subpath {
+        Subpath {
+            points: vec![start],
+            ..Subpath::default()
+        }
+    }
+
+    fn last(&self) -> DVec2 {
+        self.points.last().copied().unwrap_or_default()
+    }
+
+    fn push(&mut self, to: DVec2, through: Option<DVec2>) {
+        self.points.push(to);
+        self.through.push(through);
+    }
+
+    /// Leaves out edges of no length (a point repeated).
+    fn drop_repeats(&mut self) {
+        let n = self.points.len();
+        let mut points: Vec<DVec2> = Vec::with_capacity(n);
+        let mut through = Vec::with_capacity(n);
+        for (k, &p) in self.points.iter().enumerate() {
+            if k > 0 {
+                if points.last() == Some(&p) {
+                    continue;
+                }
+                through.push(self.through.get(k - 1).copied().flatten());
+            }
+            points.push(p);
+        }
+        if self.closed {
+            if points.len() > 1 && points.last() == points.first() {
+                // The edge into the repeated first point closes it.
+                points.pop();
+            } else {
+                through.push(self.through.get(n.wrapping_sub(1)).copied().flatten());
+            }
+        }
+        self.points = points;
+        self.through = through;
+    }
+
+    /// Its edges: ends, and the point an arc passes through.
+    fn edges(&self) -> Vec<(DVec2, DVec2, Option<DVec2>)> {
+        super::arc_edges(&self.points, &self.through, self.closed)
+    }
+}
+
+/// Where a cubic curve `at(t)`, `t` from 0 to 1, is a circular arc to
+/// within `tolerance` (its points at eighths of `t` within that of the
+/// circle through its ends and middle, and it turns less than half a
+/// circle): its middle, the point the arc passes through.
+fn circular(at: impl Fn(f64) -> DVec2, tolerance: f64) -> Option<DVec2> {
+    let (from, middle, to) = (at(0.0), at(0.5), at(1.0));
+    let arc = flatray_geometry::Arc::through(from, middle, to).ok()?;
+    if arc.sweep > std::f64::consts::PI {
+        return None;
+    }
+    (1..8)
+        .all(|k| {
+            let p = at(k as f64 / 8.0);
+            (p.distance(arc.center) - arc.radius).abs() <= tolerance
+        })
+        .then_some(middle)
+}
+
 struct Reader<'a> {
     options: &'a ImportOptions,
     attributes: HashMap<String, HashMap<String, String>>,
@@ -215,11 +292,17 @@ impl Reader<'_> {
         self.imported.floor_file = Some((name, bytes));
     }
 
-    /// The subpaths of `p` in world units, curves flattened: each with
-    /// whether it is closed.
-    fn subpaths(&self, p: &usvg::Path) -> Vec<(Vec<DVec2>, bool)> {
+    /// The subpaths of `p` in world units: each with the point each edge
+    /// passes through where it is a circular arc, and whether it is
+    /// closed. A cubic curve that is a circular arc to within the
+    /// tolerance (usvg draws a `<circle>`, a round `<ellipse>` and a path's
+    /// `A` command as such cubics, a quarter turn at most each) becomes an
+    /// arc where `arcs` allows; any other curve is flattened into
+    /// segments, each within the tolerance of it.
+    fn subpaths(&self, p: &usvg::Path, arcs: bool) -> Vec<Subpath> {
         let transform = p.abs_transform();
         let scale = self.options.scale;
+        let tolerance = self.options.tolerance * scale;
         let world = |pt: usvg::tiny_skia_path::Point| {
             let mut q = [pt];
             transform.map_points(&mut q);
@@ -240,67 +323,74 @@ impl Reader<'_> {
                     }
                 })
                 .fold(0.0, f64::max);
-            let tolerance = self.options.tolerance * scale;
             ((stray / tolerance).sqrt().ceil() as usize).clamp(1, 256)
         };
-        let mut out: Vec<(Vec<DVec2>, bool)> = Vec::new();
-        let mut current: Vec<DVec2> = Vec::new();
+        let mut out: Vec<Subpath> = Vec::new();
+        let mut current = Subpath::default();
         for segment in p.data().segments() {
             match segment {
                 PathSegment::MoveTo(pt) => {
-                    if current.len() > 1 {
-                        out.push((std::mem::take(&mut current), false));
+                    if current.points.len() > 1 {
+                        out.push(std::mem::take(&mut current));
                     }
-                    current = vec![world(pt)];
+                    current = Subpath::at(world(pt));
                 }
-                PathSegment::LineTo(pt) => current.push(world(pt)),
+                PathSegment::LineTo(pt) => current.push(world(pt), None),
                 PathSegment::QuadTo(c, pt) => {
-                    let from = current.last().copied().unwrap_or(DVec2::ZERO);
+                    let from = current.last();
                     let (c, to) = (world(c), world(pt));
                     let n = pieces(from, &[c], to);
                     for k in 1..n {
                         let t = k as f64 / n as f64;
                         let s = 1.0 - t;
-                        current.push(from * (s * s) + c * (2.0 * s * t) + to * (t * t));
+                        current.push(from * (s * s) + c * (2.0 * s * t) + to * (t * t), None);
                     }
-                    current.push(to);
+                    current.push(to, None);
                 }
                 PathSegment::CubicTo(c1, c2, pt) => {
-                    let from = current.last().copied().unwrap_or(DVec2::ZERO);
+                    let from = current.last();
                     let (c1, c2, to) = (world(c1), world(c2), world(pt));
+                    let cubic = |t: f64| {
+                        let s = 1.0 - t;
+                        from * (s * s * s)
+                            + c1 * (3.0 * s * s * t)
+                            + c2 * (3.0 * s * t * t)
+                            + to * (t * t * t)
+                    };
+                    if let Some(middle) = arcs.then(|| circular(cubic, tolerance)).flatten() {
+                        current.push(to, Some(middle));
+                        continue;
+                    }
                     let n = pieces(from, &[c1, c2], to);
                     for k in 1..n {
-                        let t = k as f64 / n as f64;
-                        let s = 1.0 - t;
-                        current.push(
-                            from * (s * s * s)
-                                + c1 * (3.0 * s * s * t)
-                                + c2 * (3.0 * s * t * t)
-                                + to * (t * t * t),
-                        );
+                        current.push(cubic(k as f64 / n as f64), None);
                     }
-                    current.push(to);
+                    current.push(to, None);
                 }
                 PathSegment::Close => {
-                    if let (Some(&first), Some(&last)) = (current.first(), current.last())
-                        && first == last
-                    {
-                        current.pop();
+                    current.closed = true;
+                    if current.points.len() > 1 && current.points.first() == current.points.last() {
+                        // The last edge ends where the path began: it is
+                        // the closing edge, arc or not.
+                        current.points.pop();
+                    } else {
+                        current.through.push(None);
                     }
-                    if current.len() > 1 {
-                        let first = current[0];
-                        out.push((std::mem::take(&mut current), true));
-                        current = vec![first];
+                    if current.points.len() > 1 {
+                        let first = current.points[0];
+                        out.push(std::mem::replace(&mut current, Subpath::at(first)));
+                    } else {
+                        current = Subpath::at(current.points.first().copied().unwrap_or_default());
                     }
                 }
             }
         }
-        if current.len() > 1 {
-            out.push((current, false));
+        if current.points.len() > 1 {
+            out.push(current);
         }
-        // Repeated points make no wall.
-        for (points, _) in &mut out {
-            points.dedup();
+        // Repeated points make no edge.
+        for subpath in &mut out {
+            subpath.drop_repeats();
         }
         out
     }
@@ -318,10 +408,13 @@ impl Reader<'_> {
         } else {
             id.to_string()
         };
-        let subpaths = self.subpaths(p);
+        // Arcs make walls and glass; a light or an emitting wall is
+        // straight.
+        let arcs = !matches!(mark, Mark::Light | Mark::Emit | Mark::Lamp);
+        let subpaths = self.subpaths(p, arcs);
         match mark {
             Mark::Lamp => {
-                let points: Vec<DVec2> = subpaths.iter().flat_map(|(s, _)| s.clone()).collect();
+                let points: Vec<DVec2> = subpaths.iter().flat_map(|s| s.points.clone()).collect();
                 if points.is_empty() {
                     return;
                 }
@@ -337,8 +430,8 @@ impl Reader<'_> {
                 });
             }
             Mark::Light => {
-                for (points, closed) in &subpaths {
-                    for (a, b) in edges(points, *closed) {
+                for subpath in &subpaths {
+                    for (a, b) in edges(&subpath.points, subpath.closed) {
                         self.imported.lights.push(ImportedLight::Line {
                             a,
                             b,
@@ -350,16 +443,23 @@ impl Reader<'_> {
                 }
             }
             Mark::Glass => {
-                for (points, closed) in &subpaths {
-                    if *closed && points.len() >= 3 {
+                for subpath in &subpaths {
+                    let arcs = subpath.through.iter().any(Option::is_some);
+                    let enough = subpath.points.len() >= 3 || (arcs && subpath.points.len() == 2);
+                    if subpath.closed && enough {
                         self.imported.glass.push(ImportedGlass {
-                            points: points.clone(),
+                            points: subpath.points.clone(),
+                            through: if arcs {
+                                subpath.through.clone()
+                            } else {
+                                Vec::new()
+                            },
                             ior: self.number(id, "ior").unwrap_or(1.5),
                             source: source.clone(),
                         });
                     } else {
                         self.imported.warnings.push(format!(
-                            "{source}: a glass body must be a closed shape of at least 3 points"
+                            "{source}: a glass body must be a closed shape of at least 3 points, or 2 joined by arcs"
                         ));
                     }
                 }
@@ -382,11 +482,12 @@ impl Reader<'_> {
                 } else {
                     kind
                 };
-                for (points, closed) in &subpaths {
-                    for (a, b) in edges(points, *closed) {
+                for subpath in &subpaths {
+                    for (a, b, through) in subpath.edges() {
                         self.imported.walls.push(ImportedWall {
                             a,
                             b,
+                            through,
                             kind,
                             emit,
                             source: source.clone(),

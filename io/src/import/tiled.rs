@@ -10,7 +10,8 @@ use serde_json::Value;
 
 use super::{
     ImportError, ImportOptions, Imported, ImportedFloor, ImportedGlass, ImportedLight,
-    ImportedWall, LAMP_INTENSITY, LINE_INTENSITY, WallKind, edges, invalid, parse_hex_color,
+    ImportedWall, LAMP_INTENSITY, LINE_INTENSITY, WallKind, arc_edges, edges, invalid,
+    parse_hex_color,
 };
 
 /// The shape of a Tiled object.
@@ -20,7 +21,10 @@ enum Shape {
     Polygon(Vec<DVec2>),
     Polyline(Vec<DVec2>),
     Point,
-    /// Ellipses, text, tiles: not imported.
+    /// An ellipse in the object's box: a circle becomes two arcs, any
+    /// other ellipse a polygon within the tolerance.
+    Ellipse,
+    /// Text, tiles: not imported.
     Other(&'static str),
 }
 
@@ -50,8 +54,31 @@ impl Object {
 
     /// The object's outline in map pixels: its points turned about
     /// `(x, y)` and placed there; with whether it is closed.
-    fn outline(&self) -> Option<(Vec<DVec2>, bool)> {
+    /// Its outline in the map's units: points, the point each edge passes
+    /// through where it is an arc (empty for none), and whether it is
+    /// closed. An ellipse that is not a circle is a polygon whose edges
+    /// stray at most `tolerance` from it.
+    fn outline(&self, tolerance: f64) -> Option<(Vec<DVec2>, Vec<Option<DVec2>>, bool)> {
+        let mut through = Vec::new();
         let (local, closed) = match &self.shape {
+            Shape::Ellipse if self.width == self.height && self.width > 0.0 => {
+                // Two half circles, from the left end to the right one
+                // through the top, and back through the bottom.
+                let (w, h) = (self.width, self.height);
+                through = vec![Some(DVec2::new(0.5 * w, 0.0)), Some(DVec2::new(0.5 * w, h))];
+                (vec![DVec2::new(0.0, 0.5 * h), DVec2::new(w, 0.5 * h)], true)
+            }
+            Shape::Ellipse => {
+                let (rx, ry) = (0.5 * self.width, 0.5 * self.height);
+                let n = ellipse_sides(rx.max(ry), tolerance);
+                let points = (0..n)
+                    .map(|k| {
+                        let a = std::f64::consts::TAU * k as f64 / n as f64;
+                        DVec2::new(rx + rx * a.cos(), ry + ry * a.sin())
+                    })
+                    .collect();
+                (points, true)
+            }
             Shape::Rectangle => (
                 vec![
                     DVec2::ZERO,
@@ -68,17 +95,16 @@ impl Object {
         };
         let (s, c) = self.rotation.to_radians().sin_cos();
         let origin = DVec2::new(self.x, self.y);
-        let placed = local
-            .into_iter()
-            .map(|p| {
-                if self.rotation == 0.0 {
-                    origin + p
-                } else {
-                    origin + DVec2::new(c * p.x - s * p.y, s * p.x + c * p.y)
-                }
-            })
-            .collect();
-        Some((placed, closed))
+        let place = |p: DVec2| {
+            if self.rotation == 0.0 {
+                origin + p
+            } else {
+                origin + DVec2::new(c * p.x - s * p.y, s * p.x + c * p.y)
+            }
+        };
+        let placed = local.into_iter().map(place).collect();
+        let through = through.into_iter().map(|m| m.map(place)).collect();
+        Some((placed, through, closed))
     }
 
     fn number(&self, name: &str) -> Option<f64> {
@@ -210,7 +236,7 @@ fn tmx_object(
             "polygon" => shape = Shape::Polygon(points(child)),
             "polyline" => shape = Shape::Polyline(points(child)),
             "point" => shape = Shape::Point,
-            "ellipse" => shape = Shape::Other("ellipse"),
+            "ellipse" => shape = Shape::Ellipse,
             "text" => shape = Shape::Other("text"),
             "properties" => {
                 for p in child.children().filter(|n| n.has_tag_name("property")) {
@@ -350,7 +376,7 @@ fn json_object(o: &Value, offset: DVec2) -> Object {
     } else if flag("point") {
         Shape::Point
     } else if flag("ellipse") {
-        Shape::Other("ellipse")
+        Shape::Ellipse
     } else if o.get("text").is_some() {
         Shape::Other("text")
     } else if o.get("gid").is_some() {
@@ -389,6 +415,19 @@ fn json_object(o: &Value, offset: DVec2) -> Object {
     }
 }
 
+/// Sides of a polygon inscribed in a circle of `radius` whose edges stray
+/// at most `tolerance` from it: `r (1 - cos(pi / n)) <= tolerance`, from 8
+/// to 256.
+fn ellipse_sides(radius: f64, tolerance: f64) -> usize {
+    let ratio = (1.0 - tolerance / radius).clamp(-1.0, 1.0);
+    let n = std::f64::consts::PI / ratio.acos();
+    if n.is_finite() {
+        (n.ceil() as usize).clamp(8, 256)
+    } else {
+        256
+    }
+}
+
 /// Walls from the walls layer, lights from the lights layer.
 fn build(
     map: Map,
@@ -416,7 +455,7 @@ fn build(
             continue;
         }
         for object in objects {
-            let Some((points, closed)) = object.outline() else {
+            let Some((points, through, closed)) = object.outline(options.tolerance) else {
                 if let Shape::Other(kind) = object.shape {
                     warnings.push(format!(
                         "{}: {kind} objects are not imported",
@@ -426,6 +465,14 @@ fn build(
                 continue;
             };
             let points: Vec<DVec2> = points.into_iter().map(world).collect();
+            let through: Vec<Option<DVec2>> = through.into_iter().map(|m| m.map(world)).collect();
+            if object.shape == Shape::Ellipse && through.is_empty() {
+                warnings.push(format!(
+                    "{}: an ellipse that is not a circle, imported as a polygon of {} sides within the tolerance",
+                    object.label(),
+                    points.len()
+                ));
+            }
             if points.is_empty() {
                 warnings.push(format!("{}: a shape without points", object.label()));
                 continue;
@@ -463,9 +510,10 @@ fn build(
                 continue;
             }
             if material == "glass" {
-                if closed && points.len() >= 3 {
+                if closed && (points.len() >= 3 || !through.is_empty()) {
                     glass.push(ImportedGlass {
                         points,
+                        through,
                         ior: object.number("ior").unwrap_or(1.5),
                         source: object.label(),
                     });
@@ -494,10 +542,27 @@ fn build(
                 .number("emit")
                 .filter(|&i| i > 0.0)
                 .map(|i| (colour.unwrap_or([1.0; 3]), i));
-            for (a, b) in edges(&points, closed) {
+            // An emitting wall is straight: a circle that emits becomes a
+            // polygon within the tolerance.
+            let (points, through) = if emit.is_some() && through.iter().any(Option::is_some) {
+                let n = ellipse_sides(0.5 * object.width.max(object.height), options.tolerance);
+                let c = points.iter().copied().sum::<DVec2>() / points.len() as f64;
+                let r = points[0].distance(c);
+                let ring = (0..n)
+                    .map(|k| {
+                        let a = std::f64::consts::TAU * k as f64 / n as f64;
+                        c + r * DVec2::new(a.cos(), a.sin())
+                    })
+                    .collect();
+                (ring, Vec::new())
+            } else {
+                (points, through)
+            };
+            for (a, b, through) in arc_edges(&points, &through, closed) {
                 walls.push(ImportedWall {
                     a,
                     b,
+                    through,
                     kind,
                     emit,
                     source: object.label(),

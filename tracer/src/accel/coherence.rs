@@ -156,7 +156,8 @@ fn light_states(
             .iter()
             .enumerate()
             .filter(move |(i, _)| own != Some(*i as u32))
-            .map(|(_, w)| w.segment)
+            // Straight walls only: the masks never run with arcs.
+            .map(|(_, w)| w.shape.chord())
     };
     let mut complete = true;
     for wall in walls() {
@@ -307,7 +308,7 @@ fn opaque_crossings(
             if !scene.stops_rays(index) {
                 return true;
             }
-            let edge = scene.walls[index as usize].segment.edge() / step;
+            let edge = scene.walls[index as usize].shape.chord().edge() / step;
             let sine = (cross(edge, dir_pixels) / (edge.length() * dir_length)).abs();
             let crossing = Hider {
                 wall: index,
@@ -592,6 +593,9 @@ pub(crate) fn supports(facts: &crate::accel::Facts) -> crate::accel::Decision {
     }
     if !facts.shadows {
         return Decision::skipped("no shadow rays");
+    }
+    if facts.arcs > 0 {
+        return Decision::skipped("curved walls: their shadow edges are not drawn");
     }
     if let Some(no) = Decision::allowed(facts.options, FastPath::Coherence, "coherence") {
         return no;

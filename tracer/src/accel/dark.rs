@@ -78,7 +78,10 @@ fn hidden_from_box(scene: &Scene, index: usize, corners: [DVec2; 4]) -> bool {
     scene
         .segments
         .for_each_crossing(&ray, t_max, skip, |wall, _| {
-            let segment = &scene.walls[wall as usize].segment;
+            // An arc is not taken to hide a cell: its shadow is no wedge.
+            let Some(segment) = scene.walls[wall as usize].as_segment() else {
+                return true;
+            };
             hidden = scene.stops_rays(wall)
                 && corners
                     .iter()
@@ -159,7 +162,7 @@ mod tests {
             DVec2::new(30.0 + cos * x - sin * y, 20.0 + sin * x + cos * y)
         };
         let wall = |a: (f64, f64), b: (f64, f64), material| Wall {
-            segment: Segment::new(turn(a.0, a.1), turn(b.0, b.1)),
+            shape: Segment::new(turn(a.0, a.1), turn(b.0, b.1)).into(),
             material,
         };
         let solid = Material::Diffuse { albedo: None };

@@ -55,7 +55,7 @@ impl MirrorArcs {
             .walls
             .iter()
             .filter(|w| diffuse(&w.material))
-            .map(|w| w.segment.length())
+            .map(|w| w.shape.length())
             .sum();
         let gather_piece = (GATHER_PIECE as f64 / scale).max(diffuse_length / MAX_GATHER_PIECES);
         let walls = scene
@@ -69,7 +69,11 @@ impl MirrorArcs {
                 } else {
                     return Vec::new();
                 };
-                let s = wall.segment;
+                // An arc's pieces are not straight: its rays take the
+                // whole set.
+                let Some(&s) = wall.as_segment() else {
+                    return Vec::new();
+                };
                 let pieces = (s.length() / piece).ceil();
                 let n = if pieces.is_finite() {
                     (pieces as usize).clamp(1, most)

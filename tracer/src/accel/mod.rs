@@ -69,6 +69,8 @@ impl Decision {
 pub(crate) struct Facts<'a> {
     pub options: &'a RenderOptions,
     pub walls: usize,
+    /// How many of the walls are circular arcs.
+    pub arcs: usize,
     pub lights: usize,
     pub mirrors: usize,
     pub floor_albedo_walls: usize,

@@ -39,7 +39,8 @@ pub(crate) fn memo_bounce(
     if u == 0.0 || u == 1.0 || (trace.memo_checks && flatray_cache::checked(index, u)) {
         return None;
     }
-    let side = wall.segment.arrival_side(dir)?;
+    let x = wall.shape.point_at(u);
+    let side = wall.shape.arrival_side(x, dir)?;
     if trace
         .last_leg_sides
         .is_some_and(|sides| sides.get(2 * index as usize + side.index()) != Some(&false))
@@ -50,7 +51,6 @@ pub(crate) fn memo_bounce(
     stats.work.bounce_rays += 1;
     stats.work.memo_lookups += 1;
     stats.physics.paths_bounce_limit += 1;
-    let x = wall.segment.point_at(u);
     let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
     // The path loop's own steps: the memo's read, the caustic bins, f E.
     let irradiance = add_caustics(

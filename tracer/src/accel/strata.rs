@@ -248,7 +248,7 @@ mod tests {
             ((5.0, 25.0), (15.0, 35.0)),
         ]
         .map(|((ax, ay), (bx, by))| Wall {
-            segment: Segment::new(DVec2::new(ax, ay), DVec2::new(bx, by)),
+            shape: Segment::new(DVec2::new(ax, ay), DVec2::new(bx, by)).into(),
             material: Material::Diffuse { albedo: None },
         })
         .to_vec();

@@ -93,7 +93,7 @@ pub(crate) fn light_contribution(
     if super::is_exact(&light.shape) {
         // A line or a circle: in closed form, with no sample (`u` unused).
         if let Some(w) = receiver.wall
-            && light.shape.grazes(w, &scene.walls[w as usize].segment)
+            && light.shape.grazes(w, &scene.walls[w as usize].shape)
         {
             return Rgb::ZERO;
         }
@@ -124,7 +124,7 @@ pub(crate) fn weighed_contribution(
 ) -> Rgb {
     let light = &scene.lights[index];
     if let Some(w) = receiver.wall
-        && light.shape.grazes(w, &scene.walls[w as usize].segment)
+        && light.shape.grazes(w, &scene.walls[w as usize].shape)
     {
         return Rgb::ZERO;
     }
@@ -255,14 +255,14 @@ mod tests {
                     0.3 + 0.01 * k as f64,
                 );
                 walls.push(Wall {
-                    segment: Segment::new(DVec2::new(x, -1.0), DVec2::new(x, 1.0)),
+                    shape: Segment::new(DVec2::new(x, -1.0), DVec2::new(x, 1.0)).into(),
                     material: Material::Transparent { tint },
                 });
             }
             for k in 0..40 {
                 let y = 3.0 + k as f64;
                 walls.push(Wall {
-                    segment: Segment::new(DVec2::new(0.0, y), DVec2::new(40.0, y + 0.5)),
+                    shape: Segment::new(DVec2::new(0.0, y), DVec2::new(40.0, y + 0.5)).into(),
                     material: Material::Diffuse { albedo: None },
                 });
             }

@@ -19,6 +19,11 @@
 //!   sine of the cosine's antiderivative) and by 12-point Gauss-Legendre in
 //!   the rim's angle, split where the falloff has a kink, for the others.
 //!
+//! An arc in front of a light is handled the same way: the places where
+//! its shadow can begin or end (the rays through its ends and tangent to
+//! its circle, and where it crosses the light) cut the light, and each
+//! piece is tested at its middle by the exact ray-arc crossing.
+//!
 //! The answer does not depend on a random number: next-event estimation
 //! with it has no variance from the light's sampling, only from where the
 //! receiver point is. `docs/model.md` ("Direct light in closed form")
@@ -26,7 +31,7 @@
 
 use std::cell::RefCell;
 
-use flatray_geometry::{DVec2, Ray, Segment, Skip, cross, intersect};
+use flatray_geometry::{Arc, DVec2, Ray, Segment, Shape, Skip, arc_crossings, cross, intersect};
 
 use super::{Receiver, Visibility};
 use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Scene};
@@ -125,9 +130,20 @@ pub(crate) fn exact_light(
                         let hull = [x, segment.a, segment.b];
                         find_walls(scene, index, receiver, &hull, scratch, stats);
                         scratch.covers.clear();
+                        let skip = receiver.skip(scene.light_wall[index]);
                         for &w in &scratch.walls {
-                            let segment = &scene.walls[w as usize].segment;
-                            line.cover(scene, w, segment, whole, &mut scratch.covers);
+                            match &scene.walls[w as usize].shape {
+                                Shape::Segment(segment) => {
+                                    line.cover(scene, w, segment, whole, &mut scratch.covers);
+                                }
+                                Shape::Arc(arc) => line.arc_cover(
+                                    scene,
+                                    (w, arc, skip),
+                                    whole,
+                                    &mut scratch.cuts,
+                                    &mut scratch.covers,
+                                ),
+                            }
                         }
                         sweep(whole, scratch);
                     }
@@ -168,10 +184,24 @@ pub(crate) fn exact_light(
                 }
                 if trace {
                     for &w in &scratch.walls {
-                        let s = &scene.walls[w as usize].segment;
-                        disk.cuts_by_line(s.a, s.b - s.a, cuts);
-                        disk.cuts_by_ray(x, s.a - x, cuts);
-                        disk.cuts_by_ray(x, s.b - x, cuts);
+                        match &scene.walls[w as usize].shape {
+                            Shape::Segment(s) => {
+                                disk.cuts_by_line(s.a, s.b - s.a, cuts);
+                                disk.cuts_by_ray(x, s.a - x, cuts);
+                                disk.cuts_by_ray(x, s.b - x, cuts);
+                            }
+                            Shape::Arc(arc) => {
+                                for p in arc_turning_points(arc, x) {
+                                    disk.cuts_by_ray(x, p - x, cuts);
+                                }
+                                for p in circles_meet(arc.center, arc.radius, at, radius)
+                                    .into_iter()
+                                    .flatten()
+                                {
+                                    disk.cuts_by_ray(x, p - x, cuts);
+                                }
+                            }
+                        }
                     }
                 }
                 cuts.retain(|t| *t >= whole.0 && *t <= whole.1);
@@ -280,7 +310,12 @@ pub(crate) fn through_mirrors_of(
         if receiver.wall == Some(m) {
             continue;
         }
-        let v = in_mirror(scene, index, m, &wall.segment, x, receiver, stats);
+        // The plan takes lights in mirrors in closed form only in scenes
+        // without arcs; flat mirrors are segments.
+        let Some(segment) = wall.as_segment() else {
+            continue;
+        };
+        let v = in_mirror(scene, index, m, segment, x, receiver, stats);
         sum += v * tint;
     }
     sum * light.color
@@ -426,7 +461,8 @@ fn in_mirror(
                     continue;
                 }
                 let wall = &scene.walls[w as usize];
-                let Some(front) = front_part(mirror, side, &wall.segment) else {
+                let Some(front) = wall.as_segment().and_then(|s| front_part(mirror, side, s))
+                else {
                     continue;
                 };
                 let image_of = Segment::new(
@@ -457,7 +493,9 @@ fn in_mirror(
             if w == m {
                 continue;
             }
-            let s = scene.walls[w as usize].segment;
+            let Some(&s) = scene.walls[w as usize].as_segment() else {
+                continue;
+            };
             let (a, b) = (reflect_point(mirror, s.a), reflect_point(mirror, s.b));
             for p in [s.a, s.b, a, b] {
                 view.cut_toward(p, cuts);
@@ -571,14 +609,16 @@ fn legs(scene: &Scene, walls: &[u32], (from, to): (DVec2, DVec2), skip: Skip) ->
     let ray = Ray::new(from, to - from);
     let mut through = Rgb::ONE;
     for &w in walls {
-        if skip.contains(w) {
-            continue;
-        }
         let wall = &scene.walls[w as usize];
-        if let Some(hit) = intersect(&ray, &wall.segment)
-            && hit.t > 0.0
-            && hit.t < 1.0
-        {
+        let crossings = match &wall.shape {
+            Shape::Segment(_) if skip.contains(w) => 0,
+            Shape::Segment(segment) => intersect(&ray, segment)
+                .is_some_and(|hit| hit.t > 0.0 && hit.t < 1.0)
+                .into(),
+            // A leg that leaves or reaches an arc can still cross it.
+            Shape::Arc(arc) => arc_crossings(&ray, arc, 1.0, skip.0 == w, skip.1 == w).1,
+        };
+        for _ in 0..crossings {
             match wall.material.pane_tint() {
                 Some(tint) => through *= tint,
                 None => return Rgb::ZERO,
@@ -606,9 +646,11 @@ fn find_walls(
     match receiver.walls_towards(index) {
         Some(list) => {
             stats.work.listed_shadow_rays += 1;
-            scratch
-                .walls
-                .extend(list.iter().copied().filter(|&w| !skip.contains(w)));
+            scratch.walls.extend(
+                list.iter()
+                    .copied()
+                    .filter(|&w| !skip.contains(w) || scene.segments.arc(w).is_some()),
+            );
         }
         None => {
             let (mut lo, mut hi) = (hull[0], hull[0]);
@@ -621,7 +663,8 @@ fn find_walls(
             scene
                 .segments
                 .for_each_in_box(lo - pad, hi + pad, query, |w| {
-                    if !skip.contains(w) {
+                    // An arc can hide light from a point on itself.
+                    if !skip.contains(w) || scene.segments.arc(w).is_some() {
                         walls.push(w);
                     }
                 });
@@ -835,6 +878,63 @@ impl LineView {
                 tint: scene.walls[w as usize].material.pane_tint(),
                 wall: w,
             });
+        }
+    }
+
+    /// Adds to `covers` the shadow that arc `w` casts on `within`: the
+    /// light cut where the arc's shadow can begin or end (the rays from
+    /// `x` through its ends and its tangent points, and where the arc
+    /// crosses the light), each piece tested at its middle by the exact
+    /// crossing, with `skip` (the receiver's and the light's walls) as
+    /// shadow rays take it. `cuts` is scratch.
+    fn arc_cover(
+        &self,
+        scene: &Scene,
+        (w, arc, skip): (u32, &Arc, Skip),
+        within: (f64, f64),
+        cuts: &mut Vec<f64>,
+        covers: &mut Vec<Cover>,
+    ) {
+        cuts.clear();
+        cuts.extend([within.0, within.1]);
+        let la = self.a - self.x;
+        for p in arc_turning_points(arc, self.x) {
+            // Where the line from `x` through `p` meets the light's line.
+            let e = p - self.x;
+            let s = -cross(e, la) / cross(e, self.edge);
+            if s.is_finite() {
+                cuts.push(s);
+            }
+        }
+        let along = Ray::new(self.a, self.edge);
+        let (roots, n) = arc.line_crossings(&along, false, None);
+        cuts.extend(roots[..n].iter().copied());
+        cuts.retain(|s| *s >= within.0 && *s <= within.1);
+        cuts.sort_unstable_by(f64::total_cmp);
+        cuts.dedup();
+        let tint = scene.walls[w as usize].material.pane_tint();
+        for k in 1..cuts.len() {
+            let (from, to) = (cuts[k - 1], cuts[k]);
+            if to <= from {
+                continue;
+            }
+            let mid = self.point(0.5 * (from + to));
+            let ray = Ray::new(self.x, mid - self.x);
+            let crossed = arc_crossings(&ray, arc, 1.0, skip.0 == w, skip.1 == w).1;
+            // A pane arc crossed twice tints twice: two covers.
+            for _ in 0..crossed {
+                match covers.last_mut() {
+                    Some(last) if last.wall == w && last.to == from && crossed == 1 => {
+                        last.to = to;
+                    }
+                    _ => covers.push(Cover {
+                        from,
+                        to,
+                        tint,
+                        wall: w,
+                    }),
+                }
+            }
         }
     }
 
@@ -1149,6 +1249,50 @@ impl DiskView {
     }
 }
 
+/// The points of `arc` where the view from `x` can turn: its ends, and
+/// its circle's tangent points from `x` that lie on it.
+fn arc_turning_points(arc: &Arc, x: DVec2) -> impl Iterator<Item = DVec2> {
+    let mut points = [None; 4];
+    if !arc.is_full() {
+        points[0] = Some(arc.a);
+        points[1] = Some(arc.b);
+    }
+    let f = x - arc.center;
+    let d2 = f.length_squared();
+    let r2 = arc.radius * arc.radius;
+    if d2 > r2 {
+        // The tangent points: at angle acos(r / d) either side of `f`.
+        let cos = arc.radius / d2.sqrt();
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let u = f / d2.sqrt();
+        for (k, s) in [sin, -sin].into_iter().enumerate() {
+            let dir = DVec2::new(u.x * cos - u.y * s, u.x * s + u.y * cos);
+            let p = arc.center + dir * arc.radius;
+            let on = arc.is_full()
+                || (arc.point_at(arc.position_of(p)) - p).length() <= 1e-9 * arc.radius;
+            if on {
+                points[2 + k] = Some(p);
+            }
+        }
+    }
+    points.into_iter().flatten()
+}
+
+/// Where the circles `(c1, r1)` and `(c2, r2)` meet: none, or two points
+/// (which may be one).
+fn circles_meet(c1: DVec2, r1: f64, c2: DVec2, r2: f64) -> Option<[DVec2; 2]> {
+    let v = c2 - c1;
+    let d = v.length();
+    if d.is_nan() || d <= 0.0 || d > r1 + r2 || d < (r1 - r2).abs() {
+        return None;
+    }
+    let along = (d * d + r1 * r1 - r2 * r2) / (2.0 * d);
+    let h = (r1 * r1 - along * along).max(0.0).sqrt();
+    let u = v / d;
+    let foot = c1 + u * along;
+    Some([foot + u.perp() * h, foot - u.perp() * h])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1349,7 +1493,7 @@ mod closed_forms {
 
     fn wall(a: DVec2, b: DVec2, material: Material) -> Wall {
         Wall {
-            segment: Segment::new(a, b),
+            shape: Segment::new(a, b).into(),
             material,
         }
     }

@@ -44,7 +44,7 @@ mod point;
 mod spot;
 mod sun;
 
-use flatray_geometry::{DVec2, Ray, Segment, Side, Skip};
+use flatray_geometry::{DVec2, Ray, Segment, Shape, Side, Skip};
 
 use crate::sampling::Stream;
 use crate::scene::{Light, LightShape, Scene};
@@ -187,7 +187,11 @@ impl LightShape {
 
     /// Whether wall `index` (of segment `wall`) can receive this light
     /// only at grazing incidence, so receives nothing from it.
-    pub(crate) fn grazes(&self, index: u32, wall: &Segment) -> bool {
+    pub(crate) fn grazes(&self, index: u32, wall: &Shape) -> bool {
+        // An arc curves away from every line: no light lies along it.
+        let Shape::Segment(wall) = wall else {
+            return false;
+        };
         match *self {
             LightShape::Point { at } | LightShape::Spot { at, .. } => point::grazes(at, wall),
             LightShape::Line {

@@ -35,8 +35,9 @@ pub(crate) fn sun_line(scene: &Scene, direction: DVec2) -> (DVec2, DVec2, f64) {
     let mut max =
         scene.canvas.origin + DVec2::new(scene.canvas.width as f64, scene.canvas.height as f64);
     for wall in &scene.walls {
-        min = min.min(wall.segment.a).min(wall.segment.b);
-        max = max.max(wall.segment.a).max(wall.segment.b);
+        let (lo, hi) = wall.shape.bounds();
+        min = min.min(lo);
+        max = max.max(hi);
     }
     let centre = (min + max) * 0.5;
     let radius = (max - min).length() * 0.5 + 1.0;

@@ -33,6 +33,8 @@ pub struct Inventory {
     pub areas: usize,
     pub lights: usize,
     pub walls: usize,
+    /// Walls that are circular arcs.
+    pub arcs: usize,
     pub mirrors: usize,
     /// Rough mirrors: glossy walls, each a non-specular bounce.
     pub rough_mirrors: usize,
@@ -75,6 +77,11 @@ impl Inventory {
             areas: scene.lights.iter().filter(|l| l.shape.has_area()).count(),
             lights: scene.lights.len(),
             walls: scene.walls.len(),
+            arcs: scene
+                .walls
+                .iter()
+                .filter(|w| w.shape.as_arc().is_some())
+                .count(),
             mirrors: walls(&Material::is_mirror),
             rough_mirrors: walls(&Material::is_glossy),
             panes: walls(&Material::is_pane),
@@ -208,7 +215,10 @@ impl Plan {
                 .iter()
                 .filter(|l| crate::lights::is_exact(&l.shape))
                 .count();
+        // The closed form through a mirror takes the walls around it as
+        // segments.
         let mirror_lights = shadows
+            && inventory.arcs == 0
             && options.specular > 0
             && mirror_pairs > 0
             && mirror_pairs <= crate::lights::MAX_MIRROR_PAIRS;
@@ -277,6 +287,7 @@ impl Plan {
         let fast = FastDecisions::of(&Facts {
             options,
             walls: scene.walls.len(),
+            arcs: inventory.arcs,
             lights: scene.lights.len(),
             mirrors: inventory.mirrors,
             floor_albedo_walls: inventory.floor_albedo_walls,

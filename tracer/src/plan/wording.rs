@@ -51,6 +51,7 @@ impl Plan {
             areas,
             lights,
             walls,
+            arcs,
             mirrors,
             rough_mirrors,
             panes,
@@ -130,6 +131,17 @@ impl Plan {
                 _ => format!("{}, {}", n(suns, "directional light"), n(beams, "beam")),
             },
         );
+        if arcs > 0 {
+            // Said only where the scene has an arc: no other plan changes.
+            add(
+                "curved walls: exact ray-arc crossings",
+                true,
+                format!(
+                    "{}; a ray can meet one twice, and meets the one it leaves again where it curves back",
+                    n(arcs, "arc")
+                ),
+            );
+        }
         if lasers > 0 {
             // Said only where the scene has a laser: no other plan changes.
             add(

@@ -6,7 +6,7 @@
 //! same bounds as it reads a file, with the same messages and the line
 //! and column they belong to.
 
-use flatray_geometry::DVec2;
+use flatray_geometry::{DVec2, Shape};
 
 use super::{Canvas, Falloff, Floor, GlassBody, Light, LightShape, Material, Wall};
 use crate::Rgb;
@@ -289,14 +289,33 @@ fn floor(floor: &Floor) -> Checked {
 }
 
 fn wall(wall: &Wall, bodies: usize) -> Checked {
-    let (a, b) = (wall.segment.a, wall.segment.b);
+    let (a, b) = (wall.shape.a(), wall.shape.b());
     point(a.x, a.y)?;
     point(b.x, b.y)?;
-    if a == b {
-        return Err(format!(
-            "a wall needs two different endpoints, found ({}, {}) twice",
-            a.x, a.y
-        ));
+    match &wall.shape {
+        Shape::Segment(_) if a == b => {
+            return Err(format!(
+                "a wall needs two different endpoints, found ({}, {}) twice",
+                a.x, a.y
+            ));
+        }
+        Shape::Segment(_) => {}
+        Shape::Arc(arc) => {
+            let c = arc.center;
+            point(c.x, c.y)?;
+            if !(arc.radius > 0.0 && arc.radius <= MAX_COORDINATE) {
+                return Err(format!(
+                    "expected an arc's radius from 0 to {MAX_COORDINATE:e}, found {}",
+                    arc.radius
+                ));
+            }
+            if !arc.is_full() && a == b {
+                return Err(format!(
+                    "an arc needs two different ends, found ({}, {}) twice",
+                    a.x, a.y
+                ));
+            }
+        }
     }
     match wall.material {
         Material::Diffuse { albedo } => albedo.map_or(Ok(()), color),

@@ -21,7 +21,7 @@ pub mod checks {
     };
 }
 
-use flatray_geometry::{DVec2, Ray, Segment, SegmentSet, Side, Skip};
+use flatray_geometry::{DVec2, Ray, Segment, SegmentSet, Shape, Side, Skip};
 
 use crate::Rgb;
 use crate::spectrum::{Mixture, Sampled, Spectrum};
@@ -360,8 +360,11 @@ impl AlbedoAlong {
         let cells = walls
             .iter()
             .map(|wall| {
-                if wall.material.takes_floor_albedo() {
-                    Self::cells(canvas, floor, &wall.segment, most)
+                // An arc's cells would not be straight: it reads the floor.
+                if let (true, Some(segment)) =
+                    (wall.material.takes_floor_albedo(), wall.as_segment())
+                {
+                    Self::cells(canvas, floor, segment, most)
                 } else {
                     Vec::new()
                 }
@@ -658,11 +661,27 @@ pub struct GlassBody {
     pub roughness: f64,
 }
 
-/// A two-sided wall.
+/// A two-sided wall: a segment or a circular arc, of any material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wall {
-    pub segment: Segment,
+    pub shape: Shape,
     pub material: Material,
+}
+
+impl Wall {
+    /// A straight wall from `a` to `b`.
+    pub fn segment(a: DVec2, b: DVec2, material: Material) -> Wall {
+        Wall {
+            shape: Shape::Segment(Segment::new(a, b)),
+            material,
+        }
+    }
+
+    /// Its segment, if it is straight.
+    #[inline]
+    pub fn as_segment(&self) -> Option<&Segment> {
+        self.shape.as_segment()
+    }
 }
 
 /// The shape of a light.
@@ -1021,17 +1040,20 @@ impl Scene {
                 | LightShape::Spot { at, .. }
                 | LightShape::Laser { at, .. } => walls
                     .iter()
-                    .position(|w| lies_on(at, &w.segment))
+                    .position(|w| lies_on_shape(at, &w.shape))
                     .map(|i| i as u32),
                 LightShape::Directional { .. }
                 | LightShape::Circle { .. }
                 | LightShape::Beam { .. } => None,
             })
             .collect();
-        let segments = SegmentSet::new(walls.iter().map(|w| w.segment).collect());
+        let segments = SegmentSet::of_shapes(walls.iter().map(|w| w.shape).collect());
         let albedo_along = AlbedoAlong::new(&canvas, &floor, &walls);
         let flat_mirrors = (0..walls.len() as u32)
-            .filter(|&w| matches!(walls[w as usize].material, Material::Mirror { .. }))
+            .filter(|&w| {
+                let wall = &walls[w as usize];
+                matches!(wall.material, Material::Mirror { .. }) && wall.as_segment().is_some()
+            })
             .collect();
         Scene {
             canvas,
@@ -1088,7 +1110,7 @@ impl Scene {
             .iter()
             .map(|w| {
                 if w.material.is_diffuse() {
-                    w.segment.length()
+                    w.shape.length()
                 } else {
                     0.0
                 }
@@ -1127,28 +1149,56 @@ impl Scene {
     /// Where other walls meet or cross each diffuse wall, as positions
     /// along it: the wall memo's bins and the caustic pass's stop there.
     pub(crate) fn junctions(&self) -> Vec<Vec<f64>> {
-        self.walls
-            .iter()
-            .enumerate()
-            .map(|(index, w)| {
-                let mut cuts = Vec::new();
-                if w.material.is_diffuse() {
-                    let along = Ray::new(w.segment.a, w.segment.edge());
-                    self.segments.for_each_crossing(
-                        &along,
-                        1.0,
-                        Skip::one(index as u32),
-                        |_, hit| {
-                            if hit.t > 0.0 {
-                                cuts.push(hit.t);
-                            }
-                            true
-                        },
-                    );
-                }
-                cuts
-            })
+        (0..self.walls.len() as u32)
+            .map(|index| self.junctions_of(index))
             .collect()
+    }
+
+    /// Where other walls meet or cross wall `index`, if it is diffuse, as
+    /// positions along it in `(0, 1)`; empty otherwise.
+    pub(crate) fn junctions_of(&self, index: u32) -> Vec<f64> {
+        let mut cuts = Vec::new();
+        let Some(w) = self.walls.get(index as usize) else {
+            return cuts;
+        };
+        if !w.material.is_diffuse() {
+            return cuts;
+        }
+        match w.shape {
+            Shape::Arc(arc) => {
+                // Where segments cross the arc or end on it; arcs that
+                // cross it are not cut at (a bin then straddles the
+                // crossing, as a bin of a long wall can).
+                for (other, o) in self.walls.iter().enumerate() {
+                    let Some(seg) = o.as_segment() else { continue };
+                    if other == index as usize {
+                        continue;
+                    }
+                    let along = Ray::new(seg.a, seg.edge());
+                    let (roots, n) = arc.line_crossings(&along, false, None);
+                    for &t in &roots[..n] {
+                        if (0.0..=1.0).contains(&t) {
+                            let u = arc.position_of(along.at(t));
+                            if u > 0.0 && u < 1.0 {
+                                cuts.push(u);
+                            }
+                        }
+                    }
+                }
+                cuts.sort_by(f64::total_cmp);
+            }
+            Shape::Segment(segment) => {
+                let along = Ray::new(segment.a, segment.edge());
+                self.segments
+                    .for_each_crossing(&along, 1.0, Skip::one(index), |_, hit| {
+                        if hit.t > 0.0 {
+                            cuts.push(hit.t);
+                        }
+                        true
+                    });
+            }
+        }
+        cuts
     }
 
     /// What light `index` sends to a path that carries `wavelength`
@@ -1213,9 +1263,11 @@ fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize
         }
         emitting
     };
-    let segments: Vec<Segment> = walls.iter().map(|w| w.segment).collect();
-    let groups =
-        flatray_geometry::overlap::overlap_groups(&segments, |i| !walls[i].material.is_glass());
+    // Arcs are not merged: only straight walls lie along a line.
+    let segments: Vec<Segment> = walls.iter().map(|w| w.shape.chord()).collect();
+    let groups = flatray_geometry::overlap::overlap_groups(&segments, |i| {
+        !walls[i].material.is_glass() && walls[i].as_segment().is_some()
+    });
     if groups.is_empty() {
         return (walls, 0);
     }
@@ -1361,15 +1413,15 @@ fn resolve_group(
         match owners[k] {
             Owner::Emitting | Owner::Nobody => {}
             Owner::Wall(g) => out.push(Wall {
-                segment: if pieces.forward[g] {
+                shape: Shape::Segment(if pieces.forward[g] {
                     Segment::new(p, q)
                 } else {
                     Segment::new(q, p)
-                },
+                }),
                 material: walls[group[g]].material,
             }),
             Owner::Panes(_) => out.push(Wall {
-                segment: Segment::new(p, q),
+                shape: Shape::Segment(Segment::new(p, q)),
                 material: Material::Transparent { tint: tints[k] },
             }),
         }
@@ -1398,7 +1450,8 @@ fn seen_order(x: &Wall, y: &Wall) -> std::cmp::Ordering {
 }
 
 fn coordinates(w: &Wall) -> [f64; 4] {
-    [w.segment.a.x, w.segment.a.y, w.segment.b.x, w.segment.b.y]
+    let (a, b) = (w.shape.a(), w.shape.b());
+    [a.x, a.y, b.x, b.y]
 }
 
 /// Two walls' coordinates in lexicographic order (a total order: NaN too).
@@ -1426,6 +1479,27 @@ pub fn lies_on(p: DVec2, segment: &Segment) -> bool {
     segment.side_value(p).abs() <= tolerance
         && along >= -tolerance
         && along <= e.length_squared() + tolerance
+}
+
+/// Whether `p` lies on `shape` to within rounding: [`lies_on`] for a
+/// segment; for an arc, within rounding of its circle and on the arc's
+/// side of its chord (or at an end).
+pub fn lies_on_shape(p: DVec2, shape: &Shape) -> bool {
+    match shape {
+        Shape::Segment(segment) => lies_on(p, segment),
+        Shape::Arc(arc) => {
+            let f = p - arc.center;
+            let scale = arc.center.abs().max(p.abs()).max_element().max(arc.radius);
+            let tolerance = 16.0 * f64::EPSILON * scale;
+            if (f.length() - arc.radius).abs() > tolerance {
+                return false;
+            }
+            p == arc.a || p == arc.b || {
+                let u = arc.position_of(p);
+                (arc.point_at(u) - p).length() <= tolerance * 4.0
+            }
+        }
+    }
 }
 
 /// Whether `p` lies on the infinite line through `segment`, to within the
@@ -1563,7 +1637,7 @@ mod tests {
 
     fn wall(a: (f64, f64), b: (f64, f64), material: Material) -> Wall {
         Wall {
-            segment: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)),
+            shape: Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1)).into(),
             material,
         }
     }
@@ -1600,7 +1674,7 @@ mod tests {
         // An emitting wall stays whole; what lies on it goes.
         let mut lights = vec![Light {
             shape: LightShape::Line {
-                segment: walls[0].segment,
+                segment: walls[0].shape.chord(),
                 one_sided: false,
                 wall: Some(0),
             },
@@ -1675,7 +1749,7 @@ mod tests {
         let walls: Vec<Wall> = walls
             .into_iter()
             .map(|segment| Wall {
-                segment,
+                shape: segment.into(),
                 material: Material::Diffuse { albedo: None },
             })
             .collect();
@@ -1702,7 +1776,7 @@ mod tests {
                     .collect();
                 us.extend((0..400).map(|_| next()));
                 for u in us {
-                    let x = wall.segment.point_at(u);
+                    let x = wall.shape.point_at(u);
                     assert_eq!(
                         along.at(&floor, &canvas, w as u32, u, x),
                         floor.albedo_at(&canvas, x),
