@@ -1514,6 +1514,65 @@ mod closed_forms {
         (a - b).abs() <= 1e-12 * (1.0 + b.abs())
     }
 
+    /// A round column of radius 2 at (1, 6) between the origin and a
+    /// line light from (-6, 10) to (8, 10): it hides the directions within
+    /// `asin(2 / |c|)` of the column's centre, a cone whose edges are the
+    /// tangents, so under `Flatland` the fluence is the light's angle less
+    /// the cone's. The same with a circle light of radius 1.5 at
+    /// (6, 12), whose rim the cone cuts, and with a pane column, which
+    /// tints the hidden directions twice (the ray crosses it twice).
+    #[test]
+    fn a_round_column_hides_the_cone_of_its_tangents() {
+        use flatray_geometry::Arc;
+        let o = DVec2::ZERO;
+        let c = DVec2::new(1.0, 6.0);
+        let column = |material| Wall {
+            shape: Arc::circle(c, 2.0, 0.3).into(),
+            material,
+        };
+        let half = (2.0 / c.length()).asin();
+        let axis = c.y.atan2(c.x);
+        let (cone_lo, cone_hi) = (axis - half, axis + half);
+        // The line light's angle, and its part inside the cone.
+        let (left, right) = (DVec2::new(-6.0, 10.0), DVec2::new(8.0, 10.0));
+        let angle = |p: DVec2| p.y.atan2(p.x);
+        let (from, to) = (angle(right), angle(left));
+        let hidden = (to.min(cone_hi) - from.max(cone_lo)).max(0.0);
+        let line = |falloff| vec![line(left, right, falloff)];
+        let opaque = scene(vec![column(OPAQUE)], line(Falloff::Flatland));
+        let v = at(&opaque, o, None, None).x;
+        assert!(close(v, to - from - hidden), "{v} against {}", to - from - hidden);
+        let tint = 0.5;
+        let pane = scene(
+            vec![column(Material::Transparent {
+                tint: Rgb::splat(tint),
+            })],
+            line(Falloff::Flatland),
+        );
+        let v = at(&pane, o, None, None).x;
+        let expected = to - from - hidden + hidden * tint * tint;
+        assert!(close(v, expected), "{v} against {expected}");
+        // The circle light: its near rim seen from the origin spans the
+        // cone of its own tangents; the column's cone cuts it.
+        let (lc, lr) = (DVec2::new(6.0, 12.0), 1.5);
+        let light_half = (lr / lc.length()).asin();
+        let light_axis = angle(lc);
+        let (l_lo, l_hi) = (light_axis - light_half, light_axis + light_half);
+        let hidden = (l_hi.min(cone_hi) - l_lo.max(cone_lo)).max(0.0);
+        let circle = Light {
+            shape: LightShape::Circle { at: lc, radius: lr },
+            color: Rgb::ONE,
+            intensity: 1.0,
+            falloff: Falloff::Flatland,
+            spectrum: None,
+        };
+        let s = scene(vec![column(OPAQUE)], vec![circle]);
+        let v = at(&s, o, None, None).x;
+        let expected = l_hi - l_lo - hidden;
+        assert!(hidden > 0.0 && hidden < l_hi - l_lo, "the cone cuts the light");
+        assert!(close(v, expected), "{v} against {expected}");
+    }
+
     /// A line light from (-4, 10) to (4, 10) seen from the origin, and a
     /// wall from (0, 5) to (10, 5) hiding its right half: under
     /// `Flatland` the fluence is the angle from the light's left end to
