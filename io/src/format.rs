@@ -399,9 +399,9 @@ impl TryFrom<RawWall> for WallSpec {
                 );
             }
         };
-        if shape != WallShape::Segment && w.emit.is_some() {
+        if shape != WallShape::Segment && w.emit.as_ref().is_some_and(|e| e.one_sided) {
             return Err(
-                "an arc or a circle cannot emit: only a straight wall can be a line light"
+                "an arc or a circle emits from both sides: `one_sided` is for straight walls"
                     .to_string(),
             );
         }

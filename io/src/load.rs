@@ -335,11 +335,19 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             ..
         }) = wall.emit
         {
+            let wall_of_light = Some(walls.len() as u32);
             lights.push(Light {
-                shape: LightShape::Line {
-                    segment,
-                    one_sided,
-                    wall: Some(walls.len() as u32),
+                shape: match shape {
+                    Shape::Segment(_) => LightShape::Line {
+                        segment,
+                        one_sided,
+                        wall: wall_of_light,
+                    },
+                    // Two-sided: the file refuses `one_sided` on an arc.
+                    Shape::Arc(arc) => LightShape::Arc {
+                        arc,
+                        wall: wall_of_light,
+                    },
                 },
                 color: rgb(color),
                 intensity: intensity.0,

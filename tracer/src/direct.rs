@@ -87,19 +87,21 @@ pub(crate) fn direct_light_glossy(
 }
 
 /// The share of a glossy BSDF's sample from `x` (of density `pdf`, on
-/// wall `wall`) that meets light `light`: the power heuristic against the
-/// light's own sampling there, 1 where next-event estimation takes none.
+/// wall `wall`) that meets light `light` at `at`: the power heuristic
+/// against the light's own sampling there, 1 where next-event estimation
+/// takes none.
 #[inline]
 pub(crate) fn glossy_emission_weight(
     scene: &Scene,
     light: &Light,
     (x, wall): (DVec2, u32),
     pdf: f64,
+    at: DVec2,
 ) -> f64 {
     if light.shape.grazes(wall, &scene.walls[wall as usize].shape) {
         return 1.0;
     }
-    power_heuristic(pdf, light.shape.pdf_towards(x))
+    power_heuristic(pdf, light.shape.pdf_towards(x, at))
 }
 
 /// The power heuristic's weight for a sample of density `a` against one

@@ -56,6 +56,11 @@ pub(crate) fn wall_memo_bytes(
     Some(bytes)
 }
 
+/// Points along an arc light at which each bin takes its light: the
+/// midpoint rule, whose error falls with the square of their number where
+/// the arc is seen whole, and the checked reads take out the rest.
+const ARC_LIGHT_SAMPLES: usize = 64;
+
 /// What a span of the memo takes besides its bins (an upper bound).
 const SPAN_BYTES: u64 = 64;
 
@@ -90,16 +95,28 @@ pub(crate) fn build_wall_memo(
                 shadow_walls: None,
             };
             let mut local = Stats::default();
-            // Lines and circles in closed form, every light one call.
-            let value = light_contribution(
-                scene,
-                light_index,
-                x,
-                receiver,
-                0.0,
-                Visibility::of(shadows),
-                &mut local,
-            );
+            // Lines and circles in closed form, every light one call; an
+            // arc light, sampled, by the midpoint rule along it.
+            let samples = if scene.lights[light_index].shape.numbers() > 0
+                && !crate::lights::is_exact(&scene.lights[light_index].shape)
+            {
+                ARC_LIGHT_SAMPLES
+            } else {
+                1
+            };
+            let mut value = crate::Rgb::ZERO;
+            for k in 0..samples {
+                value += light_contribution(
+                    scene,
+                    light_index,
+                    x,
+                    receiver,
+                    (k as f64 + 0.5) / samples as f64,
+                    Visibility::of(shadows),
+                    &mut local,
+                );
+            }
+            let value = value / samples as f64;
             let value = if mirror_lights {
                 let mirrors = &scene.flat_mirrors;
                 value + through_mirrors_of(scene, mirrors, light_index, x, receiver, &mut local)

@@ -274,7 +274,14 @@ pub(crate) fn follow(
             && let Some(light) = scene.light_of_wall(index)
         {
             fluence += throughput
-                * wall_emission(scene, light, side, unfolded, glossy_from, glass.wavelength);
+                * wall_emission(
+                    scene,
+                    (light, x),
+                    side,
+                    unfolded,
+                    glossy_from,
+                    glass.wavelength,
+                );
         }
 
         let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), trace.tables, stats);
@@ -512,7 +519,13 @@ fn emission_crossed(
             let v = light.intensity * light.falloff.per_radian(r, scene.small_radius);
             let v = match glossy_from {
                 Some(from) => {
-                    v * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf)
+                    v * glossy_emission_weight(
+                        scene,
+                        light,
+                        (from.x, from.wall),
+                        from.pdf,
+                        ray.at(t),
+                    )
                 }
                 None => v,
             };
@@ -647,7 +660,7 @@ fn glossy_direct(
 #[inline]
 fn wall_emission(
     scene: &Scene,
-    light: u32,
+    (light, at): (u32, DVec2),
     side: Side,
     r: f64,
     glossy_from: Option<GlossyStart>,
@@ -660,7 +673,9 @@ fn wall_emission(
             .shape
             .emitted_at_wall(light, side, r, scene.small_radius);
     match glossy_from {
-        Some(from) => emitted * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf),
+        Some(from) => {
+            emitted * glossy_emission_weight(scene, light, (from.x, from.wall), from.pdf, at)
+        }
         None => emitted,
     }
 }

@@ -408,9 +408,9 @@ impl Reader<'_> {
         } else {
             id.to_string()
         };
-        // Arcs make walls and glass; a light or an emitting wall is
+        // Arcs make walls (emitting ones too) and glass; a line light is
         // straight.
-        let arcs = !matches!(mark, Mark::Light | Mark::Emit | Mark::Lamp);
+        let arcs = !matches!(mark, Mark::Light | Mark::Lamp);
         let subpaths = self.subpaths(p, arcs);
         match mark {
             Mark::Lamp => {

@@ -542,22 +542,6 @@ fn build(
                 .number("emit")
                 .filter(|&i| i > 0.0)
                 .map(|i| (colour.unwrap_or([1.0; 3]), i));
-            // An emitting wall is straight: a circle that emits becomes a
-            // polygon within the tolerance.
-            let (points, through) = if emit.is_some() && through.iter().any(Option::is_some) {
-                let n = ellipse_sides(0.5 * object.width.max(object.height), options.tolerance);
-                let c = points.iter().copied().sum::<DVec2>() / points.len() as f64;
-                let r = points[0].distance(c);
-                let ring = (0..n)
-                    .map(|k| {
-                        let a = std::f64::consts::TAU * k as f64 / n as f64;
-                        c + r * DVec2::new(a.cos(), a.sin())
-                    })
-                    .collect();
-                (ring, Vec::new())
-            } else {
-                (points, through)
-            };
             for (a, b, through) in arc_edges(&points, &through, closed) {
                 walls.push(ImportedWall {
                     a,

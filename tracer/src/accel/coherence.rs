@@ -67,7 +67,7 @@ pub(crate) enum Coherence {
 pub(crate) fn draws(emitter: Emitter) -> bool {
     match emitter {
         Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Segment { .. } => true,
-        Emitter::Disk { .. } | Emitter::Parallel { .. } => false,
+        Emitter::Disk { .. } | Emitter::Arc(_) | Emitter::Parallel { .. } => false,
     }
 }
 
@@ -189,7 +189,7 @@ fn light_states(
                         mask.mark(e, direction / step, 0.0, end_t);
                     }
                 }
-                Emitter::Disk { .. } | Emitter::Parallel { .. } => {}
+                Emitter::Disk { .. } | Emitter::Arc(_) | Emitter::Parallel { .. } => {}
                 Emitter::Segment { segment, .. } => {
                     // A wall that touches an end of the light cuts
                     // every triangle: the centre test below says
@@ -227,6 +227,7 @@ fn light_states(
         Emitter::Point { .. }
         | Emitter::Direction(_)
         | Emitter::Disk { .. }
+        | Emitter::Arc(_)
         | Emitter::Parallel { .. } => None,
     };
     // Rows in parallel: a line light tests every wall at every
@@ -247,7 +248,9 @@ fn light_states(
                     }
                     (Emitter::Segment { .. }, None) => Coherence::Varies,
                     (Emitter::Point { .. } | Emitter::Direction(_), _) => Coherence::Same,
-                    (Emitter::Disk { .. } | Emitter::Parallel { .. }, _) => Coherence::Varies,
+                    (Emitter::Disk { .. } | Emitter::Arc(_) | Emitter::Parallel { .. }, _) => {
+                        Coherence::Varies
+                    }
                 }
             })
         })
@@ -578,7 +581,10 @@ pub(crate) fn centre_transmittance(
         ),
         // Lights with a source were answered above; beams and lasers are
         // not drawn, and no pixel of theirs is `Same`.
-        Emitter::Point { .. } | Emitter::Direction(_) | Emitter::Parallel { .. } => Rgb::ZERO,
+        Emitter::Point { .. }
+        | Emitter::Direction(_)
+        | Emitter::Arc(_)
+        | Emitter::Parallel { .. } => Rgb::ZERO,
     }
 }
 

@@ -72,6 +72,7 @@ pub(crate) fn direct_light_strata(
                 | Emitter::Direction(_)
                 | Emitter::Segment { .. }
                 | Emitter::Disk { .. }
+                | Emitter::Arc(_)
                 | Emitter::Parallel { .. },
                 _,
             ) => {
@@ -173,6 +174,7 @@ pub(crate) fn direct_light_chosen_strata(
                 | Emitter::Direction(_)
                 | Emitter::Segment { .. }
                 | Emitter::Disk { .. }
+                | Emitter::Arc(_)
                 | Emitter::Parallel { .. },
                 _,
             ) => {

@@ -1541,7 +1541,11 @@ mod closed_forms {
         let line = |falloff| vec![line(left, right, falloff)];
         let opaque = scene(vec![column(OPAQUE)], line(Falloff::Flatland));
         let v = at(&opaque, o, None, None).x;
-        assert!(close(v, to - from - hidden), "{v} against {}", to - from - hidden);
+        assert!(
+            close(v, to - from - hidden),
+            "{v} against {}",
+            to - from - hidden
+        );
         let tint = 0.5;
         let pane = scene(
             vec![column(Material::Transparent {
@@ -1569,7 +1573,10 @@ mod closed_forms {
         let s = scene(vec![column(OPAQUE)], vec![circle]);
         let v = at(&s, o, None, None).x;
         let expected = l_hi - l_lo - hidden;
-        assert!(hidden > 0.0 && hidden < l_hi - l_lo, "the cone cuts the light");
+        assert!(
+            hidden > 0.0 && hidden < l_hi - l_lo,
+            "the cone cuts the light"
+        );
         assert!(close(v, expected), "{v} against {expected}");
     }
 

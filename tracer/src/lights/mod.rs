@@ -28,6 +28,7 @@
 //! point and line lanes), matching it exhaustively, and fall back to these
 //! functions for every other.
 
+mod arc;
 mod beam;
 mod contribution;
 mod exact;
@@ -126,7 +127,7 @@ impl LightShape {
             | LightShape::Directional { .. }
             | LightShape::Beam { .. }
             | LightShape::Laser { .. } => 0,
-            LightShape::Line { .. } | LightShape::Circle { .. } => 1,
+            LightShape::Line { .. } | LightShape::Arc { .. } | LightShape::Circle { .. } => 1,
         }
     }
 
@@ -141,6 +142,7 @@ impl LightShape {
             LightShape::Line {
                 segment, one_sided, ..
             } => line::incident(&segment, one_sided, light, x, u, r0),
+            LightShape::Arc { arc, .. } => arc::incident(&arc, light, x, u, r0),
             LightShape::Directional { direction } => Some(sun::incident(direction)),
             LightShape::Circle { at, radius } => circle::incident(at, radius, light, x, u, r0),
             LightShape::Beam { segment, direction } => beam::incident(&segment, direction, x),
@@ -150,16 +152,17 @@ impl LightShape {
     }
 
     /// The density per radian with which [`LightShape::incident`] draws
-    /// a direction from `x` that meets the light: for a light with an
-    /// area, what multiple importance sampling weighs a BSDF's sample that
-    /// met it against. 0 for a light of one direction (no ray meets it),
-    /// and where `incident` draws nothing.
+    /// the direction from `x` that meets the light at `at`: for a light
+    /// with an area, what multiple importance sampling weighs a BSDF's
+    /// sample that met it against. 0 for a light of one direction (no ray
+    /// meets it), and where `incident` draws nothing.
     #[inline]
-    pub(crate) fn pdf_towards(&self, x: DVec2) -> f64 {
+    pub(crate) fn pdf_towards(&self, x: DVec2, at: DVec2) -> f64 {
         match *self {
             LightShape::Line {
                 segment, one_sided, ..
             } => line::pdf(&segment, one_sided, x),
+            LightShape::Arc { arc, .. } => arc::pdf_at(&arc, x, at),
             LightShape::Circle { at, radius } => circle::pdf(at, radius, x),
             LightShape::Point { .. }
             | LightShape::Spot { .. }
@@ -176,6 +179,7 @@ impl LightShape {
     pub(crate) fn emitted_at_wall(&self, light: &Light, side: Side, r: f64, r0: f64) -> f64 {
         match *self {
             LightShape::Line { one_sided, .. } => line::emitted(light, one_sided, side, r, r0),
+            LightShape::Arc { .. } => line::emitted(light, false, side, r, r0),
             LightShape::Point { .. }
             | LightShape::Spot { .. }
             | LightShape::Directional { .. }
@@ -200,7 +204,9 @@ impl LightShape {
             LightShape::Directional { direction } | LightShape::Beam { direction, .. } => {
                 sun::grazes(direction, wall)
             }
-            LightShape::Circle { .. } | LightShape::Laser { .. } => false,
+            // A straight wall sees an arc's light at grazing incidence
+            // only at one point of it.
+            LightShape::Arc { .. } | LightShape::Circle { .. } | LightShape::Laser { .. } => false,
         }
     }
 
@@ -213,6 +219,7 @@ impl LightShape {
             LightShape::Line {
                 segment, one_sided, ..
             } => line::power(&segment, one_sided),
+            LightShape::Arc { arc, .. } => arc::power(&arc),
             LightShape::Directional { direction } => sun::power(scene, direction),
             LightShape::Circle { radius, .. } => circle::power(radius),
             LightShape::Beam { segment, direction } => beam::power(&segment, direction),
@@ -236,6 +243,7 @@ impl LightShape {
                 one_sided,
                 wall,
             } => line::emit(&segment, one_sided, wall, light, stream),
+            LightShape::Arc { arc, wall } => arc::emit(&arc, wall, light, stream),
             LightShape::Directional { direction } => sun::emit(scene, direction, stream),
             LightShape::Circle { at, radius } => circle::emit(at, radius, light, stream),
             LightShape::Beam { segment, direction } => beam::emit(&segment, direction, stream),
@@ -256,6 +264,8 @@ impl LightShape {
             } => line::met_by(&segment, one_sided, ray, t_max),
             LightShape::Circle { at, radius } => circle::met_by(at, radius, ray, t_max),
             LightShape::Line { wall: Some(_), .. }
+            // An arc light is found as its wall.
+            | LightShape::Arc { .. }
             | LightShape::Point { .. }
             | LightShape::Spot { .. }
             | LightShape::Directional { .. }
@@ -279,6 +289,12 @@ impl LightShape {
                     > -tolerance
             }
             LightShape::Circle { at, radius } => (*at - origin).dot(normal) + radius > -tolerance,
+            LightShape::Arc { arc, .. } => {
+                let (lo, hi) = arc.bounds();
+                [lo, hi, DVec2::new(lo.x, hi.y), DVec2::new(hi.x, lo.y)]
+                    .iter()
+                    .any(|&p| (p - origin).dot(normal) > -tolerance)
+            }
             LightShape::Point { .. }
             | LightShape::Spot { .. }
             | LightShape::Directional { .. }
@@ -289,7 +305,7 @@ impl LightShape {
 
     pub(crate) fn has_area(&self) -> bool {
         match self {
-            LightShape::Line { .. } | LightShape::Circle { .. } => true,
+            LightShape::Line { .. } | LightShape::Arc { .. } | LightShape::Circle { .. } => true,
             LightShape::Point { .. }
             | LightShape::Spot { .. }
             | LightShape::Directional { .. }
@@ -344,6 +360,14 @@ impl LightShape {
                 let d = (distance(at) - radius).max(r0);
                 falloff.per_radian(d + radius, r0) * (2.0 * radius / d).min(std::f64::consts::PI)
             }
+            LightShape::Arc { arc, .. } => {
+                // As a line light as long as the arc, from the nearest of
+                // its box: at most the whole circle of directions.
+                let (a_lo, a_hi) = arc.bounds();
+                let gap = (a_lo - hi).max(lo - a_hi).max(DVec2::ZERO).length();
+                let d = gap.max(r0);
+                falloff.per_radian(d, r0) * (arc.length() / d).min(std::f64::consts::TAU)
+            }
             LightShape::Directional { .. } => 1.0,
             LightShape::Beam { segment, direction } => beam::reach(&segment, direction, (lo, hi)),
             // No receiver's sample finds a laser.
@@ -358,6 +382,7 @@ impl LightShape {
         match *self {
             LightShape::Point { at } | LightShape::Spot { at, .. } => Some([at; 4]),
             LightShape::Line { segment, .. } => Some([segment.a, segment.b, segment.a, segment.b]),
+            LightShape::Arc { arc, .. } => Some(arc::hull(&arc)),
             LightShape::Directional { .. } | LightShape::Laser { .. } => None,
             LightShape::Circle { at, radius } => Some(circle::hull(at, radius)),
             LightShape::Beam { segment, .. } => Some([segment.a, segment.b, segment.a, segment.b]),
@@ -585,6 +610,8 @@ pub(crate) enum Emitter {
     Segment { segment: Segment, one_sided: bool },
     /// From the rim of a disk.
     Disk { at: DVec2, radius: f64 },
+    /// From both sides of a circular arc.
+    Arc(flatray_geometry::Arc),
     /// Parallel rays in `direction` from a segment (a beam), or from one
     /// point (a laser: `edge` zero).
     Parallel {
@@ -617,7 +644,7 @@ impl LightCounts {
             match light.shape {
                 LightShape::Point { .. } => counts.points += 1,
                 LightShape::Spot { .. } => counts.spots += 1,
-                LightShape::Line { .. } => counts.lines += 1,
+                LightShape::Line { .. } | LightShape::Arc { .. } => counts.lines += 1,
                 LightShape::Circle { .. } => counts.circles += 1,
                 LightShape::Directional { .. } => counts.suns += 1,
                 LightShape::Beam { .. } => counts.beams += 1,
@@ -643,6 +670,7 @@ impl LightShape {
             LightShape::Line {
                 segment, one_sided, ..
             } => Emitter::Segment { segment, one_sided },
+            LightShape::Arc { arc, .. } => Emitter::Arc(arc),
             LightShape::Circle { at, radius } => Emitter::Disk { at, radius },
             LightShape::Beam { segment, direction } => Emitter::Parallel {
                 start: segment.a,
@@ -667,7 +695,7 @@ impl LightShape {
             | LightShape::Directional { .. }
             | LightShape::Beam { .. }
             | LightShape::Laser { .. } => true,
-            LightShape::Line { .. } | LightShape::Circle { .. } => false,
+            LightShape::Line { .. } | LightShape::Arc { .. } | LightShape::Circle { .. } => false,
         }
     }
 
@@ -699,6 +727,7 @@ impl LightShape {
             // A beam's shadow rays end at its segment, and only inside its
             // strip; a laser has none.
             LightShape::Line { .. }
+            | LightShape::Arc { .. }
             | LightShape::Circle { .. }
             | LightShape::Beam { .. }
             | LightShape::Laser { .. } => None,
@@ -745,7 +774,10 @@ impl LightShape {
             }
             LightShape::Beam { segment, direction } => beam::aperture(&segment, direction, target),
             // All of a laser's photons are traced (`whole_aperture`).
-            LightShape::Line { .. } | LightShape::Circle { .. } | LightShape::Laser { .. } => None,
+            LightShape::Line { .. }
+            | LightShape::Arc { .. }
+            | LightShape::Circle { .. }
+            | LightShape::Laser { .. } => None,
         }
     }
 
@@ -755,7 +787,7 @@ impl LightShape {
             LightShape::Point { .. } | LightShape::Spot { .. } => {
                 PhotonKernel::Point(light.falloff)
             }
-            LightShape::Line { .. } | LightShape::Circle { .. } => {
+            LightShape::Line { .. } | LightShape::Arc { .. } | LightShape::Circle { .. } => {
                 PhotonKernel::Line(light.falloff)
             }
             LightShape::Directional { .. } | LightShape::Beam { .. } | LightShape::Laser { .. } => {

@@ -414,6 +414,23 @@ fn shape(shape: &LightShape, walls: usize) -> Checked {
                 _ => Ok(()),
             }
         }
+        LightShape::Arc { arc, wall } => {
+            for p in [arc.a, arc.b, arc.center] {
+                point(p.x, p.y)?;
+            }
+            if !(arc.radius > 0.0 && arc.radius <= MAX_COORDINATE) {
+                return Err(format!(
+                    "expected an arc light's radius from 0 to {MAX_COORDINATE:e}, found {}",
+                    arc.radius
+                ));
+            }
+            match wall {
+                Some(w) if w as usize >= walls => Err(format!(
+                    "an arc light on wall {w}, but the scene has {walls} walls"
+                )),
+                _ => Ok(()),
+            }
+        }
         LightShape::Directional { direction } => unit(direction),
         LightShape::Beam { segment, direction } => {
             let (a, b) = (segment.a, segment.b);

@@ -706,6 +706,13 @@ pub enum LightShape {
         one_sided: bool,
         wall: Option<u32>,
     },
+    /// A circular arc (or a full circle) emitting from both sides, as a
+    /// Lambertian emitter of radiance `intensity`: a curved wall that
+    /// glows. `wall` is the index of the wall it also is.
+    Arc {
+        arc: flatray_geometry::Arc,
+        wall: Option<u32>,
+    },
     /// Parallel rays travelling in `direction` (unit) from outside the
     /// scene; `intensity` is the irradiance across the beam.
     Directional { direction: DVec2 },
@@ -1023,7 +1030,7 @@ impl Scene {
         let (walls, merged) = resolve_overlaps(walls, &mut lights);
         let mut wall_light = vec![None; walls.len()];
         for (index, light) in lights.iter_mut().enumerate() {
-            if let LightShape::Line { wall, .. } = &mut light.shape
+            if let LightShape::Line { wall, .. } | LightShape::Arc { wall, .. } = &mut light.shape
                 && let Some(w) = *wall
             {
                 match wall_light.get_mut(w as usize) {
@@ -1035,7 +1042,7 @@ impl Scene {
         let light_wall = lights
             .iter()
             .map(|light| match light.shape {
-                LightShape::Line { wall, .. } => wall,
+                LightShape::Line { wall, .. } | LightShape::Arc { wall, .. } => wall,
                 LightShape::Point { at }
                 | LightShape::Spot { at, .. }
                 | LightShape::Laser { at, .. } => walls
@@ -1255,7 +1262,8 @@ fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize
     let emitting: Vec<bool> = {
         let mut emitting = vec![false; walls.len()];
         for light in lights.iter() {
-            if let LightShape::Line { wall: Some(w), .. } = light.shape
+            if let LightShape::Line { wall: Some(w), .. } | LightShape::Arc { wall: Some(w), .. } =
+                light.shape
                 && let Some(slot) = emitting.get_mut(w as usize)
             {
                 *slot = true;
@@ -1299,7 +1307,7 @@ fn resolve_overlaps(walls: Vec<Wall>, lights: &mut [Light]) -> (Vec<Wall>, usize
     }
     out.extend(resolved.into_iter().flatten());
     for light in lights.iter_mut() {
-        if let LightShape::Line { wall, .. } = &mut light.shape
+        if let LightShape::Line { wall, .. } | LightShape::Arc { wall, .. } = &mut light.shape
             && let Some(w) = *wall
         {
             // An emitting wall is never replaced; an index out of range
