@@ -154,6 +154,8 @@ impl Arc {
     }
 
     /// The point at position `u` (0 at `a`, 1 at `b`); the ends exactly.
+    /// Never inlined: a segment's callers stay small.
+    #[inline(never)]
     pub fn point_at(&self, u: f64) -> DVec2 {
         if u <= 0.0 {
             return self.a;

@@ -725,6 +725,19 @@ pub struct RayLanes<const N: usize> {
     pub dy: [f64; N],
 }
 
+impl RayLanes<1> {
+    /// One ray in one lane.
+    #[inline]
+    pub fn one(ray: &Ray) -> RayLanes<1> {
+        RayLanes {
+            ox: [ray.origin.x],
+            oy: [ray.origin.y],
+            dx: [ray.dir.x],
+            dy: [ray.dir.y],
+        }
+    }
+}
+
 impl<const N: usize> RayLanes<N> {
     /// Lane `k`'s ray.
     #[inline]
@@ -777,20 +790,7 @@ impl SegmentSet {
         candidates: &[u32],
     ) -> HitLanes<N> {
         if self.has_arcs() {
-            // Arcs have no lane kernel: each ray alone.
-            let mut out = HitLanes {
-                index: [u32::MAX; N],
-                t: [f64::INFINITY; N],
-                u: [0.0; N],
-            };
-            for k in 0..N {
-                if let Some((index, hit)) =
-                    self.closest_hit_among(&rays.ray(k), f64::INFINITY, Skip::NONE, candidates)
-                {
-                    (out.index[k], out.t[k], out.u[k]) = (index, hit.t, hit.u);
-                }
-            }
-            return out;
+            return self.closest_hits_one_by_one(rays, candidates);
         }
         if let Some(hits) =
             crate::lanes::closest_hits_avx(self.kernel(), self.segments(), rays, candidates)
@@ -834,6 +834,33 @@ impl SegmentSet {
 }
 
 impl SegmentSet {
+    /// [`SegmentSet::closest_hits_among`] where arcs are among the walls,
+    /// which have no lane kernel: each ray alone. Kept out of line, so
+    /// that the lane kernels' callers stay as small as without arcs.
+    #[cold]
+    #[inline(never)]
+    fn closest_hits_one_by_one<const N: usize>(
+        &self,
+        rays: &RayLanes<N>,
+        candidates: &[u32],
+    ) -> HitLanes<N> {
+        let mut out = HitLanes {
+            index: [u32::MAX; N],
+            t: [f64::INFINITY; N],
+            u: [0.0; N],
+        };
+        for k in 0..N {
+            if let Some((index, hit)) =
+                self.closest_hit_among(&rays.ray(k), f64::INFINITY, Skip::NONE, candidates)
+            {
+                (out.index[k], out.t[k], out.u[k]) = (index, hit.t, hit.u);
+            }
+        }
+        out
+    }
+}
+
+impl SegmentSet {
     /// [`SegmentSet::closest_hits_among`] for a single ray: its
     /// candidates four at a time, each candidate's test in a lane (as the
     /// compiler vectorises it), then the lanes compared in order. The same
@@ -844,12 +871,7 @@ impl SegmentSet {
     pub fn closest_hit_among_wide(&self, ray: &Ray, candidates: &[u32]) -> HitLanes<1> {
         const W: usize = 4;
         if self.has_arcs() {
-            let hit = self.closest_hit_among(ray, f64::INFINITY, Skip::NONE, candidates);
-            return HitLanes {
-                index: [hit.map_or(u32::MAX, |h| h.0)],
-                t: [hit.map_or(f64::INFINITY, |h| h.1.t)],
-                u: [hit.map_or(0.0, |h| h.1.u)],
-            };
+            return self.closest_hits_one_by_one(&RayLanes::one(ray), candidates);
         }
         let segments = self.segments();
         let none = Segment {

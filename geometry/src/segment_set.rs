@@ -200,14 +200,16 @@ impl SegmentSet {
                 continue;
             }
             let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
-            let (hits, n) = arc_crossings(ray, arc, t_max, leaving, arriving);
-            if let Some(hit) = hits[..n].first()
-                && (hit.t < best.t || (hit.t == best.t && index < best.index))
+            // The roots alone; the position along the arc (an `atan2`)
+            // only for a root that wins.
+            let (roots, n) = arc.line_crossings(ray, leaving, arriving.then_some(t_max));
+            if let Some(&t) = roots[..n].iter().find(|&&t| t > 0.0 && t < t_max)
+                && (t < best.t || (t == best.t && index < best.index))
             {
                 *best = Best {
-                    t: hit.t,
+                    t,
                     index,
-                    u: hit.u,
+                    u: arc.position_of(ray.at(t)),
                 };
             }
         }

@@ -176,6 +176,11 @@ pub struct Items {
 pub struct WallItem {
     pub a: (f64, f64),
     pub b: (f64, f64),
+    /// For an arc or a circle, its curve as SVG path data in world units
+    /// (`M a A r r 0 large sweep b`; a circle as two half circles).
+    pub curve: Option<String>,
+    /// Whether its ends can be moved: not a circle's, which has none.
+    pub ends: bool,
     /// `Diffuse`, `Mirror` or `Transparent`.
     pub material: &'static str,
     /// The wall's own colour (albedo or tint), `None` for a diffuse wall
@@ -197,6 +202,29 @@ pub struct LightItem {
     pub direction: Option<(f64, f64)>,
     pub intensity: f64,
     pub color: (f64, f64, f64),
+}
+
+/// An arc's or circle's SVG path data, in world units; `None` for a
+/// segment.
+fn svg_curve(shape: &flatray_geometry::Shape) -> Option<String> {
+    let arc = shape.as_arc()?;
+    let r = arc.radius;
+    if arc.is_full() {
+        let (a, c) = (arc.a, arc.center);
+        let b = c * 2.0 - a;
+        return Some(format!(
+            "M {} {} A {r} {r} 0 0 1 {} {} A {r} {r} 0 0 1 {} {}",
+            a.x, a.y, b.x, b.y, a.x, a.y
+        ));
+    }
+    // SVG's sweep flag 1 turns towards positive angles (x towards y), as
+    // the arc's `turn` +1 does.
+    let large = u8::from(arc.sweep > std::f64::consts::PI);
+    let sweep = u8::from(arc.turn > 0.0);
+    Some(format!(
+        "M {} {} A {r} {r} 0 {large} {sweep} {} {}",
+        arc.a.x, arc.a.y, arc.b.x, arc.b.y
+    ))
 }
 
 /// The items of a scene `text` that loads (`loaded`, its canvas).
@@ -222,6 +250,8 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
             WallItem {
                 a: (w.a.0, w.a.1),
                 b: (w.b.0, w.b.1),
+                curve: svg_curve(&w.geometry()),
+                ends: !matches!(w.shape, crate::format::WallShape::Circle { .. }),
                 material,
                 color,
                 emits: w.emit.is_some(),
@@ -459,5 +489,43 @@ Scene(
         assert_eq!(items.lights[0].at, Some((50.0, 40.0)));
         assert_eq!(items.lights[0].intensity, 20.0);
         assert_eq!(items.lights[1].kind, "Line");
+        assert!(items.walls.iter().all(|w| w.curve.is_none() && w.ends));
+    }
+
+    /// An arc is drawn as its curve, through its ends, turning through its
+    /// middle point (SVG's sweep flag 1 where it turns from x towards y);
+    /// a circle as two half circles, with no ends to drag.
+    #[test]
+    fn arcs_and_circles_are_drawn_as_curves() {
+        let text = "Scene(canvas: (100, 80), floor: Color((0.5, 0.5, 0.5)),
+            walls: [Wall(a: (10, 40), through: (50, 70), b: (90, 40)),
+                    Wall(a: (10, 40), through: (50, 10), b: (90, 40)),
+                    Wall(center: (50, 40), radius: 5)],
+            lights: [Point(at: (50, 40))])";
+        let loaded = crate::parse(text, Path::new("t.ron"), Path::new(".")).unwrap();
+        let items = items(text, &loaded).unwrap();
+        // The numbers of a path: its command letters left out.
+        let numbers = |d: &str| -> Vec<f64> {
+            d.split_whitespace()
+                .filter_map(|w| w.parse().ok())
+                .collect()
+        };
+        // Through (50, 70) from (10, 40): the circle of centre (50, 85/3),
+        // radius 125/3, a minor arc turning from x towards y; through (50,
+        // 10), the other way.
+        for (k, sweep) in [(0, 1.0), (1, 0.0)] {
+            let d = items.walls[k].curve.clone().unwrap_or_default();
+            let v = numbers(&d);
+            assert_eq!(v.len(), 9, "{d}");
+            assert_eq!((v[0], v[1], v[7], v[8]), (10.0, 40.0, 90.0, 40.0), "{d}");
+            assert!((v[2] - 125.0 / 3.0).abs() < 1e-9 && v[2] == v[3], "{d}");
+            assert_eq!((v[4], v[5], v[6]), (0.0, 0.0, sweep), "{d}");
+        }
+        assert!(items.walls[0].ends && items.walls[1].ends);
+        assert_eq!(
+            items.walls[2].curve.as_deref(),
+            Some("M 55 40 A 5 5 0 0 1 45 40 A 5 5 0 0 1 55 40")
+        );
+        assert!(!items.walls[2].ends);
     }
 }

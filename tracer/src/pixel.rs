@@ -780,9 +780,13 @@ pub(crate) fn arc_in_lanes<const CHECKED: bool, const N: usize>(
         let trace = &contexts[pass].trace;
         // `path_finish`'s common case first, from the lanes as they are.
         let dir = DVec2::new(rays.dx[k], rays.dy[k]);
-        let shortcut = context.one_bounce_memo.and_then(|memo| {
-            memo_bounce(trace, memo, Rgb::ZERO, hits.index[k], hits.u[k], dir, stats)
-        });
+        // A `match`, not a closure: the closure is a function of its own,
+        // which the compiler may leave out of line, and then it is
+        // compiled without the AVX2 of the loop around it.
+        let shortcut = match context.one_bounce_memo {
+            Some(memo) => memo_bounce(trace, memo, Rgb::ZERO, hits.index[k], hits.u[k], dir, stats),
+            None => None,
+        };
         let value = match shortcut {
             Some(value) => value,
             None => path_finish(

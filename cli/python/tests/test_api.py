@@ -119,6 +119,50 @@ def test_beams_lasers_spectra_and_rough_glass_from_python_render_the_clis_bits(c
     assert "kelvin" in caught.value.message
 
 
+# Curved walls: a round room of two arcs with a glowing half, a round
+# mirror column, and a lens of two arcs.
+ARCS_RON = """Scene(
+    canvas: (64, 48),
+    floor: Color((0.8, 0.8, 0.8)),
+    walls: [
+        Wall(a: (8, 24), through: (32, 2), b: (56, 24)),
+        Wall(a: (56, 24), through: (32, 46), b: (8, 24), emit: (intensity: 0.2)),
+        Wall(center: (22, 20), radius: 3, material: Mirror()),
+    ],
+    lights: [Point(at: (40, 20), intensity: 3)],
+    glass: [Glass(points: [(30, 26), (30, 38)], through: [Some((33, 32)), Some((27, 32))])],
+    render: (samples: 8, bounces: 2),
+)
+"""
+
+ARCS_VALUES = dict(
+    canvas=(64, 48),
+    floor={"Color": (0.8, 0.8, 0.8)},
+    walls=[
+        {"a": (8, 24), "through": (32, 2), "b": (56, 24)},
+        {"a": (56, 24), "through": (32, 46), "b": (8, 24), "emit": {"intensity": 0.2}},
+        {"center": (22, 20), "radius": 3, "material": "Mirror"},
+    ],
+    lights=[{"Point": {"at": (40, 20), "intensity": 3}}],
+    glass=[{"points": [(30, 26), (30, 38)], "through": [(33, 32), (27, 32)]}],
+    render={"samples": 8, "bounces": 2},
+)
+
+
+def test_arcs_from_python_render_the_clis_bits(cli, tmp_path):
+    path = tmp_path / "arcs.ron"
+    path.write_text(ARCS_RON)
+    expected = cli_render(cli, path, tmp_path / "cli.exr", "--seed", "7")
+    built = flatray.Scene(**ARCS_VALUES)
+    assert built.counts["walls"] == 3
+    got = flatray.render(built, seed=7)
+    assert np.array_equal(got.image, expected)
+    assert got.image.max() > 0
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.Scene(**{**ARCS_VALUES, "walls": [{"a": (1, 1), "through": (2, 2), "b": (3, 3)}]})
+    assert "one line" in caught.value.message
+
+
 def test_the_image_is_height_by_width_by_three_float32(repo):
     scene = flatray.load(repo / "scenes" / "room.ron")
     result = flatray.render(scene, spp=2, scale=0.1)

@@ -9,7 +9,7 @@
 use std::f64::consts::TAU;
 
 use flatray_cache::WallMemo;
-use flatray_geometry::DVec2;
+use flatray_geometry::{DVec2, Shape};
 
 use crate::material::diffuse_albedo;
 use crate::path::{Trace, add_caustics, lambertian_light, memo_irradiance};
@@ -39,8 +39,10 @@ pub(crate) fn memo_bounce(
     if u == 0.0 || u == 1.0 || (trace.memo_checks && flatray_cache::checked(index, u)) {
         return None;
     }
-    let x = wall.shape.point_at(u);
-    let side = wall.shape.arrival_side(x, dir)?;
+    let side = match &wall.shape {
+        Shape::Segment(s) => s.arrival_side(dir)?,
+        Shape::Arc(arc) => arc.arrival_side(arc.point_at(u), dir)?,
+    };
     if trace
         .last_leg_sides
         .is_some_and(|sides| sides.get(2 * index as usize + side.index()) != Some(&false))
@@ -51,6 +53,7 @@ pub(crate) fn memo_bounce(
     stats.work.bounce_rays += 1;
     stats.work.memo_lookups += 1;
     stats.physics.paths_bounce_limit += 1;
+    let x = wall.shape.point_at(u);
     let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
     // The path loop's own steps: the memo's read, the caustic bins, f E.
     let irradiance = add_caustics(

@@ -72,7 +72,7 @@ impl Bsdf {
     /// The BSDF of wall `index` at `x`, the point at `u` of it. A diffuse
     /// wall without an albedo of its own takes the floor's there (counted
     /// in `stats`; with `tables`, from the table along the walls).
-    #[inline]
+    #[inline(always)]
     pub fn at(
         scene: &Scene,
         material: Material,
