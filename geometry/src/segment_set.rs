@@ -1,6 +1,6 @@
-//! A set of segments with closest-hit and all-crossings queries: brute
-//! force over a structure-of-arrays copy for small sets (four segments at
-//! a time where the processor has AVX), a bounding volume
+//! A set of segments and arcs with closest-hit and all-crossings queries:
+//! brute force over a structure-of-arrays copy for small sets (four
+//! segments at a time where the processor has AVX), a bounding volume
 //! hierarchy for large ones. All give exactly the same answers.
 
 use crate::arc::arc_crossings;
@@ -58,8 +58,10 @@ pub const BVH_THRESHOLD: usize = 32;
 /// Indices are positions in the vector given to [`SegmentSet::new`] or
 /// [`SegmentSet::of_shapes`]. Ties in the closest hit go to the lower
 /// index, so both strategies (and both kernels) return identical answers.
-/// Arcs are tested after the segments, each behind a test of its box: a
-/// scene without arcs pays one empty check per query.
+/// A BVH holds segments and arcs together (an arc by its box, tested in
+/// its leaf); brute force tests the segments, then each arc behind a test
+/// of its box. A set without arcs pays one check of a flag per query or
+/// leaf.
 #[derive(Clone, Debug, Default)]
 pub struct SegmentSet {
     /// Per index, the segment, or an arc's chord (`arcs` holds the arc).
@@ -69,6 +71,8 @@ pub struct SegmentSet {
     /// Per index, its place in `arcs`, or `u32::MAX` for a segment;
     /// empty when there are no arcs.
     arc_slot: Vec<u32>,
+    /// Whether the BVH holds the arcs (in its leaves) as well.
+    arcs_in_tree: bool,
     /// The segments as the kernels read them: in index order and padded
     /// to whole blocks for brute force; in leaf order for the BVH, whose
     /// leaves are tested one segment at a time (measured: four-wide
@@ -104,11 +108,10 @@ impl SegmentSet {
         SegmentSet::of_shapes(segments.into_iter().map(Shape::Segment).collect())
     }
 
-    /// A set of segments and arcs that picks its strategy by its number
-    /// of segments ([`BVH_THRESHOLD`]).
+    /// A set of segments and arcs that picks its strategy by its size
+    /// ([`BVH_THRESHOLD`]).
     pub fn of_shapes(shapes: Vec<Shape>) -> SegmentSet {
-        let segments = shapes.iter().filter(|s| s.as_segment().is_some()).count();
-        let strategy = if segments > BVH_THRESHOLD {
+        let strategy = if shapes.len() > BVH_THRESHOLD {
             Strategy::Bvh
         } else {
             Strategy::BruteForce
@@ -125,8 +128,9 @@ impl SegmentSet {
         )
     }
 
-    /// A set of segments and arcs with the given strategy for its
-    /// segments.
+    /// A set of segments and arcs with the given strategy. A BVH holds
+    /// both, an arc by its box; brute force tests the segments four at a
+    /// time and then each arc behind its box.
     pub fn shapes_with_strategy(shapes: Vec<Shape>, strategy: Strategy) -> SegmentSet {
         let mut arcs = Vec::new();
         let mut arc_slot = Vec::new();
@@ -142,17 +146,38 @@ impl SegmentSet {
             }
         }
         let segments: Vec<Segment> = shapes.iter().map(Shape::chord).collect();
-        let mut order: Vec<u32> = (0..segments.len() as u32)
-            .filter(|&i| arc_slot.get(i as usize).is_none_or(|&k| k == u32::MAX))
-            .collect();
+        let is_arc = |i: u32| arc_slot.get(i as usize).is_some_and(|&k| k != u32::MAX);
         let mut nodes = Vec::new();
         let mut lanes = Lanes::default();
-        if strategy == Strategy::Bvh && !order.is_empty() {
-            build(&segments, &mut order, &mut nodes);
+        let arcs_in_tree = strategy == Strategy::Bvh && !shapes.is_empty() && !arcs.is_empty();
+        if strategy == Strategy::Bvh && !shapes.is_empty() {
+            // The tree is built over every shape, an arc standing in as
+            // its box's diagonal (the same box and centre); in the lanes an
+            // arc's slot holds a segment of NaNs, which no ray crosses, and
+            // a leaf tests its arcs itself.
+            let proxies: Vec<Segment> = (0..shapes.len())
+                .map(
+                    |i| match arc_slot.get(i).and_then(|&k| arcs.get(k as usize)) {
+                        Some(&(_, _, lo, hi)) => Segment::new(lo, hi),
+                        None => segments[i],
+                    },
+                )
+                .collect();
+            let mut order: Vec<u32> = (0..shapes.len() as u32).collect();
+            build(&proxies, &mut order, &mut nodes);
+            let nothing = Segment::new(DVec2::NAN, DVec2::NAN);
             for &i in &order {
-                lanes.push(&segments[i as usize], i);
+                lanes.push(
+                    if is_arc(i) {
+                        &nothing
+                    } else {
+                        &segments[i as usize]
+                    },
+                    i,
+                );
             }
         } else {
+            let order: Vec<u32> = (0..segments.len() as u32).filter(|&i| !is_arc(i)).collect();
             for &i in &order {
                 lanes.push(&segments[i as usize], i);
             }
@@ -162,10 +187,68 @@ impl SegmentSet {
             segments,
             arcs,
             arc_slot,
+            arcs_in_tree,
             lanes,
             nodes,
             kernel: None,
         }
+    }
+
+    /// Keeps in `best` the nearest crossing of the arcs among a leaf's
+    /// `slots`, as [`SegmentSet::closest_arc`] does for all of them.
+    #[inline]
+    fn closest_arc_in(
+        &self,
+        slots: std::ops::Range<usize>,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        best: &mut Best,
+    ) {
+        for slot in slots {
+            let index = self.lanes.order[slot];
+            let Some(arc) = self.arc(index) else {
+                continue;
+            };
+            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
+            let (roots, n) = arc.line_crossings(ray, leaving, arriving.then_some(t_max));
+            if let Some(&t) = roots[..n].iter().find(|&&t| t > 0.0 && t < t_max)
+                && (t < best.t || (t == best.t && index < best.index))
+            {
+                *best = Best {
+                    t,
+                    index,
+                    u: arc.position_of(ray.at(t)),
+                };
+            }
+        }
+    }
+
+    /// Calls `visit` for the crossings of the arcs among a leaf's `slots`;
+    /// `false` when `visit` stopped it.
+    #[inline]
+    fn arc_crossings_in(
+        &self,
+        slots: std::ops::Range<usize>,
+        ray: &Ray,
+        t_max: f64,
+        skip: Skip,
+        visit: &mut impl FnMut(u32, Hit) -> bool,
+    ) -> bool {
+        for slot in slots {
+            let index = self.lanes.order[slot];
+            let Some(arc) = self.arc(index) else {
+                continue;
+            };
+            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
+            let (hits, n) = arc_crossings(ray, arc, t_max, leaving, arriving);
+            for hit in &hits[..n] {
+                if !visit(index, *hit) {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Whether any shape is an arc.
@@ -360,6 +443,9 @@ impl SegmentSet {
                     skip,
                     &mut best,
                 );
+                if self.arcs_in_tree {
+                    self.closest_arc_in(Self::leaf(&node), ray, t_max, skip, &mut best);
+                }
             } else {
                 let (near, far) = self.children(&node, ray, inv, best.t);
                 if let Some(far) = far {
@@ -375,9 +461,6 @@ impl SegmentSet {
             // Pop the next node that may still hold a nearer hit.
             loop {
                 if top == 0 {
-                    if !self.arcs.is_empty() {
-                        self.closest_arc(ray, t_max, skip, &mut best);
-                    }
                     return best.found();
                 }
                 top -= 1;
@@ -429,6 +512,10 @@ impl SegmentSet {
             if node.count > 0 {
                 for slot in Self::leaf(&node) {
                     let index = self.lanes.order[slot];
+                    if self.arcs_in_tree && self.arc(index).is_some() {
+                        // Listed with the arcs, by its own box.
+                        continue;
+                    }
                     let s = &self.segments[index as usize];
                     let (lo, hi) = (s.a.min(s.b), s.a.max(s.b));
                     if lo.x <= max.x && lo.y <= max.y && hi.x >= min.x && hi.y >= min.y {
@@ -478,7 +565,9 @@ impl SegmentSet {
         if !self.segment_crossings(ray, t_max, skip, &mut visit) {
             return false;
         }
-        self.arcs.is_empty() || self.arc_crossings_visit(ray, t_max, skip, None, &mut visit)
+        self.arcs.is_empty()
+            || self.arcs_in_tree
+            || self.arc_crossings_visit(ray, t_max, skip, None, &mut visit)
     }
 
     /// [`SegmentSet::for_each_crossing`] over the segments alone.
@@ -515,6 +604,11 @@ impl SegmentSet {
                     skip,
                     &mut visit,
                 ) {
+                    return false;
+                }
+                if self.arcs_in_tree
+                    && !self.arc_crossings_in(Self::leaf(&node), ray, t_max, skip, &mut visit)
+                {
                     return false;
                 }
             } else {

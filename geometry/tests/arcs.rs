@@ -334,3 +334,86 @@ fn a_round_room_returns_every_ray_to_its_wall() {
         );
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 60, rng_seed: proptest::test_runner::RngSeed::Fixed(37), ..ProptestConfig::default() })]
+
+    /// A BVH over segments and arcs together answers as brute force does:
+    /// hundreds of random arcs (full circles among them) and segments,
+    /// closest hits and every crossing (as sets), from rays anywhere and
+    /// from rays that leave an arc.
+    #[test]
+    fn the_bvh_over_arcs_and_segments_answers_as_brute_force(
+        shapes in proptest::collection::vec(
+            (
+                (-100.0..100.0f64, -100.0..100.0f64),
+                0.5..20.0f64,
+                0.0..std::f64::consts::TAU,
+                prop_oneof![0.1..6.0f64, Just(7.0)],
+                any::<bool>(),
+            ),
+            40..300,
+        ),
+        rays in proptest::collection::vec(((-120.0..120.0f64, -120.0..120.0f64), 0.0..std::f64::consts::TAU), 20),
+    ) {
+        let shapes: Vec<Shape> = shapes
+            .into_iter()
+            .map(|((x, y), r, from, span, straight)| {
+                let c = DVec2::new(x, y);
+                if straight {
+                    Shape::Segment(Segment::new(c, c + r * DVec2::new(from.cos(), from.sin())))
+                } else {
+                    Shape::Arc(Arc::from_angles(c, r, from, from + span).expect("an arc"))
+                }
+            })
+            .collect();
+        let brute = SegmentSet::shapes_with_strategy(shapes.clone(), Accel::BruteForce);
+        let bvh = SegmentSet::shapes_with_strategy(shapes.clone(), Accel::Bvh);
+        let arcs: Vec<u32> = (0..shapes.len() as u32).filter(|&i| shapes[i as usize].as_arc().is_some()).collect();
+        for (k, ((ox, oy), a)) in rays.into_iter().enumerate() {
+            let dir = DVec2::new(a.cos(), a.sin());
+            // From anywhere, and leaving an arc.
+            let (origin, skip) = if k % 2 == 0 || arcs.is_empty() {
+                (DVec2::new(ox, oy), Skip::NONE)
+            } else {
+                let i = arcs[k % arcs.len()];
+                (shapes[i as usize].point_at(0.37), Skip::one(i))
+            };
+            let ray = Ray::new(origin, dir);
+            prop_assert_eq!(
+                brute.closest_hit(&ray, f64::INFINITY, skip),
+                bvh.closest_hit(&ray, f64::INFINITY, skip)
+            );
+            let all = |set: &SegmentSet| {
+                let mut v = Vec::new();
+                set.for_each_crossing(&ray, 150.0, skip, |i, h| {
+                    v.push((i, h.t.to_bits()));
+                    true
+                });
+                v.sort_unstable();
+                v
+            };
+            prop_assert_eq!(all(&brute), all(&bvh));
+            // Boxes: the same indices.
+            let (lo, hi) = (origin - DVec2::splat(30.0), origin + DVec2::splat(30.0));
+            let in_box = |set: &SegmentSet| {
+                let (mut v, mut scratch) = (Vec::new(), Vec::new());
+                set.for_each_in_box(lo, hi, &mut scratch, |i| v.push(i));
+                v
+            };
+            let (b, t) = (in_box(&brute), in_box(&bvh));
+            // Brute force lists everything; the tree, what its boxes meet,
+            // which must hold every shape that meets the box.
+            for i in &t {
+                prop_assert!(b.contains(i));
+            }
+            for (i, shape) in shapes.iter().enumerate() {
+                let (slo, shi) = shape.bounds();
+                let meets = slo.x <= hi.x && slo.y <= hi.y && shi.x >= lo.x && shi.y >= lo.y;
+                if meets {
+                    prop_assert!(t.contains(&(i as u32)), "shape {i} meets the box but is not listed");
+                }
+            }
+        }
+    }
+}

@@ -493,8 +493,8 @@ Scene(
     }
 
     /// An arc is drawn as its curve, through its ends, turning through its
-    /// middle point (SVG's sweep flag 1 where it turns from x towards y);
-    /// a circle as two half circles, with no ends to drag.
+    /// middle point (SVG's sweep flag 1 where its angle grows, from x
+    /// towards y); a circle as two half circles, with no ends to drag.
     #[test]
     fn arcs_and_circles_are_drawn_as_curves() {
         let text = "Scene(canvas: (100, 80), floor: Color((0.5, 0.5, 0.5)),
@@ -511,9 +511,10 @@ Scene(
                 .collect()
         };
         // Through (50, 70) from (10, 40): the circle of centre (50, 85/3),
-        // radius 125/3, a minor arc turning from x towards y; through (50,
-        // 10), the other way.
-        for (k, sweep) in [(0, 1.0), (1, 0.0)] {
+        // radius 125/3, a minor arc whose angle about the centre falls
+        // (from 164 degrees through 90 to 16: SVG's sweep flag 0); through
+        // (50, 10), the other way.
+        for (k, sweep) in [(0, 0.0), (1, 1.0)] {
             let d = items.walls[k].curve.clone().unwrap_or_default();
             let v = numbers(&d);
             assert_eq!(v.len(), 9, "{d}");
