@@ -31,7 +31,7 @@
 
 use std::cell::RefCell;
 
-use flatray_geometry::{Arc, DVec2, Ray, Segment, Shape, Skip, arc_crossings, cross, intersect};
+use flatray_geometry::{Arc, DVec2, Ray, Segment, Shape, Skip, cross, intersect};
 
 use super::{Receiver, Visibility};
 use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Scene};
@@ -616,7 +616,7 @@ fn legs(scene: &Scene, walls: &[u32], (from, to): (DVec2, DVec2), skip: Skip) ->
                 .is_some_and(|hit| hit.t > 0.0 && hit.t < 1.0)
                 .into(),
             // A leg that leaves or reaches an arc can still cross it.
-            Shape::Arc(arc) => arc_crossings(&ray, arc, 1.0, skip.0 == w, skip.1 == w).1,
+            Shape::Arc(arc) => crossings_within(arc, &ray, skip, w),
         };
         for _ in 0..crossings {
             match wall.material.pane_tint() {
@@ -895,6 +895,13 @@ impl LineView {
         cuts: &mut Vec<f64>,
         covers: &mut Vec<Cover>,
     ) {
+        // An arc whose circle stays clear of the triangle from `x` to the
+        // light hides none of it (`x` on the arc lies on the circle: the
+        // test then passes).
+        let (pa, pb) = (self.point(within.0), self.point(within.1));
+        if !circle_meets_triangle(arc.center, arc.radius, [self.x, pa, pb]) {
+            return;
+        }
         cuts.clear();
         cuts.extend([within.0, within.1]);
         let la = self.a - self.x;
@@ -920,7 +927,7 @@ impl LineView {
             }
             let mid = self.point(0.5 * (from + to));
             let ray = Ray::new(self.x, mid - self.x);
-            let crossed = arc_crossings(&ray, arc, 1.0, skip.0 == w, skip.1 == w).1;
+            let crossed = crossings_within(arc, &ray, skip, w);
             // A pane arc crossed twice tints twice: two covers.
             for _ in 0..crossed {
                 match covers.last_mut() {
@@ -1249,6 +1256,32 @@ impl DiskView {
     }
 }
 
+/// How many times the segment `ray` (`t` from 0 to 1) crosses arc `w`,
+/// leaving or reaching it as `skip` says: the roots alone, no position.
+#[inline]
+fn crossings_within(arc: &Arc, ray: &Ray, skip: Skip, w: u32) -> usize {
+    let (roots, n) = arc.line_crossings(ray, skip.0 == w, (skip.1 == w).then_some(1.0));
+    roots[..n].iter().filter(|&&t| t > 0.0 && t < 1.0).count()
+}
+
+/// Whether the circle of `centre` and `radius` comes within a relative
+/// `1e-9` of the triangle (inside it, or near an edge).
+fn circle_meets_triangle(centre: DVec2, radius: f64, t: [DVec2; 3]) -> bool {
+    let scale = centre.abs().max_element().max(radius);
+    let reach = radius + 1e-9 * scale;
+    let side = |a: DVec2, b: DVec2| cross(b - a, centre - a);
+    let (s0, s1, s2) = (side(t[0], t[1]), side(t[1], t[2]), side(t[2], t[0]));
+    let inside = (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0);
+    inside
+        || (0..3).any(|k| {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let e = b - a;
+            let u = ((centre - a).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+            let u = if u.is_nan() { 0.0 } else { u };
+            centre.distance(a + e * u) <= reach
+        })
+}
+
 /// The points of `arc` where the view from `x` can turn: its ends, and
 /// its circle's tangent points from `x` that lie on it.
 fn arc_turning_points(arc: &Arc, x: DVec2) -> impl Iterator<Item = DVec2> {
@@ -1268,8 +1301,9 @@ fn arc_turning_points(arc: &Arc, x: DVec2) -> impl Iterator<Item = DVec2> {
         for (k, s) in [sin, -sin].into_iter().enumerate() {
             let dir = DVec2::new(u.x * cos - u.y * s, u.x * s + u.y * cos);
             let p = arc.center + dir * arc.radius;
-            let on = arc.is_full()
-                || (arc.point_at(arc.position_of(p)) - p).length() <= 1e-9 * arc.radius;
+            // On the arc's side of its chord (a tangent point a hair off
+            // it adds a cut that changes nothing).
+            let on = arc.is_full() || arc.bulge * cross(arc.b - arc.a, p - arc.a) >= 0.0;
             if on {
                 points[2 + k] = Some(p);
             }
