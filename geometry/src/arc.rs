@@ -203,14 +203,7 @@ impl Arc {
     /// inside, `None` on it.
     pub fn side_of(&self, p: DVec2) -> Option<Side> {
         let f = p - self.center;
-        let s = (f.length() - self.radius) * (f.length() + self.radius);
-        if s > 0.0 {
-            Some(Side::Positive)
-        } else if s < 0.0 {
-            Some(Side::Negative)
-        } else {
-            None
-        }
+        Side::of_sign((f.length() - self.radius) * (f.length() + self.radius))
     }
 
     /// The side from which a ray travelling in `d` arrives at point `p` of
@@ -218,14 +211,9 @@ impl Arc {
     /// along the tangent.
     #[inline]
     pub fn arrival_side(&self, p: DVec2, d: DVec2) -> Option<Side> {
-        let s = d.dot(p - self.center);
-        if s < 0.0 {
-            Some(Side::Positive)
-        } else if s > 0.0 {
-            Some(Side::Negative)
-        } else {
-            None
-        }
+        // Arriving from outside means travelling against the outward
+        // normal.
+        Side::of_sign(-d.dot(p - self.center))
     }
 
     /// The bounding box: the ends, and the circle's extreme points that

@@ -116,6 +116,19 @@ impl Side {
         }
     }
 
+    /// `Positive` for a value above zero, `Negative` below, `None` for
+    /// zero (either sign) and NaN.
+    #[inline]
+    pub fn of_sign(value: f64) -> Option<Side> {
+        if value > 0.0 {
+            Some(Side::Positive)
+        } else if value < 0.0 {
+            Some(Side::Negative)
+        } else {
+            None
+        }
+    }
+
     /// 0 for `Positive`, 1 for `Negative`: an index for per-side tables.
     #[inline]
     pub fn index(self) -> usize {
@@ -185,14 +198,7 @@ impl Segment {
     /// the line.
     #[inline]
     pub fn side_of(&self, p: DVec2) -> Option<Side> {
-        let s = self.side_value(p);
-        if s > 0.0 {
-            Some(Side::Positive)
-        } else if s < 0.0 {
-            Some(Side::Negative)
-        } else {
-            None
-        }
+        Side::of_sign(self.side_value(p))
     }
 
     /// The side from which a ray travelling in direction `d` arrives at

@@ -207,19 +207,8 @@ impl SegmentSet {
     ) {
         for slot in slots {
             let index = self.lanes.order[slot];
-            let Some(arc) = self.arc(index) else {
-                continue;
-            };
-            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
-            let (roots, n) = arc.line_crossings(ray, leaving, arriving.then_some(t_max));
-            if let Some(&t) = roots[..n].iter().find(|&&t| t > 0.0 && t < t_max)
-                && (t < best.t || (t == best.t && index < best.index))
-            {
-                *best = Best {
-                    t,
-                    index,
-                    u: arc.position_of(ray.at(t)),
-                };
+            if let Some(arc) = self.arc(index) {
+                keep_nearer_arc(index, arc, ray, t_max, skip, best);
             }
         }
     }
@@ -235,20 +224,11 @@ impl SegmentSet {
         skip: Skip,
         visit: &mut impl FnMut(u32, Hit) -> bool,
     ) -> bool {
-        for slot in slots {
+        slots.into_iter().all(|slot| {
             let index = self.lanes.order[slot];
-            let Some(arc) = self.arc(index) else {
-                continue;
-            };
-            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
-            let (hits, n) = arc_crossings(ray, arc, t_max, leaving, arriving);
-            for hit in &hits[..n] {
-                if !visit(index, *hit) {
-                    return false;
-                }
-            }
-        }
-        true
+            self.arc(index)
+                .is_none_or(|arc| visit_arc(index, arc, ray, t_max, skip, visit))
+        })
     }
 
     /// Whether any shape is an arc.
@@ -279,21 +259,8 @@ impl SegmentSet {
     fn closest_arc(&self, ray: &Ray, t_max: f64, skip: Skip, best: &mut Best) {
         let inv = DVec2::new(1.0 / ray.dir.x, 1.0 / ray.dir.y);
         for &(index, ref arc, lo, hi) in &self.arcs {
-            if enter_box(lo, hi, ray, inv, best.t).is_none() {
-                continue;
-            }
-            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
-            // The roots alone; the position along the arc (an `atan2`)
-            // only for a root that wins.
-            let (roots, n) = arc.line_crossings(ray, leaving, arriving.then_some(t_max));
-            if let Some(&t) = roots[..n].iter().find(|&&t| t > 0.0 && t < t_max)
-                && (t < best.t || (t == best.t && index < best.index))
-            {
-                *best = Best {
-                    t,
-                    index,
-                    u: arc.position_of(ray.at(t)),
-                };
+            if enter_box(lo, hi, ray, inv, best.t).is_some() {
+                keep_nearer_arc(index, arc, ray, t_max, skip, best);
             }
         }
     }
@@ -315,19 +282,10 @@ impl SegmentSet {
             None if only.is_some() => &[],
             None => &self.arcs[..],
         };
-        for &(index, ref arc, lo, hi) in arcs {
-            if enter_box(lo, hi, ray, inv, t_max).is_none() {
-                continue;
-            }
-            let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
-            let (hits, n) = arc_crossings(ray, arc, t_max, leaving, arriving);
-            for hit in &hits[..n] {
-                if !visit(index, *hit) {
-                    return false;
-                }
-            }
-        }
-        true
+        arcs.iter().all(|&(index, ref arc, lo, hi)| {
+            enter_box(lo, hi, ray, inv, t_max).is_none()
+                || visit_arc(index, arc, ray, t_max, skip, visit)
+        })
     }
 
     /// The same set, answering with `kernel` if this processor runs it
@@ -651,6 +609,41 @@ fn enter(node: &Node, ray: &Ray, inv: DVec2, t_max: f64) -> Option<f64> {
     if lo <= hi { Some(lo) } else { None }
 }
 
+/// Calls `visit` for each crossing of arc `index` below `t_max`, nearer
+/// first; `false` when `visit` stopped it.
+#[inline]
+fn visit_arc(
+    index: u32,
+    arc: &Arc,
+    ray: &Ray,
+    t_max: f64,
+    skip: Skip,
+    visit: &mut impl FnMut(u32, Hit) -> bool,
+) -> bool {
+    let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
+    let (hits, n) = arc_crossings(ray, arc, t_max, leaving, arriving);
+    hits[..n].iter().all(|hit| visit(index, *hit))
+}
+
+/// Keeps in `best` the nearest crossing of arc `index` below `best.t`,
+/// the lower index on a tie; `t_max` is the query's, where an arriving ray
+/// ends. The roots alone: the position along the arc (an `atan2`) only
+/// for a root that wins.
+#[inline]
+fn keep_nearer_arc(index: u32, arc: &Arc, ray: &Ray, t_max: f64, skip: Skip, best: &mut Best) {
+    let (leaving, arriving) = (skip.0 == index, skip.1 == index && t_max.is_finite());
+    let (roots, n) = arc.line_crossings(ray, leaving, arriving.then_some(t_max));
+    if let Some(&t) = roots[..n].iter().find(|&&t| t > 0.0 && t < t_max)
+        && (t < best.t || (t == best.t && index < best.index))
+    {
+        *best = Best {
+            t,
+            index,
+            u: arc.position_of(ray.at(t)),
+        };
+    }
+}
+
 /// Where `ray` enters the box `[lo, hi]` within `[0, t_max]`, if it does
 /// (as [`enter`]).
 #[inline(always)]
@@ -764,13 +757,7 @@ fn bounds(segments: &[Segment], slots: &[u32]) -> (DVec2, DVec2) {
     }
     // Pad by a few units in the last place of the largest coordinate, so
     // that the box test's rounding can never cut off an endpoint.
-    let scale = min
-        .abs()
-        .max(max.abs())
-        .max_element()
-        .max(f64::MIN_POSITIVE);
-    let pad = DVec2::splat(scale * 8.0 * f64::EPSILON + (max - min).max_element() * 1e-12);
-    (min - pad, max + pad)
+    pad_box(min, max)
 }
 
 /// Reorders `slots` and returns the size of the left part, or `None` when

@@ -109,14 +109,12 @@ fn draw(
                 } else {
                     p.distance(a)
                 };
-                let coverage = (half + 0.5 - distance).clamp(0.0, 1.0) * opacity;
-                if coverage > 0.0 {
-                    let k = ((y * w + x) * 3) as usize;
-                    for c in 0..3 {
-                        let old = bytes[k + c] as f64;
-                        bytes[k + c] = (old + (colour[c] - old) * coverage).round() as u8;
-                    }
-                }
+                blend(
+                    bytes,
+                    ((y * w + x) * 3) as usize,
+                    colour,
+                    (half, distance, opacity),
+                );
             }
             i += 1;
         }
@@ -160,14 +158,26 @@ fn draw_arc(
             // Its nearest point by angle: on the circle, or an end.
             let on = to_pixels(arc.point_at(arc.position_of(world)));
             let distance = p.distance(on).min(p.distance(a)).min(p.distance(b));
-            let coverage = (half + 0.5 - distance).clamp(0.0, 1.0) * opacity;
-            if coverage > 0.0 {
-                let k = ((y * w + x) * 3) as usize;
-                for c in 0..3 {
-                    let old = bytes[k + c] as f64;
-                    bytes[k + c] = (old + (colour[c] - old) * coverage).round() as u8;
-                }
-            }
+            blend(
+                bytes,
+                ((y * w + x) * 3) as usize,
+                colour,
+                (half, distance, opacity),
+            );
+        }
+    }
+}
+
+/// Blends `colour` into the pixel at byte `k` by how much of it a line
+/// `2 half` wide covers, its centre `distance` from the line's middle,
+/// times `opacity`.
+#[inline]
+fn blend(bytes: &mut [u8], k: usize, colour: [f64; 3], (half, distance, opacity): (f64, f64, f64)) {
+    let coverage = (half + 0.5 - distance).clamp(0.0, 1.0) * opacity;
+    if coverage > 0.0 {
+        for c in 0..3 {
+            let old = bytes[k + c] as f64;
+            bytes[k + c] = (old + (colour[c] - old) * coverage).round() as u8;
         }
     }
 }
