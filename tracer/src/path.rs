@@ -250,7 +250,8 @@ pub(crate) fn follow(
         let wall = &scene.walls[index as usize];
         let x = wall.shape.point_at(h.u);
         let Some(side) = wall.shape.arrival_side(x, ray.dir) else {
-            // A crossing implies the ray is not parallel to the wall.
+            // A crossing implies the ray is not parallel to a segment; a
+            // ray exactly tangent to an arc, to the last bit, ends here.
             stats.physics.paths_escaped += 1;
             break;
         };
