@@ -229,14 +229,7 @@ pub(crate) fn exact_light(
                     if through == Rgb::ZERO {
                         continue;
                     }
-                    match scratch.spans.last_mut() {
-                        Some(last) if last.to == a && last.through == through => last.to = b,
-                        _ => scratch.spans.push(Span {
-                            from: a,
-                            to: b,
-                            through,
-                        }),
-                    }
+                    extend_spans(&mut scratch.spans, (a, b), through);
                 }
                 let mut sum = Rgb::ZERO;
                 for span in &scratch.spans {
@@ -549,14 +542,7 @@ fn in_mirror(
             if through == Rgb::ZERO {
                 continue;
             }
-            match scratch.spans.last_mut() {
-                Some(last) if last.to == a && last.through == through => last.to = b,
-                _ => scratch.spans.push(Span {
-                    from: a,
-                    to: b,
-                    through,
-                }),
-            }
+            extend_spans(&mut scratch.spans, (a, b), through);
         }
         let mut sum = Rgb::ZERO;
         for span in &scratch.spans {
@@ -689,6 +675,22 @@ fn through_walls(
     legs(scene, walls, (x, p), receiver.skip(scene.light_wall[index]))
 }
 
+/// Adds the piece from `a` to `b` that lets `through` through to
+/// `spans`: the last span grown where it ends at `a` and lets the same
+/// through, so that walls that hide nothing leave the integral's bits as
+/// they are.
+#[inline]
+fn extend_spans(spans: &mut Vec<Span>, (a, b): (f64, f64), through: Rgb) {
+    match spans.last_mut() {
+        Some(last) if last.to == a && last.through == through => last.to = b,
+        _ => spans.push(Span {
+            from: a,
+            to: b,
+            through,
+        }),
+    }
+}
+
 /// Turns the covers of `scratch` into the visible spans of `whole`: where
 /// no opaque cover lies, with the product of the panes' tints over each
 /// span (in the order of their walls' indices).
@@ -739,14 +741,7 @@ fn sweep(whole: (f64, f64), scratch: &mut Scratch) {
         }
         // Neighbours that let the same through are one span: a light
         // with no wall in front of it is one span, whatever cuts it.
-        match spans.last_mut() {
-            Some(last) if last.to == a && last.through == through => last.to = b,
-            _ => spans.push(Span {
-                from: a,
-                to: b,
-                through,
-            }),
-        }
+        extend_spans(spans, (a, b), through);
     }
 }
 
