@@ -123,3 +123,81 @@ fn passes_do_not_depend_on_the_threads() {
     assert!(one.image == two.image);
     assert_eq!(one.stats, two.stats);
 }
+
+/// A window of a render takes the whole render's floor points: the first
+/// pass measures their rate at the same probe pixels, in every tile, also
+/// those outside the window, so the window's pixels have the whole
+/// render's bits. With the probes of the window's tiles only, the rate
+/// would differ and so would the bits.
+#[test]
+fn a_window_takes_the_whole_renders_points() {
+    for name in ["room", "first-flat"] {
+        let loaded = load(name);
+        let options = {
+            let mut options = loaded.options;
+            options.samples = 96;
+            options.scale = 0.25;
+            options
+        };
+        let whole = render(&loaded.scene, &options);
+        let window = flatray_tracer::Window {
+            x0: 37,
+            y0: 21,
+            x1: 70,
+            y1: 50,
+        };
+        let part = render(&loaded.scene, &{
+            let mut options = options;
+            options.window = Some(window);
+            options
+        });
+        for y in window.y0..window.y1 {
+            for x in window.x0..window.x1 {
+                assert_eq!(
+                    part.image.get(x, y),
+                    whole.image.get(x, y),
+                    "{name} ({x}, {y})"
+                );
+            }
+        }
+    }
+}
+
+/// The later passes' floor points follow the first pass's measure: the
+/// room, whose noise is its bounce, takes under an eighth of a point per
+/// sample (a quarter would be 64 a pixel); a hard shadow with little
+/// other noise (a point light behind a mirror's end, whose light off the
+/// mirror the caustic pass brings) takes over a quarter (91 a pixel).
+#[test]
+fn floor_points_go_where_the_noise_is() {
+    let points = |text: &str, samples: u32, scale: f64| {
+        let loaded = flatray_io::parse(
+            text,
+            std::path::Path::new("test.ron"),
+            std::path::Path::new("."),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let options = {
+            let mut options = loaded.options;
+            options.samples = samples;
+            options.scale = scale;
+            options
+        };
+        let rendered = render(&loaded.scene, &options);
+        let pixels = rendered.image.width as f64 * rendered.image.height as f64;
+        rendered.stats.work.floor_points as f64 / pixels
+    };
+    let room = std::fs::read_to_string(workspace_root().join("scenes/room.ron")).unwrap();
+    let room_points = points(&room, 256, 0.5);
+    // 8 in the first pass, then a few a pass.
+    assert!(
+        room_points < 256.0 / 8.0,
+        "room: {room_points} points a pixel"
+    );
+    let shadow = "Scene(canvas: (64, 64), floor: Color((1, 1, 1)), falloff: Constant,
+        walls: [Wall(a: (30, -1000), b: (30, 40.9), material: Mirror())],
+        lights: [Point(at: (10.3, 30.2))],
+        render: (bounces: 1))";
+    let shadow_points = points(shadow, 256, 1.0);
+    assert!(shadow_points > 256.0 / 4.0, "hard shadow: {shadow_points}");
+}

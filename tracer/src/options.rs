@@ -21,9 +21,9 @@ pub struct MemoOptions {
     /// Length of a wall bin, in pixels of the rendered image.
     pub bin_length: f64,
     /// The fewest receiver points per pixel and render pass for the
-    /// floor's direct light. A pass's points grow with its samples
-    /// (`passes::samples_per_point`), so the error keeps falling as the
-    /// samples grow.
+    /// floor's direct light. A later pass's points grow with its samples
+    /// at the rate the first pass measures (`passes::point_rate`), so the
+    /// error keeps falling as the samples grow.
     pub floor_samples: u32,
     /// Whether, with the memo on and more than one bounce, paths end at
     /// their first diffuse wall and read the rest of their light from the

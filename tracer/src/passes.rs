@@ -36,49 +36,84 @@ pub fn next_pass_end(done: u32) -> u32 {
     }
 }
 
-/// How many of a pass's samples each floor point stands for. Where a
-/// light table draws the lights a point takes, its direct light is a
-/// random estimate: one point per sample. Elsewhere every light's value
-/// at a point is exact, and the points only average it over the pixel's
-/// square: a point per 4 samples. (Per 16 the room at one bounce took
-/// two thirds of the time for the same noise, but a point light's hard
-/// shadow edge stopped converging: a later pass's few points weigh as
-/// much as its many samples, `direct_light.rs`.)
-pub(crate) fn samples_per_point(light_table: bool) -> u32 {
-    if light_table { 1 } else { 4 }
+/// The first pass's floor points where each point's value is exact (or
+/// its samples, if fewer). Where a light table draws the lights a point
+/// takes, its direct light is a random estimate, and the first pass takes
+/// a point per sample.
+pub const FIRST_EXACT_POINTS: u32 = 8;
+
+/// The first pass measures its points' error from its first this many
+/// points, half against half ([`point_rate`]): a later pass takes few
+/// points, and this many, stratified as the first of a pixel's Sobol
+/// sequence are, have about the error per point that those few have. (A
+/// measure from all of the first pass's points would read their finer
+/// stratification as a smaller error per point.)
+pub const MEASURED_POINTS: usize = 4;
+
+/// What [`point_rate`] divides the ratio of the points' error to the
+/// rest's by. The first pass measures the rest's error from halves of 8
+/// samples, each on 8 of the 64 arcs of directions; a later pass takes
+/// whole runs of the arcs, and stratifies each arc over its runs, so its
+/// paths' error per sample is several times smaller than measured. The
+/// value is set from the time each scene of `scenes/` takes to reach a
+/// given error (`docs/performance.md`, "Floor points by measure").
+pub const POINT_SHARE: f64 = 1.0 / 32.0;
+
+/// Probe pixels, where the first pass measures its noise's split
+/// ([`crate::stats::Split`]): one in each square of this many pixels a
+/// side, the same pixels whatever the window, so that a window of a render
+/// takes the same points as the whole.
+pub const PROBE_SPACING: u32 = 4;
+
+/// Whether pixel `(x, y)` is a probe pixel ([`PROBE_SPACING`]).
+#[inline(always)]
+pub(crate) fn is_probe((x, y): (u32, u32)) -> bool {
+    x % PROBE_SPACING == PROBE_SPACING / 2 && y % PROBE_SPACING == PROBE_SPACING / 2
 }
 
-/// The fewest floor points a pass takes where a point stands for more
-/// than one sample (or its samples, if fewer): a render of a few passes
-/// keeps a point per sample, where the direct light's position in the
-/// pixel can be most of its noise (the tutorial's flat at 32 spp: 1.86 %
-/// with 16 a pass, over 2 % with 4).
-pub const FEWEST_EXACT_POINTS: u32 = 16;
+/// How many floor points a pass takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum PointRule {
+    /// The first pass's: a point per sample where a light table draws
+    /// each point's lights, [`FIRST_EXACT_POINTS`] elsewhere.
+    First { light_table: bool },
+    /// `rate` points per sample, at least one a pass: the later passes',
+    /// measured by the first ([`point_rate`]).
+    Measured { rate: f64 },
+}
 
-/// The floor memo's points in one pixel for a pass of `count` samples,
-/// each point standing for `per_point` of them ([`samples_per_point`]):
-/// never fewer than [`FEWEST_EXACT_POINTS`] (or the samples, if fewer),
-/// and at least `fewest`.
-pub(crate) fn pass_points(count: u32, fewest: u32, per_point: u32) -> u32 {
-    let wanted = if per_point > 1 {
-        (count / per_point).max(count.min(FEWEST_EXACT_POINTS))
+/// Points per sample for the passes after the first, from the first
+/// pass's noise at its probe pixels (`split`). Each part's squared error
+/// falls as its count grows, the points' as `K_points / points` and the
+/// rest's as `K_paths / samples`; a pass takes `K_points / (POINT_SHARE
+/// K_paths)` points per sample, at most one. Where the paths carry most
+/// of the noise (a bounce) a point, which takes every light's closed
+/// form, would buy little: the samples take the time. Where the points
+/// carry it (a hard shadow, many lights), every sample takes one. Where
+/// the paths measured no noise at all, one per sample.
+pub(crate) fn point_rate(split: &crate::stats::Split) -> f64 {
+    if split.probes == 0 || split.paths <= 0.0 {
+        return 1.0;
+    }
+    let rate = split.points / (POINT_SHARE * split.paths);
+    if rate.is_finite() {
+        rate.clamp(0.0, 1.0)
     } else {
-        count
+        1.0
+    }
+}
+
+/// The floor memo's points in one pixel for a pass of `count` samples, by
+/// `rule`, and at least `fewest`.
+pub(crate) fn pass_points(count: u32, fewest: u32, rule: PointRule) -> u32 {
+    let wanted = match rule {
+        PointRule::First { light_table: true } => count,
+        PointRule::First { light_table: false } => count.min(FIRST_EXACT_POINTS),
+        // At least one point a pass: each pass is an estimate of the
+        // pixel by itself.
+        PointRule::Measured { rate } => ((count as f64 * rate).ceil() as u32).clamp(1, count),
     };
     wanted.max(fewest)
-}
-
-/// The floor memo's points per pixel over the passes of a render of
-/// `samples` ([`pass_points`] per pass).
-pub(crate) fn floor_points(samples: u32, fewest: u32, per_point: u32) -> u64 {
-    let mut done = 0;
-    let mut points = 0u64;
-    while done < samples {
-        let end = next_pass_end(done).min(samples);
-        points += pass_points(end - done, fewest, per_point) as u64;
-        done = end;
-    }
-    points
 }
 
 /// The index of the pass of the schedule that takes sample `sample`: 0
@@ -87,6 +122,15 @@ pub(crate) fn floor_points(samples: u32, fewest: u32, per_point: u32) -> u64 {
 pub(crate) fn pass_index(sample: u32) -> u32 {
     const _: () = assert!(FIRST_PASS == 16);
     (u32::BITS - (sample | (FIRST_PASS - 1)).leading_zeros()).saturating_sub(4)
+}
+
+/// The first sample of pass `index` of the schedule.
+#[inline(always)]
+pub(crate) fn pass_start(index: u32) -> u32 {
+    match index {
+        0 => 0,
+        i => FIRST_PASS.checked_shl(i - 1).unwrap_or(u32::MAX),
+    }
 }
 
 /// The passes of a render of `samples` samples per pixel, as ranges of
@@ -123,17 +167,18 @@ pub(crate) struct Pass {
 
 impl Pass {
     /// Pass `index`, of `samples`, whose floor points start at
-    /// `first_point`, at least `fewest_points` of them.
+    /// `first_point`, at least `fewest_points` of them, as many as `rule`
+    /// says.
     pub fn new(
         index: u32,
         samples: Range<u32>,
-        (first_point, fewest_points, per_point): (u32, u32, u32),
+        (first_point, fewest_points, rule): (u32, u32, PointRule),
         seed: u64,
     ) -> Pass {
         let middle = samples.start + (samples.end - samples.start) / 2;
         let count = samples.end - samples.start;
-        let points =
-            first_point..first_point.saturating_add(pass_points(count, fewest_points, per_point));
+        let taken = pass_points(count, fewest_points, rule);
+        let points = first_point..first_point.saturating_add(taken);
         let seed = match index {
             0 => seed,
             i => crate::sampling::derive_seed(seed, PASS_SEEDS + i as u64),
@@ -418,16 +463,52 @@ mod tests {
         assert_eq!(ends(17), vec![(0, 16), (16, 17)]);
         assert_eq!(ends(100), vec![(0, 16), (16, 32), (32, 64), (64, 100)]);
         assert_eq!(next_pass_end(u32::MAX), u32::MAX);
-        assert_eq!(floor_points(100, 1, 1), 100);
-        assert_eq!(floor_points(100, 20, 1), 20 + 20 + 32 + 36);
-        assert_eq!(floor_points(0, 20, 1), 0);
-        // Passes of 16, 16, 32 and 36 samples: a quarter or a sixteenth
-        // of each, but at least 16; or 20 at least.
-        assert_eq!(floor_points(100, 1, 4), 16 + 16 + 16 + 16);
-        assert_eq!(floor_points(100, 1, 16), 16 + 16 + 16 + 16);
-        assert_eq!(floor_points(1024, 1, 4), 16 + 16 + 16 + 16 + 32 + 64 + 128);
-        assert_eq!(floor_points(100, 20, 16), 20 + 20 + 20 + 20);
-        assert_eq!(floor_points(2, 1, 16), 2);
+    }
+
+    #[test]
+    fn a_pass_takes_its_points_by_its_rule() {
+        let table = PointRule::First { light_table: true };
+        let exact = PointRule::First { light_table: false };
+        assert_eq!(pass_points(16, 1, table), 16);
+        assert_eq!(pass_points(16, 1, exact), FIRST_EXACT_POINTS);
+        assert_eq!(pass_points(3, 1, exact), 3);
+        assert_eq!(pass_points(16, 20, exact), 20);
+        // A measured rate, rounded up, at least one a pass and at most
+        // one a sample.
+        let rate = |rate| PointRule::Measured { rate };
+        assert_eq!(pass_points(256, 1, rate(0.04)), 11);
+        assert_eq!(pass_points(16, 1, rate(0.0)), 1);
+        assert_eq!(pass_points(16, 1, rate(1.0)), 16);
+        assert_eq!(pass_points(16, 5, rate(0.01)), 5);
+    }
+
+    /// The rate follows the split of the first pass's noise: points
+    /// twice as noisy against the same paths take twice as many; paths
+    /// with no noise, or nothing measured, one a sample; never more.
+    #[test]
+    fn the_rate_follows_the_measured_split() {
+        let split = |points, paths| crate::stats::Split {
+            probes: 10,
+            points,
+            paths,
+        };
+        let r1 = point_rate(&split(1.0, 1000.0));
+        let r2 = point_rate(&split(2.0, 1000.0));
+        assert!((r1 - 1.0 / (POINT_SHARE * 1000.0)).abs() < 1e-15);
+        assert!((r2 - 2.0 * r1).abs() < 1e-15);
+        assert_eq!(point_rate(&split(1.0, 0.0)), 1.0);
+        assert_eq!(point_rate(&split(500.0, 1.0)), 1.0);
+        assert_eq!(point_rate(&crate::stats::Split::default()), 1.0);
+        assert_eq!(point_rate(&split(f64::NAN, 1.0)), 1.0);
+    }
+
+    #[test]
+    fn probes_are_one_in_each_square() {
+        let probes = (0..64)
+            .flat_map(|y| (0..64).map(move |x| (x, y)))
+            .filter(|&p| is_probe(p))
+            .count();
+        assert_eq!(probes, 64 * 64 / (PROBE_SPACING * PROBE_SPACING) as usize);
     }
 
     #[test]
@@ -442,15 +523,19 @@ mod tests {
 
     #[test]
     fn halves_weigh_each_half_by_its_samples() {
-        let pass = Pass::new(1, 16..21, (36, 36, 1), 7);
+        let pass = Pass::new(1, 16..21, (36, 36, PointRule::Measured { rate: 1.0 }), 7);
         assert_eq!(pass.points, 36..72);
         assert_eq!((pass.count(), pass.first_count()), (5, 2));
         let sums = pass.weigh_halves((Rgb::splat(1.0), Rgb::splat(3.0)));
         assert_eq!(sums.all, Rgb::splat(2.0 + 9.0));
         assert_eq!(sums.first, Rgb::splat(2.0));
         assert_ne!(pass.seed, 7);
-        assert_eq!(Pass::new(0, 0..16, (0, 1, 1), 7).seed, 7);
-        assert_eq!(Pass::new(0, 0..16, (0, 1, 1), 7).points, 0..16);
-        assert_eq!(Pass::new(6, 512..1024, (0, 1, 16), 7).points, 0..32);
+        let table = PointRule::First { light_table: true };
+        assert_eq!(Pass::new(0, 0..16, (0, 1, table), 7).seed, 7);
+        assert_eq!(Pass::new(0, 0..16, (0, 1, table), 7).points, 0..16);
+        let rate = PointRule::Measured { rate: 1.0 / 16.0 };
+        assert_eq!(Pass::new(6, 512..1024, (0, 1, rate), 7).points, 0..32);
+        assert_eq!(pass_start(6), 512);
+        assert_eq!(pass_start(0), 0);
     }
 }

@@ -14,7 +14,7 @@ use crate::material::glass::{GlassState, absorption, transmit};
 use crate::material::{Bsdf, Sampling, Transport};
 use crate::memo::Onward;
 use crate::run::Run;
-use crate::sampling::{Stream, circle_in_arc};
+use crate::sampling::{Stream, arc_point};
 use crate::scene::{Material, Scene};
 use crate::{Integrator, Rgb, Stats};
 
@@ -26,18 +26,19 @@ use crate::{Integrator, Rgb, Stats};
 /// render loop has it from the memo). With a `memo`, next-event estimation
 /// at a diffuse wall reads it instead of casting shadow rays.
 ///
-/// The ray that leaves the floor takes a uniform direction inside `arc`
-/// (of [`crate::sampling::ARCS`]); the caller draws the arc uniformly
-/// (`sampling::sample_arc`), so that the direction is uniform.
+/// The ray that leaves the floor takes the direction `fraction` of the
+/// way through `arc` (of [`crate::sampling::ARCS`]); the caller draws the
+/// arc and the fraction uniformly (`sampling::sample_arc`,
+/// `pixel::arc_fraction`), so that the direction is uniform.
 pub(crate) fn path_sample(
     trace: &Trace,
     p: DVec2,
-    arc: usize,
+    direction: (usize, f64),
     sample: u32,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
-    let begun = path_begin(trace, p, arc, None, stream, stats);
+    let begun = path_begin(trace, p, direction, None, stream, stats);
     let Some(ray) = begun.ray else {
         return begun.fluence;
     };
@@ -66,7 +67,7 @@ pub(crate) struct Begun {
 pub(crate) fn path_begin(
     trace: &Trace,
     p: DVec2,
-    arc: usize,
+    (arc, fraction): (usize, f64),
     shadow_walls: Option<&[Option<Vec<u32>>]>,
     stream: &mut Stream,
     stats: &mut Stats,
@@ -94,7 +95,7 @@ pub(crate) fn path_begin(
     if !trace.indirect {
         return Begun { fluence, ray: None };
     }
-    let dir = circle_in_arc(arc, stream);
+    let dir = arc_point(arc, fraction);
     Begun {
         fluence,
         ray: Some(Ray::new(p, dir)),

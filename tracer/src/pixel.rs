@@ -33,6 +33,9 @@ pub(crate) struct Context<'a> {
     pub(crate) size: (u32, u32),
     /// Whether the floor's direct light is estimated once per pixel.
     pub(crate) floor_memo: bool,
+    /// Whether the pass measures its noise's split at the probe pixels
+    /// (the first pass, with the floor memo: `passes::point_rate`).
+    pub(crate) measures: bool,
     /// Where that estimate's strata can share their shadow rays.
     pub(crate) coherence: Option<&'a FloorCoherence>,
     /// Whether the floor's rays test only their arc's walls.
@@ -332,22 +335,51 @@ pub(crate) fn pass_sums(
     let pass = context.pass;
     // Each half's estimates, and the whole's.
     let (mut halves, mut whole) = ((Rgb::ZERO, Rgb::ZERO), Rgb::ZERO);
+    let mut point_halves = ((Rgb::ZERO, Rgb::ZERO), (0, 0));
     if context.floor_memo && !pass.points.is_empty() {
         let from = (pass.points.start - first_point) as usize;
         let to = (pass.points.end - first_point) as usize;
         if let Some(values) = values.get(from..to) {
             let (first, second, all) = noise_halves(values, (x, y), stats);
             (halves, whole) = ((first, second), all);
+            if context.measures {
+                let measured = &values[..values.len().min(crate::passes::MEASURED_POINTS)];
+                let middle = measured.len() / 2;
+                let (first, second, _) = noise_halves(measured, (x, y), &mut Stats::default());
+                point_halves = ((first, second), (middle, measured.len() - middle));
+            }
         }
         stats.work.floor_memo_reuses += pass.count() as u64;
+        stats.work.floor_points += pass.points.len() as u64;
     }
     // The caustic pass's light on the floor, from each half of its
     // photons.
+    let mut caustic_halves = (Rgb::ZERO, Rgb::ZERO);
     if let Some(caustics) = context.trace.caustics {
         let k = (y * context.size.0 + x) as usize;
-        let (first, second) = caustics.floor_halves(k);
-        halves = (halves.0 + first, halves.1 + second);
+        caustic_halves = caustics.floor_halves(k);
+        halves = (halves.0 + caustic_halves.0, halves.1 + caustic_halves.1);
         whole += caustics.floor_at(k);
+    }
+    if context.measures && crate::passes::is_probe((x, y)) {
+        // The points' halves against the rest's: the paths' means over
+        // each half of the samples, and the photons'.
+        let (a, b) = (pass.first_count(), pass.count() - pass.first_count());
+        if a > 0 && b > 0 {
+            let scale = crate::film::pixel_scale(
+                context.trace.scene,
+                context.size,
+                (x, y),
+                context.options.exposure,
+            );
+            let ((p1, p2), (m1, m2)) = point_halves;
+            let paths = sums.first / a as f64 - (sums.all - sums.first) / b as f64
+                + (caustic_halves.0 - caustic_halves.1);
+            stats.split.add(
+                ((p1 - p2) * scale, m1 as u32, m2 as u32),
+                (paths * scale, a, b),
+            );
+        }
     }
     // A pass of one sample has no halves: its points and photons all
     // count, for the whole.
@@ -439,6 +471,33 @@ impl Pixel {
 /// apart from every path sample's and the floor memo's.
 pub(crate) const ARC_OFFSET_STREAM: u64 = 1 << 41;
 
+/// Stream sample indices from here up draw, per pass and arc, the turn of
+/// that pass's samples inside that arc ([`arc_fraction`]).
+pub(crate) const ARC_TURN_STREAMS: u64 = (1 << 41) + (1 << 20);
+
+/// How far through its arc (`sampling::sample_arc`) sample `sample`'s
+/// floor direction lies. A pass's runs of [`ARCS`] samples each take the
+/// arc once; the `r`-th run of the pass takes the van der Corput point
+/// `r` turned by one number drawn for the pass and the arc, so that a
+/// pass's samples in each arc are spread evenly through it (`2^k` runs
+/// take one each of its `2^k` equal parts), and each alone is uniform in
+/// it. Passes turn apart: they stay independent estimates, as the noise
+/// estimate's halves require.
+#[inline(always)]
+pub(crate) fn arc_fraction(key: StreamKey, arc: usize, sample: u32) -> f64 {
+    let pass = crate::passes::pass_index(sample);
+    let run = (sample - crate::passes::pass_start(pass)) / ARCS as u32;
+    let turn = key
+        .stream(ARC_TURN_STREAMS + pass as u64 * ARCS as u64 + arc as u64)
+        .uniform();
+    let fraction = turn + crate::sampling::radical_inverse(run);
+    if fraction >= 1.0 {
+        fraction - 1.0
+    } else {
+        fraction
+    }
+}
+
 /// One sample of a pixel: the receiver is jittered uniformly inside the
 /// pixel (the box filter). Deterministic in `(seed, pixel, sample)`.
 pub(crate) fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: &mut Stats) -> Rgb {
@@ -448,11 +507,12 @@ pub(crate) fn sample_with(context: &Context, pixel: &Pixel, sample: u32, stats: 
     let p = pixel.receiver(scene, &mut stream);
     stats.physics.camera_samples += 1;
     let arc = sample_arc(pixel.arc_offset, sample);
+    let direction = (arc, arc_fraction(pixel.key, arc, sample));
     if context.one_bounce_memo.is_none() {
-        return path_sample(trace, p, arc, sample, &mut stream, stats);
+        return path_sample(trace, p, direction, sample, &mut stream, stats);
     }
     // `path_sample`, with the one-bounce shortcut tried first.
-    let begun = path_begin(trace, p, arc, None, &mut stream, stats);
+    let begun = path_begin(trace, p, direction, None, &mut stream, stats);
     let Some(ray) = begun.ray else {
         return begun.fluence;
     };
@@ -645,7 +705,8 @@ pub(crate) fn culled_samples<const CHECKED: bool>(
             let trace = &context.trace;
             let mut stream = pixel.key.stream(sample as u64);
             let p = pixel.receiver(scene, &mut stream);
-            let begun = path_begin(trace, p, arc, shadow_walls, &mut stream, stats);
+            let direction = (arc, arc_fraction(pixel.key, arc, sample));
+            let begun = path_begin(trace, p, direction, shadow_walls, &mut stream, stats);
             // The plan culls only when paths bounce: every sample has a ray.
             let value = match begun.ray {
                 Some(ray) => {
@@ -727,9 +788,10 @@ pub(crate) fn arc_in_lanes<const CHECKED: bool, const N: usize>(
         std::array::from_fn(|k| pixel.key.stream(start as u64 + (k * ARCS) as u64));
     let (mut jx, mut jy, mut fractions) = ([0.0; N], [0.0; N], [0.0; N]);
     for (k, stream) in streams.iter_mut().enumerate() {
-        // In the order `sample_with` draws them: jitter, then direction.
+        // As `sample_with` draws them: the jitter from the sample's
+        // stream, the direction's fraction from its pass's turn.
         (jx[k], jy[k]) = stream.uniform_pair();
-        fractions[k] = stream.uniform();
+        fractions[k] = arc_fraction(pixel.key, arc, start.saturating_add((k * ARCS) as u32));
     }
     let mut rays = RayLanes {
         ox: [0.0; N],
@@ -821,6 +883,26 @@ pub(crate) const CHUNK: usize = 8 * ARCS;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A pass's runs spread each arc's samples evenly through it: pass
+    /// 5 (samples 256 to 511) takes 4 runs, one in each quarter of every
+    /// arc; another pass turns apart.
+    #[test]
+    fn a_passs_runs_spread_through_each_arc() {
+        let key = StreamKey::new(3, 77);
+        for arc in [0, 9, 63] {
+            let first = 256 + crate::sampling::first_sample_of_arc(0, arc);
+            let mut quarters: Vec<usize> = (0..4)
+                .map(|run| (arc_fraction(key, arc, first + 64 * run) * 4.0) as usize)
+                .collect();
+            quarters.sort();
+            assert_eq!(quarters, [0, 1, 2, 3], "arc {arc}");
+            assert_ne!(
+                arc_fraction(key, arc, first),
+                arc_fraction(key, arc, first - 128)
+            );
+        }
+    }
 
     #[test]
     fn strata_that_are_not_finite_are_left_out_and_counted() {

@@ -4,7 +4,7 @@
 
 use crate::Stats;
 use crate::options::{Integrator, RenderOptions, Rendered, image_size};
-use crate::passes::{Pass, Totals};
+use crate::passes::{Pass, PointRule, Totals};
 use crate::scene::Scene;
 use crate::tile::{Shared, path_passes};
 
@@ -62,13 +62,13 @@ struct Cursor {
 }
 
 impl Cursor {
-    /// The pass from here to `end` samples per pixel, a floor point for
-    /// every `per_point` of its samples (`passes::samples_per_point`).
-    fn pass(self, end: u32, options: &RenderOptions, per_point: u32) -> Pass {
+    /// The pass from here to `end` samples per pixel, taking floor points
+    /// by `rule`.
+    fn pass(self, end: u32, options: &RenderOptions, rule: PointRule) -> Pass {
         Pass::new(
             self.index,
             self.samples..end,
-            (self.points, options.memo.floor_samples, per_point),
+            (self.points, options.memo.floor_samples, rule),
             options.seed,
         )
     }
@@ -95,6 +95,9 @@ pub(crate) struct Passes<'a> {
     /// Whether the last pass ended short of the schedule: no pass may
     /// follow it.
     closed: bool,
+    /// Floor points per sample of the passes after the first, once the
+    /// first has measured it (`passes::point_rate`).
+    rate: Option<f64>,
 }
 
 impl<'a> Passes<'a> {
@@ -110,6 +113,7 @@ impl<'a> Passes<'a> {
             totals: Totals::new((width, height), stats),
             cursor: Cursor::default(),
             closed: false,
+            rate: None,
         }
     }
 
@@ -122,11 +126,24 @@ impl<'a> Passes<'a> {
         self.options.adaptive && self.shared.is_some()
     }
 
-    /// How many samples a floor point stands for
-    /// (`passes::samples_per_point`).
-    fn exact_points(&self) -> u32 {
-        let table = self.shared.as_ref().is_none_or(|s| s.plan.light_table);
-        crate::passes::samples_per_point(table)
+    /// Whether the first pass measures how many floor points the later
+    /// ones take: wherever the floor memo takes points.
+    fn measures(&self) -> bool {
+        self.shared.as_ref().is_some_and(|s| s.plan.floor_memo)
+    }
+
+    /// How the pass at `cursor` takes its floor points: the first by
+    /// the plan, the later ones by the rate the first measured (a point
+    /// per sample where none was).
+    fn point_rule(&self, cursor: Cursor) -> PointRule {
+        match cursor.index {
+            0 => PointRule::First {
+                light_table: self.shared.as_ref().is_none_or(|s| s.plan.light_table),
+            },
+            _ => PointRule::Measured {
+                rate: self.rate.unwrap_or(1.0),
+            },
+        }
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -145,34 +162,43 @@ impl<'a> Passes<'a> {
             Some(next) if end > done && end <= next => self.closed = end < next,
             _ => return false,
         }
-        let pass = self.cursor.pass(end, &self.options, self.exact_points());
+        let pass = self
+            .cursor
+            .pass(end, &self.options, self.point_rule(self.cursor));
         self.run(&[pass], progress);
         true
     }
 
     /// Takes every pass of the schedule up to `samples`, as many at once
-    /// as [`FILLS_BUDGET`] and [`GROUP_POINTS`] allow: each pixel then takes all of them in
-    /// turn, sharing its culling lists, floor points and shared shadow
-    /// rays. The same sums as pass by pass.
+    /// as [`FILLS_BUDGET`] and [`GROUP_POINTS`] allow: each pixel then
+    /// takes all of them in turn, sharing its culling lists, floor points
+    /// and shared shadow rays. The same sums as pass by pass. A first pass
+    /// that measures the later passes' floor points goes alone.
     pub fn run_to(&mut self, samples: u32, progress: &(dyn Fn(u64) + Sync)) {
         if self.adaptive() {
             // Each pass's pixels are chosen from the image before it.
             while !self.closed && self.cursor.samples < samples {
                 let next = crate::passes::next_pass_end(self.cursor.samples);
-                let pass = self
-                    .cursor
-                    .pass(next.min(samples), &self.options, self.exact_points());
+                let rule = self.point_rule(self.cursor);
+                let pass = self.cursor.pass(next.min(samples), &self.options, rule);
                 self.closed = pass.samples.end < next;
                 self.run(&[pass], progress);
             }
             return;
+        }
+        if self.cursor.index == 0 && self.measures() && !self.closed && samples > 0 {
+            let next = crate::passes::next_pass_end(0);
+            let rule = self.point_rule(self.cursor);
+            let pass = self.cursor.pass(next.min(samples), &self.options, rule);
+            self.closed = pass.samples.end < next;
+            self.run(&[pass], progress);
         }
         let mut group: Vec<Pass> = Vec::new();
         let mut cursor = self.cursor;
         let (mut bytes, mut points) = (0, 0);
         while !self.closed && cursor.samples < samples {
             let next = crate::passes::next_pass_end(cursor.samples);
-            let pass = cursor.pass(next.min(samples), &self.options, self.exact_points());
+            let pass = cursor.pass(next.min(samples), &self.options, self.point_rule(cursor));
             let pass_bytes = self.fill_bytes();
             let pass_points = pass.points.len() as u64;
             if !group.is_empty()
@@ -252,6 +278,9 @@ impl<'a> Passes<'a> {
             }
         }
         self.cursor = Cursor::after(last);
+        if self.rate.is_none() && self.measures() && group.first().is_some_and(|p| p.index == 0) {
+            self.rate = Some(crate::passes::point_rate(&self.totals.stats.split));
+        }
     }
 
     pub fn rendered(&self) -> Rendered {

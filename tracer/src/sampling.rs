@@ -272,6 +272,14 @@ fn reverse_arc_bits(k: usize) -> usize {
     REVERSED_ARC_BITS[k & (ARCS - 1)] as usize
 }
 
+/// `run`'s bits reversed behind the binary point, in `[0, 1)`: the van
+/// der Corput sequence, whose first `2^k` values fall one in each `2^-k`
+/// of the unit interval.
+#[inline(always)]
+pub fn radical_inverse(run: u32) -> f64 {
+    run.reverse_bits() as f64 * (1.0 / 4_294_967_296.0)
+}
+
 /// [`reverse_arc_bits`] of each arc.
 const REVERSED_ARC_BITS: [u8; ARCS] = {
     let mut table = [0; ARCS];
@@ -309,7 +317,7 @@ pub fn circle_point(u: f64) -> DVec2 {
 /// The point of the circle `fraction` (in `[0, 1)`) of the way through arc
 /// `arc`.
 #[inline]
-fn arc_point(arc: usize, fraction: f64) -> DVec2 {
+pub fn arc_point(arc: usize, fraction: f64) -> DVec2 {
     let (x, y) = arc_turn(ARC_CENTRES[arc & (ARCS - 1)], fraction);
     DVec2::new(x, y)
 }

@@ -13,6 +13,9 @@ pub struct Stats {
     pub work: Work,
     /// The render's estimate of its own noise.
     pub noise: Noise,
+    /// The first pass's noise, split between the floor's points and the
+    /// rest of the samples (`passes::point_rate`).
+    pub split: Split,
 }
 
 /// What happened to light: the same for the reference model and the fast
@@ -88,6 +91,8 @@ pub struct Work {
     pub memo_checks: u64,
     /// Path samples that reused their pixel's memoised direct light.
     pub floor_memo_reuses: u64,
+    /// Points of the floor memo (each pixel's, summed over its passes).
+    pub floor_points: u64,
     /// (pixel, light) pairs of the floor memo whose strata shared one
     /// visibility (one shadow ray, or none for a clear line light).
     pub floor_shared_visibility: u64,
@@ -188,6 +193,50 @@ impl Noise {
     }
 }
 
+/// The first pass's noise at its probe pixels (`passes::is_probe`), split
+/// in two independent parts: the floor memo's points and everything else
+/// (the path samples and the caustic pass's photons). Each part's two
+/// halves differ by `d`; `|d|^2 / (1/a + 1/b)`, for halves of `a` and `b`
+/// points (or samples), is that part's squared error times its count, so
+/// the two sums say how the error of each falls as its count grows.
+/// Summed over the probes in tile order.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Split {
+    /// Probe pixels measured.
+    pub probes: u64,
+    /// The floor points' squared error times their count, summed.
+    pub points: f64,
+    /// The rest's squared error times its samples, summed.
+    pub paths: f64,
+}
+
+impl Split {
+    /// Adds a probe whose points' halves of `points.1` and `points.2`
+    /// points differ by `points.0`, and whose samples' halves of
+    /// `paths.1` and `paths.2` differ by `paths.0`, each difference
+    /// already in image units.
+    pub(crate) fn add(&mut self, points: (crate::Rgb, u32, u32), paths: (crate::Rgb, u32, u32)) {
+        let part = |(d, a, b): (crate::Rgb, u32, u32)| {
+            let spread = 1.0 / a as f64 + 1.0 / b as f64;
+            (a > 0 && b > 0).then(|| d.length_squared() / spread)
+        };
+        if let (Some(p), Some(q)) = (part(points), part(paths))
+            && p.is_finite()
+            && q.is_finite()
+        {
+            self.probes += 1;
+            self.points += p;
+            self.paths += q;
+        }
+    }
+
+    pub fn merge(&mut self, other: &Split) {
+        self.probes += other.probes;
+        self.points += other.points;
+        self.paths += other.paths;
+    }
+}
+
 impl fmt::Display for Noise {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.relative() {
@@ -212,6 +261,7 @@ impl Stats {
         self.physics.merge(&other.physics);
         self.work.merge(&other.work);
         self.noise.merge(&other.noise);
+        self.split.merge(&other.split);
     }
 
     /// All rays cast.
@@ -267,6 +317,7 @@ impl Work {
         self.memo_lookups += other.memo_lookups;
         self.memo_checks += other.memo_checks;
         self.floor_memo_reuses += other.floor_memo_reuses;
+        self.floor_points += other.floor_points;
         self.floor_shared_visibility += other.floor_shared_visibility;
         self.floor_albedo_reads += other.floor_albedo_reads;
         self.emission_tests += other.emission_tests;
@@ -365,6 +416,7 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  wall cache hits  {:>14}", w.memo_lookups)?;
             writeln!(f, "  wall cache checks{:>14}", w.memo_checks)?;
             writeln!(f, "  floor reuses     {:>14}", w.floor_memo_reuses)?;
+            writeln!(f, "  floor points     {:>14}", w.floor_points)?;
             writeln!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
             writeln!(f, "  chosen lights    {:>14}", w.chosen_lights)?;
             writeln!(f, "  chosen dark      {:>14}", w.chosen_dark)?;

@@ -18,8 +18,8 @@ use crate::lights::choice::LightTable;
 use crate::memo::build_wall_memo;
 use crate::memo::{Onward, OnwardMemo};
 use crate::options::MemoOptions;
-use crate::options::{CULL_BLOCK, FINE_CULLING_SAMPLES, RenderOptions, TILE, image_size};
-use crate::passes::Pass;
+use crate::options::{CULL_BLOCK, FINE_CULLING_SAMPLES, RenderOptions, TILE, Window, image_size};
+use crate::passes::{Pass, PointRule};
 use crate::path::{MirrorWalls, Trace};
 use crate::pixel::{Context, Pixel, pixel_fn, render_pixel, sample_with};
 use crate::plan::Plan;
@@ -38,7 +38,11 @@ pub(crate) struct Shared {
     /// Per wall side, whether a path's last leg from there can meet a
     /// light (`run::last_leg_sides`), where the plan has last legs.
     pub(crate) last_leg_sides: Option<Vec<bool>>,
+    /// The tiles that meet the window (all of them, without one).
     pub(crate) tiles: Vec<(u32, u32)>,
+    /// Every tile of the image, where a window leaves some out: the first
+    /// pass measures its probe pixels in all of them (`passes::is_probe`).
+    pub(crate) all_tiles: Option<Vec<(u32, u32)>>,
 }
 
 impl Shared {
@@ -68,15 +72,20 @@ impl Shared {
             .flatten();
         // Only the tiles that meet the window, where there is one: each
         // tile's pixels do not depend on which other tiles are rendered.
-        let window = options.window;
-        let tiles = (0..height.div_ceil(TILE))
+        let every: Vec<(u32, u32)> = (0..height.div_ceil(TILE))
             .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx, ty)))
-            .filter(|&(tx, ty)| {
-                window.is_none_or(|w| {
-                    w.meets((tx * TILE, ty * TILE), ((tx + 1) * TILE, (ty + 1) * TILE))
-                })
-            })
             .collect();
+        let (tiles, all_tiles) = match options.window {
+            Some(window) => (
+                every
+                    .iter()
+                    .copied()
+                    .filter(|&tile| tile_meets(window, tile))
+                    .collect(),
+                Some(every),
+            ),
+            None => (every, None),
+        };
         let last_leg_sides = plan.last_legs.then(|| crate::run::last_leg_sides(scene));
         Shared {
             plan,
@@ -86,8 +95,14 @@ impl Shared {
             coherence,
             last_leg_sides,
             tiles,
+            all_tiles,
         }
     }
+}
+
+/// Whether tile `(tx, ty)` meets `window`.
+fn tile_meets(window: Window, (tx, ty): (u32, u32)) -> bool {
+    window.meets((tx * TILE, ty * TILE), ((tx + 1) * TILE, (ty + 1) * TILE))
 }
 
 /// What one pass of a path-traced render fills for itself: its caustic
@@ -161,6 +176,13 @@ pub(crate) fn path_passes(
     let (width, height) = image_size(scene, options.scale);
     let plan = &shared.plan;
     let mut stats = Stats::default();
+    // A first pass measures its probe pixels in every tile, also those
+    // outside the window.
+    let measures = plan.floor_memo && group.first().is_some_and(|p| p.index == 0);
+    let tiles = match &shared.all_tiles {
+        Some(all) if measures => all,
+        _ => &shared.tiles,
+    };
     let fills: Vec<Fills> = group
         .iter()
         .map(|pass| Fills::new(scene, options, shared, pass, &mut stats, progress))
@@ -173,6 +195,7 @@ pub(crate) fn path_passes(
             pass,
             size: (width, height),
             floor_memo: plan.floor_memo,
+            measures: measures && pass.index == 0,
             coherence: shared.coherence.as_ref(),
             culling: plan.floor_ray_culling,
             trace: trace_for(
@@ -199,7 +222,8 @@ pub(crate) fn path_passes(
     let outcome = run(
         &PixelEstimator {
             contexts,
-            tiles: &shared.tiles,
+            tiles,
+            window: options.window,
             previous,
             mask,
         },
@@ -216,6 +240,9 @@ pub(crate) struct PixelEstimator<'a> {
     /// One per pass, in order.
     pub(crate) contexts: Vec<Context<'a>>,
     pub(crate) tiles: &'a [(u32, u32)],
+    /// The render's window: a tile outside it renders only its probe
+    /// pixels, for their measure, and adds no values.
+    pub(crate) window: Option<Window>,
     /// The pixels' totals before these passes (empty before the first).
     pub(crate) previous: &'a [PixelSums],
     /// With adaptive passes, the pixels that take them; the others keep
@@ -254,6 +281,8 @@ impl Estimator for PixelEstimator<'_> {
         let y1 = (y0 + TILE).min(height);
         let tile_width = x1 - x0;
         let mut values = vec![PixelSums::default(); (tile_width * (y1 - y0)) as usize];
+        // Outside the window, only the first pass's probes, measured.
+        let probes_only = self.window.is_some_and(|w| !tile_meets(w, (tx, ty)));
         // The walls each arc of directions can meet, for the tile and
         // then for each block of it (tested against the tile's lists).
         // With few samples a pixel, a block's lists would serve too few
@@ -318,6 +347,9 @@ impl Estimator for PixelEstimator<'_> {
                                 total.unwrap_or_default();
                             continue;
                         }
+                        if probes_only && !crate::passes::is_probe((x, y)) {
+                            continue;
+                        }
                         values[((y - y0) * tile_width + x - x0) as usize] = (context.render_pixel)(
                             contexts,
                             total,
@@ -329,6 +361,14 @@ impl Estimator for PixelEstimator<'_> {
                     }
                 }
             }
+        }
+        if probes_only {
+            return Part::Tile {
+                x0,
+                y0,
+                width: 0,
+                values: Vec::new(),
+            };
         }
         let samples: u64 = contexts.iter().map(|c| c.pass.count() as u64).sum();
         progress(values.len() as u64 * samples);
@@ -447,12 +487,18 @@ pub fn pixel_sample(
     // The render's own table, built again: the same from the same seed.
     let light_table = light_table_for(scene, &options, &plan);
     let last_leg_sides = plan.last_legs.then(|| crate::run::last_leg_sides(scene));
-    let pass = Pass::new(0, sample..sample.saturating_add(1), (0, 0, 1), options.seed);
+    let pass = Pass::new(
+        0,
+        sample..sample.saturating_add(1),
+        (0, 0, PointRule::First { light_table: true }),
+        options.seed,
+    );
     let context = Context {
         options: &options,
         pass: &pass,
         size,
         floor_memo: false,
+        measures: false,
         coherence: None,
         culling: false,
         trace: trace_with(

@@ -114,8 +114,8 @@ pub struct Plan {
     pub caustics_enabled: bool,
     /// The wall memo's bin length, in pixels, as given.
     pub bin_length: String,
-    /// The floor memo's points per pixel, over the render's passes.
-    pub floor_points: u64,
+    /// The floor memo's points per pixel in the first pass.
+    pub floor_points: u32,
     /// Whether the wall memo fits its budget.
     pub wall_memo_fits: bool,
     /// Wall-light pairs and pixel-light cells: what the coherence masks
@@ -316,10 +316,10 @@ impl Plan {
             memo_enabled: options.memo.enabled,
             caustics_enabled: options.caustics,
             bin_length: options.memo.bin_length.to_string(),
-            floor_points: crate::passes::floor_points(
-                options.samples,
+            floor_points: crate::passes::pass_points(
+                options.samples.min(crate::passes::FIRST_PASS),
                 options.memo.floor_samples,
-                crate::passes::samples_per_point(light_table),
+                crate::passes::PointRule::First { light_table },
             ),
             wall_memo_fits,
             pairs,

@@ -413,11 +413,11 @@ impl Plan {
                 "no indirect path would reuse it".into()
             } else if light_table {
                 format!(
-                    "{floor_points} stratified points per pixel (as many as the samples: a light table draws each point's lights)"
+                    "{floor_points} stratified points per pixel in the first pass (one a sample: a light table draws each point's lights), then as many as its noise asks"
                 )
             } else {
                 format!(
-                    "{floor_points} stratified points per pixel (a quarter of the samples, at least 16 a pass: each point's direct light is exact)"
+                    "{floor_points} stratified points per pixel in the first pass (each point's direct light is exact), then as many as its noise asks"
                 )
             },
         );
