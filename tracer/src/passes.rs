@@ -56,7 +56,7 @@ pub const MEASURED_POINTS: usize = 4;
 /// whole runs of the arcs, and stratifies each arc over its runs, so its
 /// paths' error per sample is several times smaller than measured. The
 /// value is set from the time each scene of `scenes/` takes to reach a
-/// given error (`docs/performance.md`, "Floor points by measure").
+/// given error (`docs/model.md`, "The direct-light memo").
 pub const POINT_SHARE: f64 = 1.0 / 32.0;
 
 /// Probe pixels, where the first pass measures its noise's split
