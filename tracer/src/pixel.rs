@@ -342,7 +342,7 @@ pub(crate) fn pass_sums(
         if let Some(values) = values.get(from..to) {
             let (first, second, all) = noise_halves(values, (x, y), stats);
             (halves, whole) = ((first, second), all);
-            if context.measures {
+            if context.measures && crate::passes::is_probe((x, y)) {
                 let measured = &values[..values.len().min(crate::passes::MEASURED_POINTS)];
                 let middle = measured.len() / 2;
                 let (first, second, _) = noise_halves(measured, (x, y), &mut Stats::default());
