@@ -160,6 +160,24 @@ fn a_window_takes_the_whole_renders_points() {
                 );
             }
         }
+        // The probes a window measures outside itself are not its work:
+        // two windows that split the image on a tile border count the
+        // whole's samples.
+        let (width, height) = (whole.image.width, whole.image.height);
+        let halves: u64 = [(0, 32), (32, height)]
+            .into_iter()
+            .map(|(y0, y1)| {
+                let mut options = options;
+                options.window = Some(flatray_tracer::Window {
+                    x0: 0,
+                    y0,
+                    x1: width,
+                    y1,
+                });
+                render(&loaded.scene, &options).stats.physics.camera_samples
+            })
+            .sum();
+        assert_eq!(halves, whole.stats.physics.camera_samples, "{name}");
     }
 }
 

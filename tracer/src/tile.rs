@@ -261,7 +261,7 @@ impl Estimator for PixelEstimator<'_> {
         self.tiles.len()
     }
 
-    fn render_unit(&self, unit: usize, stats: &mut Stats, progress: &(dyn Fn(u64) + Sync)) -> Part {
+    fn render_unit(&self, unit: usize, outer: &mut Stats, progress: &(dyn Fn(u64) + Sync)) -> Part {
         let contexts = &self.contexts[..];
         let Some(context) = contexts.first() else {
             return Part::Tile {
@@ -281,8 +281,16 @@ impl Estimator for PixelEstimator<'_> {
         let y1 = (y0 + TILE).min(height);
         let tile_width = x1 - x0;
         let mut values = vec![PixelSums::default(); (tile_width * (y1 - y0)) as usize];
-        // Outside the window, only the first pass's probes, measured.
+        // Outside the window, only the first pass's probes, measured. Their
+        // work is counted apart and only their measure kept: the window's
+        // counts are its own pixels'.
         let probes_only = self.window.is_some_and(|w| !tile_meets(w, (tx, ty)));
+        let mut probe_stats = Stats::default();
+        let stats = if probes_only {
+            &mut probe_stats
+        } else {
+            &mut *outer
+        };
         // The walls each arc of directions can meet, for the tile and
         // then for each block of it (tested against the tile's lists).
         // With few samples a pixel, a block's lists would serve too few
@@ -363,6 +371,7 @@ impl Estimator for PixelEstimator<'_> {
             }
         }
         if probes_only {
+            outer.split.merge(&probe_stats.split);
             return Part::Tile {
                 x0,
                 y0,
