@@ -354,6 +354,7 @@ pub fn stats_json(stats: &flatray_tracer::Stats) -> serde_json::Value {
             "memo_checks": w.memo_checks,
             "floor_memo_reuses": w.floor_memo_reuses,
             "floor_shared_visibility": w.floor_shared_visibility,
+            "floor_square_lights": w.floor_square_lights,
             "chosen_lights": w.chosen_lights,
             "light_table_bytes": w.light_table_bytes,
             "onward_lookups": w.onward_lookups,

@@ -96,6 +96,10 @@ pub struct Work {
     /// (pixel, light) pairs of the floor memo whose strata shared one
     /// visibility (one shadow ray, or none for a clear line light).
     pub floor_shared_visibility: u64,
+    /// (pixel, light) pairs of the floor memo where a point, spot or sun
+    /// looked at the walls in front of the pixel's square, to take its
+    /// mean over the square in closed form (`lights::square`).
+    pub floor_square_lights: u64,
     /// Diffuse hits whose albedo was read from the floor.
     pub floor_albedo_reads: u64,
     /// Path rays tested against lights they can meet (after a mirror).
@@ -319,6 +323,7 @@ impl Work {
         self.floor_memo_reuses += other.floor_memo_reuses;
         self.floor_points += other.floor_points;
         self.floor_shared_visibility += other.floor_shared_visibility;
+        self.floor_square_lights += other.floor_square_lights;
         self.floor_albedo_reads += other.floor_albedo_reads;
         self.emission_tests += other.emission_tests;
         self.chosen_lights += other.chosen_lights;
@@ -418,6 +423,7 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  floor reuses     {:>14}", w.floor_memo_reuses)?;
             writeln!(f, "  floor points     {:>14}", w.floor_points)?;
             writeln!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
+            writeln!(f, "  floor squares    {:>14}", w.floor_square_lights)?;
             writeln!(f, "  chosen lights    {:>14}", w.chosen_lights)?;
             writeln!(f, "  chosen dark      {:>14}", w.chosen_dark)?;
             writeln!(f, "  light table rays {:>14}", w.light_table_rays)?;

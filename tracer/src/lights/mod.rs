@@ -43,6 +43,7 @@ mod circle;
 pub(crate) mod line;
 mod point;
 mod spot;
+pub(crate) mod square;
 mod sun;
 
 use flatray_geometry::{DVec2, Ray, Segment, Shape, Side, Skip};
