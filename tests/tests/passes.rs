@@ -183,9 +183,10 @@ fn a_window_takes_the_whole_renders_points() {
 
 /// The later passes' floor points follow the first pass's measure: the
 /// room, whose noise is its bounce, takes under an eighth of a point per
-/// sample (a quarter would be 64 a pixel); a hard shadow with little
-/// other noise (a point light behind a mirror's end, whose light off the
-/// mirror the caustic pass brings) takes over a quarter (91 a pixel).
+/// sample (a quarter would be 64 a pixel); nine lamps under a light table,
+/// where each point draws one light beside the brightest, with little
+/// other noise (one dark wall), take over a quarter (one a sample, 256 a
+/// pixel).
 #[test]
 fn floor_points_go_where_the_noise_is() {
     let points = |text: &str, samples: u32, scale: f64| {
@@ -212,10 +213,13 @@ fn floor_points_go_where_the_noise_is() {
         room_points < 256.0 / 8.0,
         "room: {room_points} points a pixel"
     );
-    let shadow = "Scene(canvas: (64, 64), floor: Color((1, 1, 1)), falloff: Constant,
-        walls: [Wall(a: (30, -1000), b: (30, 40.9), material: Mirror())],
-        lights: [Point(at: (10.3, 30.2))],
+    let lamps = "Scene(canvas: (64, 64), floor: Color((1, 1, 1)),
+        walls: [Wall(a: (30, -1000), b: (30, 40.9), material: Diffuse(albedo: Some((0.05, 0.05, 0.05)))),
+                Wall(a: (20, 20), b: (25, 28))],
+        lights: [Point(at: (10.3, 30.2)), Point(at: (12.3, 10.2)), Point(at: (14.3, 50.2)),
+                 Point(at: (40.3, 30.2)), Point(at: (50.3, 10.2)), Point(at: (55.3, 55.2)),
+                 Point(at: (8.3, 5.2)), Point(at: (45.3, 44.2)), Point(at: (20.3, 60.2))],
         render: (bounces: 1))";
-    let shadow_points = points(shadow, 256, 1.0);
-    assert!(shadow_points > 256.0 / 4.0, "hard shadow: {shadow_points}");
+    let lamp_points = points(lamps, 256, 1.0);
+    assert!(lamp_points > 256.0 / 4.0, "nine lamps: {lamp_points}");
 }

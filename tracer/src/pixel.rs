@@ -16,6 +16,7 @@ use crate::accel::shortcut::memo_bounce;
 use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::direct::{direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::film::PixelSums;
+use crate::lights::square::{Square, square_light, takes_square};
 use crate::lights::{Receiver, Visibility, through_mirrors};
 use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
@@ -33,6 +34,9 @@ pub(crate) struct Context<'a> {
     pub(crate) size: (u32, u32),
     /// Whether the floor's direct light is estimated once per pixel.
     pub(crate) floor_memo: bool,
+    /// Whether that estimate takes points, spots and suns over the
+    /// pixel's square in closed form (`Plan::floor_squares`).
+    pub(crate) floor_squares: bool,
     /// Whether the pass measures its noise's split at the probe pixels
     /// (the first pass, with the floor memo: `passes::point_rate`).
     pub(crate) measures: bool,
@@ -44,10 +48,10 @@ pub(crate) struct Context<'a> {
     /// The wall memo, where paths take the one-bounce shortcut
     /// (`accel/shortcut.rs`: one bounce, the memo, not the reference).
     pub(crate) one_bounce_memo: Option<&'a WallMemo>,
-    /// [`render_pixel`], compiled for this processor.
     /// Whether the floor memo's points are taken light by light
     /// (`accel::strata`).
     pub(crate) strata_loops: bool,
+    /// [`render_pixel`], compiled for this processor.
     pub(crate) render_pixel: PixelFn,
 }
 
@@ -120,6 +124,7 @@ pub(crate) fn render_pixel(
         options,
         size,
         floor_memo,
+        floor_squares,
         coherence,
         ref trace,
         ..
@@ -187,18 +192,44 @@ pub(crate) fn render_pixel(
                 )
             }
             // The same for every pixel of the render: filled once per
-            // batch, not per pixel (a pass over every light).
+            // batch, not per pixel (a pass over every light), unless the
+            // pixel's squares change it.
             None => {
-                if visibility.len() != scene.lights.len() {
+                if visibility.len() != scene.lights.len() || floor_squares {
                     visibility.clear();
                     visibility.resize(scene.lights.len(), Visibility::of(trace.shadows));
                 }
             }
         }
-        // The pass's points (progressive jitter: the pixel's earlier
-        // points are drawn again to place them), and the numbers each line
-        // light draws, in the order `direct_light_with` draws them; then
-        // the lights one by one over all points (`direct_light_strata`).
+        // Points, spots and suns whose shadows cover some of the pixel,
+        // or whose kernel varies steeply across it, over the whole square
+        // in closed form: every point of the pixel takes their mean, and
+        // none of them takes their light again. Elsewhere the light
+        // reaches the whole pixel and only its kernel varies, gently:
+        // the points take it, with nothing in the way. The coherence
+        // masks' transmittance, where they know it, saves looking at the
+        // walls; the answer is the same.
+        let mut square = Rgb::ZERO;
+        if floor_squares {
+            let area = (corner, step);
+            for (light, vis) in visibility.iter_mut().enumerate() {
+                if !takes_square(&scene.lights[light].shape) {
+                    continue;
+                }
+                let known = match *vis {
+                    Visibility::Trace => None,
+                    Visibility::Known(known) => Some(known),
+                };
+                match square_light(scene, light, area, receiver, known, stats) {
+                    Some(Square::Uniform) => *vis = Visibility::Known(Rgb::ONE),
+                    Some(Square::Mean(mean)) => {
+                        square += mean;
+                        *vis = Visibility::Known(Rgb::ZERO);
+                    }
+                    None => {}
+                }
+            }
+        }
         // The pass's points, from the pixel's scrambled Sobol sequence,
         // and the numbers each line light draws, in the order
         // `direct_light_with` draws them; then the lights one by one over
@@ -253,6 +284,11 @@ pub(crate) fn render_pixel(
                 direct_light_strata(scene, floor, visibility, shadow_walls, stats)
             }
             None => direct_light_points(scene, floor, visibility, stats),
+        }
+        if square != Rgb::ZERO {
+            for value in &mut batch.floor.values {
+                *value += square;
+            }
         }
         if trace.mirror_lights {
             // Lines and circles seen in one flat mirror, in closed form

@@ -155,6 +155,10 @@ pub struct Plan {
     /// The floor memo's strata share one shadow ray per light where no
     /// shadow edge crosses their pixel (`accel/coherence.rs`).
     pub floor_coherence: bool,
+    /// Points, spots and suns give each pixel of the floor memo their
+    /// mean over its square in closed form (`lights::square`), not their
+    /// points' shadow rays: the floor memo without a light table.
+    pub floor_squares: bool,
     /// The floor's rays test only the walls that rays from their block of
     /// pixels, in their arc of directions, can meet (`ArcCandidates`).
     pub floor_ray_culling: bool,
@@ -265,10 +269,6 @@ impl Plan {
             && wall_memo_bytes.is_some_and(|bytes| {
                 crate::onward::onward_bytes(bytes, options.bounces) <= crate::onward::ONWARD_BUDGET
             });
-        // The reference never changes how the floor's direct light is
-        // estimated: that would change the image.
-        let floor_memo =
-            !tracing_light && indirect_possible && reflectors > 0 && options.memo.enabled;
         let pairs = scene.walls.len() * scene.lights.len();
         let (width, height) = crate::options::image_size(scene, options.scale);
         let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
@@ -281,6 +281,21 @@ impl Plan {
                 LightChoice::Every => false,
                 LightChoice::Table => !no_lights,
             };
+        // Points, spots and suns over each pixel's square in closed form,
+        // where the floor's direct light is estimated once per pixel.
+        let squares = !light_table
+            && scene
+                .lights
+                .iter()
+                .any(|l| crate::lights::square::takes_square(&l.shape));
+        // The floor memo runs where paths reuse it, and where the squares
+        // make a pixel's direct light exact at shadow edges. The reference
+        // never changes how the floor's direct light is estimated: that
+        // would change the image.
+        let floor_memo = !tracing_light
+            && options.memo.enabled
+            && ((indirect_possible && reflectors > 0) || (squares && occluders > 0));
+        let floor_squares = floor_memo && squares;
         // Each fast path says where it runs (`accel`). With a light table
         // too, a pixel's points trace a shared transmittance once, when
         // one of them first takes that light.
@@ -337,6 +352,7 @@ impl Plan {
             onward_enabled: options.memo.onward,
             floor_memo,
             floor_coherence,
+            floor_squares,
             floor_ray_culling,
         }
     }

@@ -89,6 +89,7 @@ impl Plan {
             onward_enabled,
             floor_memo,
             floor_coherence,
+            floor_squares,
             floor_ray_culling,
             light_choice,
             light_table,
@@ -106,7 +107,16 @@ impl Plan {
             "direct light: points and spots",
             points + spots > 0,
             if points + spots > 0 {
-                format!("{}, {}", n(points, "point light"), n(spots, "spot light"))
+                format!(
+                    "{}, {}{}",
+                    n(points, "point light"),
+                    n(spots, "spot light"),
+                    if floor_squares {
+                        "; on the floor, each pixel's mean over its square in closed form"
+                    } else {
+                        ""
+                    }
+                )
             } else {
                 "no point or spot light in the scene".into()
             },
@@ -126,6 +136,10 @@ impl Plan {
             suns + beams > 0,
             match (suns, beams) {
                 (0, 0) => "no directional light in the scene".into(),
+                (_, 0) if floor_squares => format!(
+                    "{}; on the floor, each pixel's mean over its square in closed form",
+                    n(suns, "directional light")
+                ),
                 (_, 0) => n(suns, "directional light"),
                 (0, _) => n(beams, "beam"),
                 _ => format!("{}, {}", n(suns, "directional light"), n(beams, "beam")),
@@ -409,6 +423,10 @@ impl Plan {
                 "light tracing does not read it".into()
             } else if !memo_enabled {
                 "the cache is switched off (--cache off)".into()
+            } else if !indirect && floor_squares {
+                format!(
+                    "for the points', spots' and suns' means over each pixel's square, exact at shadow edges: {floor_points} stratified points per pixel in the first pass, then as many as its noise asks"
+                )
             } else if !indirect {
                 "no indirect path would reuse it".into()
             } else if light_table {
