@@ -25,6 +25,10 @@ pub(crate) enum Config {
     Original,
     /// Light tracing from the lights.
     Light,
+    /// Path tracing with the cache and adaptive passes (`--adaptive`):
+    /// from the third pass on, only the pixels whose noise is high take
+    /// more samples. Its rung's samples are the most a pixel takes.
+    Adaptive,
 }
 
 impl Config {
@@ -34,12 +38,13 @@ impl Config {
             Config::Path => "path",
             Config::Original => "original",
             Config::Light => "light",
+            Config::Adaptive => "adaptive",
         }
     }
 
     fn options(self, base: &RenderOptions) -> RenderOptions {
         let (integrator, memo) = match self {
-            Config::PathCache => (Integrator::Path, true),
+            Config::PathCache | Config::Adaptive => (Integrator::Path, true),
             Config::Path => (Integrator::Path, false),
             Config::Original => (Integrator::Original, false),
             Config::Light => (Integrator::Light, false),
@@ -49,6 +54,7 @@ impl Config {
             options.integrator = integrator;
             options.memo = base.memo;
             options.memo.enabled = memo;
+            options.adaptive = self == Config::Adaptive;
             options
         }
     }
@@ -396,4 +402,23 @@ fn rms(image: &Image) -> f64 {
         .map(|&v| (v as f64).powi(2))
         .sum();
     (sum / (image.pixels.len() * 3).max(1) as f64).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Only the adaptive configuration takes adaptive passes, and it is
+    /// path tracing with the cache otherwise.
+    #[test]
+    fn the_adaptive_configuration_is_the_cache_with_adaptive_passes() {
+        let base = RenderOptions::default();
+        let adaptive = Config::Adaptive.options(&base);
+        let cache = Config::PathCache.options(&base);
+        assert!(adaptive.adaptive && !cache.adaptive);
+        assert!(adaptive.memo.enabled && adaptive.integrator == Integrator::Path);
+        for config in [Config::Path, Config::Original, Config::Light] {
+            assert!(!config.options(&base).adaptive, "{config:?}");
+        }
+    }
 }

@@ -153,3 +153,53 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
     assert_eq!(noise_line(&given), noise_line(&out));
     assert_ne!(noise_line(&given), "0.000");
 }
+
+/// The adaptive configuration is path tracing with the cache whose later
+/// passes go only where the noise is: up to 32 spp (the passes every
+/// pixel takes) it does the same work as `path-cache`, and past that its
+/// error stays of the same size.
+#[test]
+fn converge_measures_the_adaptive_passes() {
+    let dir = TempDir::new("converge-adaptive");
+    let scene = dir.write("small.ron", SCENE);
+    let out = dir.path().join("study");
+    let run = flatray(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--reference-spp",
+        "1024",
+        "--max-spp",
+        "256",
+        "--configs",
+        "path-cache,adaptive",
+        "--quiet",
+    ]);
+    assert_eq!(run.code, 0, "{run:?}");
+    let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+    let row = |config: &str, samples: u32| -> (f64, f64) {
+        let fields: Vec<&str> = csv
+            .lines()
+            .find(|l| l.starts_with(&format!("{config},{samples},")))
+            .unwrap_or_else(|| panic!("no {config} at {samples} in {csv}"))
+            .split(',')
+            .collect();
+        (fields[3].parse().unwrap(), fields[6].parse().unwrap())
+    };
+    for samples in [1, 2, 4, 8, 16, 32] {
+        let (plain, adaptive) = (row("path-cache", samples).0, row("adaptive", samples).0);
+        assert!(
+            (adaptive / plain - 1.0).abs() < 0.02,
+            "{samples} spp: {adaptive} rays against {plain}"
+        );
+    }
+    for samples in [64, 128, 256] {
+        let (plain, adaptive) = (row("path-cache", samples).1, row("adaptive", samples).1);
+        assert!(
+            adaptive < 1.5 * plain,
+            "{samples} spp: {adaptive} against {plain}"
+        );
+    }
+    assert!(run.stdout.contains("adaptive"), "{}", run.stdout);
+}
