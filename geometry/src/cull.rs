@@ -466,7 +466,7 @@ pub fn hull_candidates(set: &SegmentSet, points: &[DVec2], out: &mut Vec<u32>) {
 /// without collinear points (Andrew's monotone chain), written in `hull`:
 /// one or two points for a point or a segment. `None` for more than
 /// [`MAX_HULL_POINTS`] points or any that is not finite.
-fn convex_hull<'h>(
+pub fn convex_hull<'h>(
     points: &[DVec2],
     hull: &'h mut [DVec2; 2 * MAX_HULL_POINTS + 1],
 ) -> Option<&'h [DVec2]> {

@@ -43,7 +43,7 @@ mod lanes;
 pub mod overlap;
 mod segment_set;
 pub use arc::{Arc, NotAnArc, arc_crossings, intersect_arc};
-pub use cull::{ArcCandidates, HitLanes, MAX_HULL_POINTS, RayLanes, hull_candidates};
+pub use cull::{ArcCandidates, HitLanes, MAX_HULL_POINTS, RayLanes, convex_hull, hull_candidates};
 pub use lanes::{Kernel, portable_forced};
 pub use segment_set::{BVH_THRESHOLD, SegmentSet, Skip, Strategy};
 

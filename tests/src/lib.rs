@@ -40,6 +40,15 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Rendered {
     flatray_tracer::render(scene, options, &|_| {})
 }
 
+/// The default options with these samples per pixel, bounces and seed.
+pub fn options(samples: u32, bounces: u32, seed: u64) -> RenderOptions {
+    let mut options = RenderOptions::default();
+    options.samples = samples;
+    options.bounces = bounces;
+    options.seed = seed;
+    options
+}
+
 /// A folder under the system's temporary folder, removed on drop.
 pub struct TempDir(PathBuf);
 

@@ -5,8 +5,8 @@
 //! never does, block by block (5 standard errors over fixed seeds).
 
 use flatray_geometry::DVec2;
-use flatray_tests::{Agreement, render, scene};
-use flatray_tracer::{Integrator, RenderOptions, Scene};
+use flatray_tests::{Agreement, options, render, scene};
+use flatray_tracer::{Integrator, Scene};
 
 /// A room turned by 0.4 radians, non-convex (a wall stub into it), a line
 /// light and a circle light whose soft shadows the stub and a tinted pane
@@ -66,14 +66,6 @@ fn room_and_lights(falloff: &str) -> (Scene, impl Fn(DVec2) -> bool) {
     ))
     .scene;
     (scene, near)
-}
-
-fn options(samples: u32, bounces: u32, seed: u64) -> RenderOptions {
-    let mut options = RenderOptions::default();
-    options.samples = samples;
-    options.bounces = bounces;
-    options.seed = seed;
-    options
 }
 
 /// Two renders of the room's direct light at 16 samples and 4 pixels a

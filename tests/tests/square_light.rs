@@ -6,16 +6,8 @@
 //! over fixed seeds), in a turned, non-convex room under every falloff.
 
 use flatray_geometry::DVec2;
-use flatray_tests::{Agreement, render, scene};
-use flatray_tracer::{Integrator, RenderOptions};
-
-fn options(samples: u32, bounces: u32, seed: u64) -> RenderOptions {
-    let mut options = RenderOptions::default();
-    options.samples = samples;
-    options.bounces = bounces;
-    options.seed = seed;
-    options
-}
+use flatray_tests::{Agreement, options, render, scene};
+use flatray_tracer::Integrator;
 
 /// A point light at (1, 1) under the constant kernel, and a wall from
 /// (3, 2) to (3, 6): the lower edge of its shadow, the ray `y - 1 =

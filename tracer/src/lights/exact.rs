@@ -1493,11 +1493,12 @@ mod tests {
 /// The closed form through a scene: walls found, shadows swept, tints
 /// multiplied; each case worked out by hand.
 #[cfg(test)]
-mod closed_forms {
+pub(crate) mod closed_forms {
     use super::*;
     use crate::scene::{Canvas, Floor, Light, Material, Wall};
 
-    fn scene(walls: Vec<Wall>, lights: Vec<Light>) -> Scene {
+    /// A scene on a canvas of 100 x 100 units about the origin.
+    pub(crate) fn scene(walls: Vec<Wall>, lights: Vec<Light>) -> Scene {
         let canvas = Canvas {
             width: 100,
             height: 100,

@@ -30,7 +30,7 @@
 
 use std::cell::RefCell;
 
-use flatray_geometry::{Arc, DVec2, Ray, Shape, arc_crossings};
+use flatray_geometry::{Arc, DVec2, MAX_HULL_POINTS, Ray, Shape, arc_crossings, convex_hull};
 
 use super::{PhotonKernel, Receiver};
 use crate::scene::{Falloff, LightShape, Scene, smooth_window};
@@ -222,7 +222,7 @@ pub(crate) fn square_light(
         if known.is_none() {
             stats.work.floor_square_lights += 1;
             let least = SLIVER * area.abs();
-            let mut hull = [DVec2::ZERO; 8];
+            let mut hull = [DVec2::ZERO; 2 * MAX_HULL_POINTS + 1];
             find_walls(scene, index, source, &square, receiver, scratch);
             let mut touched = false;
             for k in 0..scratch.walls.len() {
@@ -233,12 +233,10 @@ pub(crate) fn square_light(
                     // An arc's shadow is not convex: where the arc meets
                     // the region between the square and the light, the
                     // points take the light.
-                    Shape::Arc(arc) => {
-                        if arc_meets(&arc, reach(source, &square, scene, &mut hull)) {
-                            return None;
-                        }
-                        continue;
-                    }
+                    Shape::Arc(arc) => match reach(source, &square, scene, &mut hull) {
+                        Some(region) if !arc_meets(&arc, region) => continue,
+                        _ => return None,
+                    },
                 };
                 let Some(shadow) = shadow(source, segment.a, segment.b) else {
                     continue;
@@ -300,14 +298,15 @@ fn inside_part(
 
 /// The region light crosses to reach the square: the convex hull of the
 /// square and the light (for the sun, the square and its beam back
-/// across the scene), counter-clockwise, in `hull`.
+/// across the scene), counter-clockwise, in `hull`. `None` where a point
+/// of it is not finite.
 fn reach<'a>(
     source: Source,
     square: &[DVec2; 4],
     scene: &Scene,
-    hull: &'a mut [DVec2; 8],
-) -> &'a [DVec2] {
-    let mut points = [DVec2::ZERO; 8];
+    hull: &'a mut [DVec2; 2 * MAX_HULL_POINTS + 1],
+) -> Option<&'a [DVec2]> {
+    let mut points = [DVec2::ZERO; MAX_HULL_POINTS];
     points[..4].copy_from_slice(square);
     let count = match source {
         Source::Point(p) => {
@@ -322,30 +321,7 @@ fn reach<'a>(
             8
         }
     };
-    let points = &mut points[..count];
-    points.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    // Andrew's monotone chain: the lower hull, then the upper.
-    let mut n = 0;
-    for pass in 0..2 {
-        let start = n;
-        for k in 0..count {
-            let q = if pass == 0 {
-                points[k]
-            } else {
-                points[count - 1 - k]
-            };
-            while n >= start + 2 && (hull[n - 1] - hull[n - 2]).perp_dot(q - hull[n - 2]) <= 0.0 {
-                n -= 1;
-            }
-            if n < hull.len() {
-                hull[n] = q;
-                n += 1;
-            }
-        }
-        // The last point of each chain starts the other.
-        n -= 1;
-    }
-    &hull[..n]
+    convex_hull(&points[..count], hull)
 }
 
 /// Whether an arc meets a convex polygon (counter-clockwise): an end of
@@ -730,18 +706,10 @@ fn graded(from: f64, to: f64, h: f64, f: &impl Fn(f64) -> f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lights::exact::closed_forms::scene;
     use crate::lights::{Visibility, light_contribution};
-    use crate::scene::{Canvas, Floor, Light, Material, Wall};
+    use crate::scene::{Light, Material, Wall};
     use flatray_geometry::Segment;
-
-    fn scene(walls: Vec<Wall>, lights: Vec<Light>) -> Scene {
-        let canvas = Canvas {
-            width: 100,
-            height: 100,
-            origin: DVec2::new(-50.0, -50.0),
-        };
-        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene")
-    }
 
     fn light(shape: LightShape, falloff: Falloff) -> Light {
         Light {
