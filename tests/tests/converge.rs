@@ -5,7 +5,9 @@
 //! estimate the same image (with a mirror, light tracing also sees point
 //! lights in it, which the reference cannot).
 
-use flatray_tests::{TempDir, flatray};
+use std::path::PathBuf;
+
+use flatray_tests::{Run, TempDir, flatray};
 
 const SCENE: &str = "Scene(canvas: (48, 40), floor: Color((0.9, 0.9, 0.9)),
     walls: [
@@ -20,23 +22,28 @@ const SCENE: &str = "Scene(canvas: (48, 40), floor: Color((0.9, 0.9, 0.9)),
     ],
     render: (bounces: 2))";
 
-#[test]
-fn converge_writes_agreeing_files_and_measures_a_half_slope() {
-    let dir = TempDir::new("converge");
+/// `flatray converge` on the small scene, written into `dir`, with the
+/// study in `dir/study`: the scene's path, the study's and the run.
+fn study(dir: &TempDir, args: &[&str]) -> (PathBuf, PathBuf, Run) {
     let scene = dir.write("small.ron", SCENE);
     let out = dir.path().join("study");
-    let run = flatray(&[
+    let mut all = vec![
         "converge",
         scene.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-        "--reference-spp",
-        "2048",
-        "--max-spp",
-        "64",
         "--quiet",
-    ]);
+    ];
+    all.extend_from_slice(args);
+    let run = flatray(&all);
     assert_eq!(run.code, 0, "{run:?}");
+    (scene, out, run)
+}
+
+#[test]
+fn converge_writes_agreeing_files_and_measures_a_half_slope() {
+    let dir = TempDir::new("converge");
+    let (scene, out, run) = study(&dir, &["--reference-spp", "2048", "--max-spp", "64"]);
 
     let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
     let markdown = std::fs::read_to_string(out.join("convergence.md")).unwrap();
@@ -161,22 +168,17 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
 #[test]
 fn converge_measures_the_adaptive_passes() {
     let dir = TempDir::new("converge-adaptive");
-    let scene = dir.write("small.ron", SCENE);
-    let out = dir.path().join("study");
-    let run = flatray(&[
-        "converge",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--reference-spp",
-        "1024",
-        "--max-spp",
-        "256",
-        "--configs",
-        "path-cache,adaptive",
-        "--quiet",
-    ]);
-    assert_eq!(run.code, 0, "{run:?}");
+    let (_, out, run) = study(
+        &dir,
+        &[
+            "--reference-spp",
+            "1024",
+            "--max-spp",
+            "256",
+            "--configs",
+            "path-cache,adaptive",
+        ],
+    );
     let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
     let row = |config: &str, samples: u32| -> (f64, f64) {
         let fields: Vec<&str> = csv
