@@ -1521,14 +1521,15 @@ pub(crate) mod closed_forms {
         }
     }
 
-    fn wall(a: DVec2, b: DVec2, material: Material) -> Wall {
+    /// A straight wall from `a` to `b`.
+    pub(crate) fn wall(a: DVec2, b: DVec2, material: Material) -> Wall {
         Wall {
             shape: Segment::new(a, b).into(),
             material,
         }
     }
 
-    const OPAQUE: Material = Material::Diffuse { albedo: None };
+    pub(crate) const OPAQUE: Material = Material::Diffuse { albedo: None };
 
     fn at(scene: &Scene, x: DVec2, normal: Option<DVec2>, wall: Option<u32>) -> Rgb {
         let receiver = Receiver {

@@ -706,10 +706,9 @@ fn graded(from: f64, to: f64, h: f64, f: &impl Fn(f64) -> f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lights::exact::closed_forms::scene;
+    use crate::lights::exact::closed_forms::{OPAQUE, scene, wall};
     use crate::lights::{Visibility, light_contribution};
-    use crate::scene::{Light, Material, Wall};
-    use flatray_geometry::Segment;
+    use crate::scene::{Light, Material};
 
     fn light(shape: LightShape, falloff: Falloff) -> Light {
         Light {
@@ -725,47 +724,32 @@ mod tests {
         light(LightShape::Point { at }, falloff)
     }
 
-    fn wall(a: DVec2, b: DVec2, material: Material) -> Wall {
-        Wall {
-            shape: Segment::new(a, b).into(),
-            material,
-        }
-    }
-
-    const OPAQUE: Material = Material::Diffuse { albedo: None };
-
-    /// The square's mean where walls shade it.
-    fn mean(scene: &Scene, square: (DVec2, DVec2)) -> Rgb {
+    /// The mean of light 0 over the square, with the transmittance
+    /// `known` or the walls'.
+    fn mean_with(scene: &Scene, square: (DVec2, DVec2), known: Option<Rgb>) -> Rgb {
         let got = square_light(
             scene,
             0,
             square,
             Receiver::FLOOR,
-            None,
+            known,
             &mut Stats::default(),
         );
         match got {
             Some(Square::Mean(mean)) => mean,
-            _ => panic!("{got:?}: no wall shades the square"),
+            _ => panic!("{got:?}: the square takes no mean"),
         }
+    }
+
+    /// The square's mean where walls shade it.
+    fn mean(scene: &Scene, square: (DVec2, DVec2)) -> Rgb {
+        mean_with(scene, square, None)
     }
 
     /// The kernel's mean over a square that nothing shades: asked with a
     /// known transmittance of one half (halving and doubling are exact).
     fn kernel_mean(scene: &Scene, square: (DVec2, DVec2)) -> Rgb {
-        let half = Some(Rgb::splat(0.5));
-        let got = square_light(
-            scene,
-            0,
-            square,
-            Receiver::FLOOR,
-            half,
-            &mut Stats::default(),
-        );
-        match got {
-            Some(Square::Mean(mean)) => mean * 2.0,
-            _ => panic!("{got:?}"),
-        }
+        mean_with(scene, square, Some(Rgb::splat(0.5))) * 2.0
     }
 
     /// The mean of the sampled estimator (one shadow ray per point) over

@@ -36,6 +36,10 @@ impl Effect {
     }
 }
 
+/// What the plan adds to the lines of points, spots and suns where the
+/// floor memo takes them over each pixel's square (`Plan::floor_squares`).
+const OVER_THE_SQUARE: &str = "; on the floor, each pixel's mean over its square in closed form";
+
 impl Plan {
     /// Every effect with its reason, in a fixed order, for printing.
     pub fn effects(&self) -> Vec<Effect> {
@@ -111,11 +115,7 @@ impl Plan {
                     "{}, {}{}",
                     n(points, "point light"),
                     n(spots, "spot light"),
-                    if floor_squares {
-                        "; on the floor, each pixel's mean over its square in closed form"
-                    } else {
-                        ""
-                    }
+                    if floor_squares { OVER_THE_SQUARE } else { "" }
                 )
             } else {
                 "no point or spot light in the scene".into()
@@ -136,10 +136,9 @@ impl Plan {
             suns + beams > 0,
             match (suns, beams) {
                 (0, 0) => "no directional light in the scene".into(),
-                (_, 0) if floor_squares => format!(
-                    "{}; on the floor, each pixel's mean over its square in closed form",
-                    n(suns, "directional light")
-                ),
+                (_, 0) if floor_squares => {
+                    format!("{}{OVER_THE_SQUARE}", n(suns, "directional light"))
+                }
                 (_, 0) => n(suns, "directional light"),
                 (0, _) => n(beams, "beam"),
                 _ => format!("{}, {}", n(suns, "directional light"), n(beams, "beam")),
