@@ -4,7 +4,7 @@ use flatray_geometry::DVec2;
 
 use crate::lights::choice::{LightTable, NUMBERS};
 use crate::lights::{
-    Receiver, Visibility, light_contribution, through_mirrors, weighed_contribution,
+    Receiver, Visibility, light_contribution, through_glass, through_mirrors, weighed_contribution,
 };
 use crate::material::{Bsdf, Sampling};
 use crate::sampling::Stream;
@@ -13,7 +13,9 @@ use crate::{Rgb, Stats};
 
 /// The light that reaches `x` directly from every light: fluence for the
 /// floor, irradiance for a wall side; with `mirror_lights`, and every line
-/// and circle light through one flat mirror (`lights::exact`). Without a `table`, one shadow ray
+/// and circle light through one flat mirror (`lights::exact`); with
+/// `glass_lights`, and through one edge of the glass body `x` is in
+/// (`lights::refracted`). Without a `table`, one shadow ray
 /// per light, each light drawing its numbers from `stream`
 /// (`LightShape::numbers`); with one, the lights the table chooses, from
 /// [`NUMBERS`] numbers.
@@ -21,7 +23,7 @@ pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
     receiver: Receiver,
-    (shadows, mirror_lights): (bool, bool),
+    (shadows, mirror_lights, glass_lights): (bool, bool, bool),
     table: Option<&LightTable>,
     stream: &mut Stream,
     stats: &mut Stats,
@@ -34,8 +36,13 @@ pub(crate) fn direct_light(
         }
         None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
     };
-    if mirror_lights {
+    let direct = if mirror_lights {
         direct + through_mirrors(scene, &scene.flat_mirrors, x, receiver, stats)
+    } else {
+        direct
+    };
+    if glass_lights {
+        direct + through_glass(scene, x, receiver, stats)
     } else {
         direct
     }

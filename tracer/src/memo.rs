@@ -9,7 +9,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use flatray_cache::{Value, WallMemo};
 use flatray_geometry::Side;
 
-use crate::lights::{Receiver, Visibility, light_contribution, through_mirrors_of};
+use crate::lights::{
+    Receiver, Visibility, light_contribution, through_glass_of, through_mirrors_of,
+};
 use crate::options::MemoOptions;
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
@@ -70,7 +72,7 @@ pub(crate) fn build_wall_memo(
     scene: &Scene,
     options: &MemoOptions,
     scale: f64,
-    (shadows, mirror_lights): (bool, bool),
+    (shadows, mirror_lights, glass_lights): (bool, bool, bool),
     stats: &mut Stats,
 ) -> WallMemo {
     let lengths = scene.diffuse_lengths();
@@ -120,6 +122,11 @@ pub(crate) fn build_wall_memo(
             let value = if mirror_lights {
                 let mirrors = &scene.flat_mirrors;
                 value + through_mirrors_of(scene, mirrors, light_index, x, receiver, &mut local)
+            } else {
+                value
+            };
+            let value = if glass_lights {
+                value + through_glass_of(scene, light_index, x, receiver, &mut local)
             } else {
                 value
             };

@@ -81,7 +81,7 @@ pub(crate) fn path_begin(
             trace.scene,
             p,
             receiver,
-            (trace.shadows, trace.mirror_lights),
+            (trace.shadows, trace.mirror_lights, trace.glass_lights),
             trace.light_table,
             stream,
             stats,
@@ -209,11 +209,14 @@ pub(crate) fn follow(
     // shadow ray found, so emission met by the ray then counts.
     let mut after_mirror = false;
     // Specular events since the floor or the last diffuse vertex, and
-    // whether the first was a flat mirror: right after exactly that one
-    // mirror, lines and circles were taken in closed form at the vertex
-    // (`Trace::mirror_lights`), and a ray that meets them adds nothing.
+    // whether the first was a flat mirror, or a refraction out of the
+    // glass body the vertex is in: right after exactly that one event,
+    // lines and circles were taken in closed form at the vertex
+    // (`Trace::mirror_lights`, `Trace::glass_lights`), and a ray that
+    // meets them adds nothing.
     let mut events = 0u32;
     let mut first_flat_mirror = false;
+    let mut first_glass_exit = false;
     // Where the ray left a glossy wall, and the density of its direction:
     // light with an area that it meets is weighed against next-event
     // estimation there (multiple importance sampling).
@@ -234,8 +237,10 @@ pub(crate) fn follow(
                 .closest_hit_within(&ray, f64::INFINITY, skip, line_walls),
         };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        let taken_at_vertex =
-            trace.mirror_lights && events == 1 && first_flat_mirror && glossy_from.is_none();
+        let taken_at_vertex = events == 1
+            && glossy_from.is_none()
+            && ((trace.mirror_lights && first_flat_mirror)
+                || (trace.glass_lights && first_glass_exit));
         if mirror_emission && (after_mirror || force || glossy_from.is_some()) && !taken_at_vertex {
             stats.work.emission_tests += 1;
             let emitted =
@@ -400,10 +405,17 @@ pub(crate) fn follow(
             throughput *= weight;
             // After a specular event, light met by the ray counts: no
             // next-event estimation could have found it (but for one
-            // flat mirror, with `mirror_lights`).
+            // flat mirror, with `mirror_lights`, and one refraction out
+            // of the vertex's glass, with `glass_lights`).
             after_mirror = true;
             if events == 0 {
                 first_flat_mirror = matches!(wall.material, Material::Mirror { .. });
+                // Reached from its inside, and out of the glass now.
+                first_glass_exit = wall
+                    .material
+                    .glass()
+                    .is_some_and(|(_, inside)| inside == side)
+                    && glass.inside.is_none();
             }
             events = events.saturating_add(1);
             line_walls = if bsdf.is_mirror() {
@@ -464,6 +476,10 @@ pub(crate) struct Trace<'a> {
     /// mirror in closed form (`Plan::mirror_lights`); path rays then add
     /// nothing from them right after exactly that one mirror.
     pub mirror_lights: bool,
+    /// Whether receivers inside glass take line and circle lights through
+    /// one edge of their body in closed form (`Plan::glass_lights`); path
+    /// rays then add nothing for them right after that one refraction.
+    pub glass_lights: bool,
     /// Per wall side, whether a path goes on past its last diffuse bounce
     /// there, to meet such lights after mirrors or glass
     /// (`run::last_leg_sides`); `None`: it never does.
@@ -574,7 +590,7 @@ fn wall_irradiance(
         shadow_walls: None,
     };
     let direct = |stream: &mut Stream, stats: &mut Stats| {
-        let shadows = (shadows, trace.mirror_lights);
+        let shadows = (shadows, trace.mirror_lights, trace.glass_lights);
         direct_light(scene, x, receiver(), shadows, light_table, stream, stats)
     };
     let irradiance = match memo {

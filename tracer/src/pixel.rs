@@ -17,7 +17,7 @@ use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::direct::{direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::film::PixelSums;
 use crate::lights::square::{Square, square_light, takes_square};
-use crate::lights::{Receiver, Visibility, through_mirrors};
+use crate::lights::{Receiver, Visibility, through_glass, through_mirrors};
 use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
 use crate::path::{Trace, path_begin, path_finish, path_sample};
@@ -298,6 +298,31 @@ pub(crate) fn render_pixel(
                 *value += through_mirrors(scene, &scene.flat_mirrors, x, Receiver::FLOOR, stats);
             }
         }
+        if trace.glass_lights {
+            // Lines and circles seen through one glass edge, in closed
+            // form (`lights::refracted`): their mean over some of each
+            // half's points, given to every point of the half.
+            let floor = &mut batch.floor;
+            for context in contexts {
+                let from = (context.pass.points.start - points.start) as usize;
+                for half in glass_halves(from, context.pass.points.len()) {
+                    let (Some(values), Some(xs)) = (
+                        floor.values.get_mut(half.all.clone()),
+                        floor.points.get(half.taken),
+                    ) else {
+                        continue;
+                    };
+                    let mut mean = Rgb::ZERO;
+                    for &x in xs {
+                        mean += through_glass(scene, x, Receiver::FLOOR, stats);
+                    }
+                    let mean = mean / xs.len().max(1) as f64;
+                    for value in values {
+                        *value += mean;
+                    }
+                }
+            }
+        }
     }
     // Every pass's path samples, arc by arc over all of them.
     let mut sums = std::mem::take(&mut batch.sums);
@@ -345,6 +370,34 @@ pub(crate) fn render_pixel(
     }
     batch.sums = sums;
     total.unwrap_or_default()
+}
+
+/// One floor point in this many takes the light through glass edges
+/// (`lights::refracted`) for its half of the pass's points: the light
+/// inside glass varies gently across a pixel, and each look costs about
+/// as much as a path sample.
+pub(crate) const GLASS_POINT_SHARE: usize = 16;
+
+/// One half of a pass's floor points ([`noise_halves`]): all its points,
+/// and the first of them, one in [`GLASS_POINT_SHARE`] and at least one,
+/// whose mean light through glass edges every point of the half takes.
+/// The half's mean stays an unbiased estimate over the pixel (each point
+/// is uniform over it), and its points differ only as they did.
+pub(crate) struct GlassHalf {
+    pub all: std::ops::Range<usize>,
+    pub taken: std::ops::Range<usize>,
+}
+
+/// The halves of a pass's `count` floor points from index `from`.
+pub(crate) fn glass_halves(from: usize, count: usize) -> impl Iterator<Item = GlassHalf> {
+    let middle = count / 2;
+    [(from, middle), (from + middle, count - middle)]
+        .into_iter()
+        .filter(|&(_, n)| n > 0)
+        .map(|(start, n)| GlassHalf {
+            all: start..start + n,
+            taken: start..start + (n / GLASS_POINT_SHARE).max(1),
+        })
 }
 
 /// The pass of `contexts` (consecutive passes of the schedule) that takes

@@ -52,7 +52,7 @@ impl Shared {
         let (width, height) = image_size(scene, options.scale);
         let plan = Plan::new(scene, options);
         let memo = plan.wall_memo.then(|| {
-            let shadows = (plan.shadows, plan.mirror_lights);
+            let shadows = (plan.shadows, plan.mirror_lights, plan.glass_lights);
             build_wall_memo(scene, &options.memo, options.scale, shadows, stats)
         });
         // Rays off mirrors are culled wherever the floor's are, and so
@@ -461,6 +461,7 @@ pub(crate) fn trace_with<'a>(
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
         mirror_lights: plan.mirror_lights,
+        glass_lights: plan.glass_lights,
         last_leg_sides: last_leg_sides.filter(|_| plan.last_legs),
         force,
         tables: plan.fast.tables.runs,

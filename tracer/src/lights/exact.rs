@@ -62,16 +62,16 @@ struct Cover {
 /// covers they cast and the visible spans. They grow with the walls in
 /// front of one light, never with the render.
 #[derive(Default)]
-struct Scratch {
-    walls: Vec<u32>,
+pub(super) struct Scratch {
+    pub(super) walls: Vec<u32>,
     query: Vec<u32>,
     covers: Vec<Cover>,
     spans: Vec<Span>,
-    cuts: Vec<f64>,
+    pub(super) cuts: Vec<f64>,
 }
 
 thread_local! {
-    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+    pub(super) static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
 /// Pieces of a light (and shadows on it) no wider than this share of the
@@ -80,7 +80,7 @@ thread_local! {
 /// share a corner, or between a wall and the horizon of a receiver on its
 /// neighbour, changes neither the image nor, when nothing else is in the
 /// way, the bits of the whole light's integral.
-const SLIVER: f64 = 1e-9;
+pub(super) const SLIVER: f64 = 1e-9;
 
 /// Whether light `shape` is given in closed form: lines and circles.
 #[inline]
@@ -591,7 +591,7 @@ fn front_part(mirror: &Segment, side: f64, segment: &Segment) -> Option<Segment>
 
 /// The product of the tints of `walls` (but those `skip` names) that the
 /// segment from `from` to `to` crosses, zero at the first opaque one.
-fn legs(scene: &Scene, walls: &[u32], (from, to): (DVec2, DVec2), skip: Skip) -> Rgb {
+pub(super) fn legs(scene: &Scene, walls: &[u32], (from, to): (DVec2, DVec2), skip: Skip) -> Rgb {
     let ray = Ray::new(from, to - from);
     let mut through = Rgb::ONE;
     for &w in walls {
@@ -618,7 +618,7 @@ fn legs(scene: &Scene, walls: &[u32], (from, to): (DVec2, DVec2), skip: Skip) ->
 /// its list where known, else those whose boxes meet the box around
 /// `hull` (padded by a relative `1e-9`), without the receiver's wall and
 /// the light's own. Counts one shadow query.
-fn find_walls(
+pub(super) fn find_walls(
     scene: &Scene,
     index: usize,
     receiver: Receiver,
@@ -748,7 +748,7 @@ fn sweep(whole: (f64, f64), scratch: &mut Scratch) {
 /// The distances at which `falloff.per_radian` has a kink: the small
 /// radius (inside it, the distance is clamped), and a window's range
 /// (beyond it, nothing).
-fn kinks(falloff: Falloff, r0: f64) -> impl Iterator<Item = f64> {
+pub(super) fn kinks(falloff: Falloff, r0: f64) -> impl Iterator<Item = f64> {
     let range = match falloff {
         Falloff::Window { range } => Some(range),
         _ => None,
@@ -1125,7 +1125,7 @@ struct DiskView {
 
 /// Nodes and weights of 12-point Gauss-Legendre quadrature on `[-1, 1]`
 /// (the positive half; the rule is symmetric).
-const GAUSS_12: [(f64, f64); 6] = [
+pub(super) const GAUSS_12: [(f64, f64); 6] = [
     (0.125_233_408_511_468_9, 0.249_147_045_813_402_8),
     (0.367_831_498_998_180_2, 0.233_492_536_538_354_8),
     (0.587_317_954_286_617_4, 0.203_167_426_723_065_9),
@@ -1507,7 +1507,7 @@ pub(crate) mod closed_forms {
         Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene")
     }
 
-    fn line(a: DVec2, b: DVec2, falloff: Falloff) -> Light {
+    pub(crate) fn line(a: DVec2, b: DVec2, falloff: Falloff) -> Light {
         Light {
             shape: LightShape::Line {
                 segment: Segment::new(a, b),

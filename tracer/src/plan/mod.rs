@@ -135,6 +135,13 @@ pub struct Plan {
     pub mirror_lights: bool,
     /// Pairs of a flat mirror and a line or circle light.
     pub mirror_pairs: usize,
+    /// Line and circle lights taken in closed form through one edge of
+    /// the glass body a receiver is in, and left out of path rays that
+    /// meet them right after that one refraction
+    /// (`lights::refracted::through_glass`).
+    pub glass_lights: bool,
+    /// Pairs of a glass edge and a line or circle light.
+    pub glass_pairs: usize,
     /// Paths go on past their last diffuse bounce, to meet lights with an
     /// area after mirrors and glass.
     pub last_legs: bool,
@@ -226,6 +233,17 @@ impl Plan {
             && options.specular > 0
             && mirror_pairs > 0
             && mirror_pairs <= crate::lights::MAX_MIRROR_PAIRS;
+        // Lines and circles seen through one edge of smooth glass, in
+        // closed form at each receiver inside glass, up to a budget of
+        // (edge, light) pairs; the closed form takes the walls around as
+        // segments.
+        let glass_pairs = crate::lights::glass_pairs(scene);
+        let glass_lights = shadows
+            && inventory.arcs == 0
+            && options.specular > 0
+            && glass_pairs > 0
+            && glass_pairs <= crate::lights::MAX_GLASS_PAIRS
+            && crate::lights::glass_is_plain(scene);
         // Past its last diffuse bounce a path goes on only where such a
         // light could be met; not forced, as it would find none.
         let last_legs = indirect && specular_paths && areas > 0;
@@ -344,6 +362,8 @@ impl Plan {
             mirror_emission,
             mirror_lights,
             mirror_pairs,
+            glass_lights,
+            glass_pairs,
             last_legs,
             caustics,
             wall_memo,

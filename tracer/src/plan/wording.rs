@@ -86,6 +86,8 @@ impl Plan {
             mirror_emission,
             mirror_lights,
             mirror_pairs,
+            glass_lights,
+            glass_pairs,
             caustics,
             wall_memo,
             onward,
@@ -289,10 +291,7 @@ impl Plan {
             if mirror_lights {
                 format!(
                     "{}: every floor and wall point takes them exactly; path rays add them only after more than one mirror or glass event",
-                    n(
-                        mirror_pairs,
-                        "pair of a flat mirror and a line or circle light"
-                    )
+                    n(mirror_pairs, "flat mirror and light pair")
                 )
             } else if tracing_light {
                 "light tracing does not take it".into()
@@ -303,12 +302,37 @@ impl Plan {
             } else if mirror_pairs > crate::lights::MAX_MIRROR_PAIRS {
                 format!(
                     "{}, over {}: path rays find them",
-                    n(
-                        mirror_pairs,
-                        "pair of a flat mirror and a line or circle light"
-                    ),
+                    n(mirror_pairs, "flat mirror and light pair"),
                     crate::lights::MAX_MIRROR_PAIRS
                 )
+            } else {
+                "no shadow rays are cast".into()
+            },
+        );
+        add(
+            "lines and circles through one glass edge, closed form",
+            glass_lights,
+            if glass_lights {
+                format!(
+                    "{}: every floor and wall point inside glass takes them exactly; path rays add them only after more than one mirror or glass event",
+                    n(glass_pairs, "glass edge and light pair")
+                )
+            } else if tracing_light {
+                "light tracing does not take it".into()
+            } else if glass_pairs == 0 {
+                "no glass and line or circle light in the scene".into()
+            } else if specular_limit == 0 {
+                "specular = 0: no light is refracted".into()
+            } else if glass_pairs > crate::lights::MAX_GLASS_PAIRS {
+                format!(
+                    "{}, over {}: path rays find them",
+                    n(glass_pairs, "glass edge and light pair"),
+                    crate::lights::MAX_GLASS_PAIRS
+                )
+            } else if dispersive > 0 || rough_glass > 0 {
+                "rough or dispersive glass: path rays find them".into()
+            } else if arcs > 0 {
+                "the scene has arcs: path rays find them".into()
             } else {
                 "no shadow rays are cast".into()
             },

@@ -851,6 +851,9 @@ pub struct Scene {
     /// The walls that are flat, perfect mirrors (`Material::Mirror`), in
     /// index order.
     pub(crate) flat_mirrors: Vec<u32>,
+    /// The glass edges that are segments, each body's together (by body,
+    /// then index).
+    pub(crate) glass_edges: Vec<u32>,
     /// The walls' segments, indexed like `walls`.
     pub(crate) segments: SegmentSet,
     /// The floor's albedo along the walls that take it.
@@ -1062,6 +1065,12 @@ impl Scene {
                 matches!(wall.material, Material::Mirror { .. }) && wall.as_segment().is_some()
             })
             .collect();
+        let mut glass_edges: Vec<u32> = (0..walls.len() as u32)
+            .filter(|&w| {
+                walls[w as usize].material.is_glass() && walls[w as usize].as_segment().is_some()
+            })
+            .collect();
+        glass_edges.sort_by_key(|&w| (walls[w as usize].material.glass().map(|(b, _)| b), w));
         Scene {
             canvas,
             floor,
@@ -1073,6 +1082,7 @@ impl Scene {
             wall_light,
             light_wall,
             flat_mirrors,
+            glass_edges,
             segments,
             albedo_along,
             spectra,
