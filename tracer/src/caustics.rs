@@ -32,7 +32,8 @@
 use flatray_geometry::{Ray, Segment, Side, Skip, segments_meet};
 
 use crate::film::{Estimator, Film, Part, run};
-use crate::light_tracer::{Deposits, Grid, WallDeposits, follow_photon};
+use crate::light_tracer::{Deposits, Grid, OneEvent, WallDeposits, follow_photon};
+use crate::lights::aimed::Aim;
 use crate::lights::{Aperture, Photon};
 use crate::options::{RenderOptions, image_size};
 use crate::passes::Pass;
@@ -296,12 +297,14 @@ impl Caustics {
     }
 }
 
-/// One light's apertures towards the specular walls.
+/// One light's apertures towards the specular walls; for a line or
+/// circle light, its aim at them.
 struct Emitter {
     light: usize,
     apertures: Vec<Aperture>,
     /// Their measures, summed as they are listed.
     cumulative: Vec<f64>,
+    area: Option<Aim>,
 }
 
 /// Segments whose apertures hold every direction that meets `shape`: the
@@ -330,6 +333,21 @@ fn covering(shape: &flatray_geometry::Shape) -> impl Iterator<Item = Segment> + 
         }
     }
     out.into_iter()
+}
+
+/// Most segments that line and circle lights aim their photons at
+/// (`Plan::area_photons`): each photon looks at every one.
+pub const MAX_AREA_TARGETS: usize = 256;
+
+/// The segments line and circle lights aim their photons at: every
+/// mirror and glass edge (arcs by the segments that cover them).
+pub(crate) fn area_targets(scene: &Scene) -> Vec<Segment> {
+    scene
+        .walls
+        .iter()
+        .filter(|w| w.material.turns_specularly())
+        .flat_map(|w| covering(&w.shape))
+        .collect()
 }
 
 /// Parts of an aperture tested for whether a diffuse wall hides the target.
@@ -422,15 +440,23 @@ struct CausticPass<'a> {
     values: usize,
     /// The seed of the photons: the render pass's.
     seed: u64,
+    /// What line and circle lights' photons leave to closed forms.
+    area: Option<OneEvent>,
 }
 
 /// Runs the caustic pass for a path-traced render of `scene`; `None` when
 /// the scene has no mirror or glass, or no light of one direction per
 /// point (the plan says so).
+///
+/// With `area` (`Plan::area_photons`), line and circle lights send
+/// photons too, aimed at the mirror and glass edges (`lights::aimed`):
+/// they count after a run of specular events but those `area` says
+/// receivers take in closed form, and path rays leave that light to them.
 pub(crate) fn trace_caustics(
     scene: &Scene,
     options: &RenderOptions,
     (limits, pass): (Limits, &Pass),
+    area: Option<OneEvent>,
     stats: &mut Stats,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Option<Caustics> {
@@ -445,6 +471,15 @@ pub(crate) fn trace_caustics(
         .iter()
         .enumerate()
         .filter_map(|(index, light)| {
+            if crate::lights::is_exact(&light.shape) {
+                let aim = area.and_then(|_| Aim::new(light.shape, area_targets(scene)))?;
+                return (light.intensity > 0.0).then_some(Emitter {
+                    light: index,
+                    apertures: Vec::new(),
+                    cumulative: vec![aim.measure()],
+                    area: Some(aim),
+                });
+            }
             // A light no path finds (a laser) is traced whole; any other
             // towards the specular walls.
             let apertures: Vec<Aperture> = match light.shape.whole_aperture() {
@@ -477,6 +512,7 @@ pub(crate) fn trace_caustics(
                 light: index,
                 apertures,
                 cumulative,
+                area: None,
             })
         })
         .collect();
@@ -533,6 +569,7 @@ pub(crate) fn trace_caustics(
         bins,
         values,
         seed: pass.seed,
+        area,
     };
     let outcome = run(&pass, Stats::default(), progress);
     stats.merge(&outcome.stats);
@@ -562,6 +599,7 @@ impl Estimator for CausticPass<'_> {
         let first = chunk as u64 * self.per_chunk;
         let last = ((chunk as u64 + 1) * self.per_chunk).min(self.photons);
         let weight = self.total / self.photons as f64;
+        let mut scratch = Vec::new();
         let pick = |list: &[f64], u: f64| {
             let u = u * list.last().copied().unwrap_or(0.0);
             list.iter().position(|&c| u < c).unwrap_or(list.len() - 1)
@@ -575,6 +613,44 @@ impl Estimator for CausticPass<'_> {
             stats.physics.caustic_photons += 1;
             let emitter = &self.emitters[pick(&self.shares, stream.uniform())];
             let light = &scene.lights[emitter.light];
+            if let Some(aim) = &emitter.area {
+                // Its share of the photons stands for its aimed power as
+                // measured; each carries what its own point sees.
+                let Some(aimed) = aim.draw(&mut stream, &mut scratch) else {
+                    continue;
+                };
+                let (wavelength, colour) =
+                    match scene.spectra.photon(emitter.light, || stream.uniform()) {
+                        Some((wavelength, colour)) => (Some(wavelength), colour),
+                        None => (None, light.color),
+                    };
+                let power = colour * (weight * aimed.factor / aim.measure());
+                let photon = Photon {
+                    origin: aimed.origin,
+                    dir: aimed.dir,
+                    scale: 1.0,
+                    kernel: light.shape.kernel(light),
+                    skip: scene.light_wall[emitter.light].map_or(Skip::NONE, Skip::one),
+                    unseen: false,
+                    wavelength,
+                };
+                let mut deposits = Deposits {
+                    grid: &self.grid,
+                    floor: &mut floor,
+                    walls: Some((&self.bins, &mut walls)),
+                    area: self.area,
+                };
+                follow_photon(
+                    scene,
+                    photon,
+                    power,
+                    self.limits,
+                    &mut deposits,
+                    &mut stream,
+                    stats,
+                );
+                continue;
+            }
             let aperture = &emitter.apertures[pick(&emitter.cumulative, stream.uniform())];
             let (origin, dir) = aperture.ray(stream.uniform());
             // The density of this ray among the light's apertures: every
@@ -610,6 +686,7 @@ impl Estimator for CausticPass<'_> {
                 grid: &self.grid,
                 floor: &mut floor,
                 walls: Some((&self.bins, &mut walls)),
+                area: None,
             };
             follow_photon(
                 scene,

@@ -207,6 +207,7 @@ fn trace_photon(
     }
     let power = colour * weight * photon.scale;
     let mut deposits = Deposits {
+        area: None,
         grid,
         floor: buffer,
         walls: None,
@@ -237,6 +238,23 @@ pub(crate) struct Deposits<'a> {
     /// its first diffuse wall, its power binned there, if it has been
     /// specular before.
     pub walls: Option<(&'a dyn WallDeposits, &'a mut [Rgb])>,
+    /// For a line or circle light's photon in the caustic pass: which runs
+    /// of exactly one event receivers take in closed form, whose light the
+    /// photon then leaves to them. Such a photon counts only after a
+    /// specular event, and stops at its first non-specular wall (the path
+    /// tracer takes what comes off a rough mirror).
+    pub area: Option<OneEvent>,
+}
+
+/// Runs of exactly one specular event, between a line or circle light and
+/// a receiver, that receivers take in closed form (`Plan::mirror_lights`,
+/// `Plan::glass_lights`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct OneEvent {
+    /// A reflection off a flat mirror.
+    pub mirror: bool,
+    /// A refraction into a smooth glass body.
+    pub glass: bool,
 }
 
 /// Follows `photon`, of `power`, through at most `limits.bounces` diffuse
@@ -278,6 +296,10 @@ pub(crate) fn follow_photon(
     };
     // A laser's light no path finds: the caustic pass counts all of it.
     let unseen = photon.unseen;
+    let area = deposits.area;
+    // For a line or circle light's photon: whether its run so far is one
+    // event that receivers take in closed form.
+    let mut closed_form_run = false;
     loop {
         stats.work.bounce_rays += 1;
         let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
@@ -296,7 +318,10 @@ pub(crate) fn follow_photon(
             None => glass.inside,
         };
         let absorb = absorption(scene, body);
-        if !caustic || run.specular() || glossy || unseen {
+        if !caustic
+            || (run.specular() && !closed_form_run)
+            || (area.is_none() && (glossy || unseen))
+        {
             deposits.grid.deposit(
                 &ray,
                 t_end,
@@ -330,7 +355,7 @@ pub(crate) fn follow_photon(
         if bsdf.is_straight() {
             stats.physics.transparent_passes += 1;
         }
-        let takes_lobe = bsdf.is_glossy() && !glossy && limits.bounces > 0;
+        let takes_lobe = bsdf.is_glossy() && !glossy && limits.bounces > 0 && area.is_none();
         if let Some((bins, values)) = &mut deposits.walls
             && !bsdf.is_specular()
             && !takes_lobe
@@ -346,7 +371,7 @@ pub(crate) fn follow_photon(
             stats.physics.paths_to_walls += 1;
             if bsdf.lambertian().is_some() {
                 let arriving = power * kernel.factor(travelled, r0);
-                if !glossy && (run.specular() || unseen) {
+                if !glossy && ((run.specular() && !closed_form_run) || unseen) {
                     bins.add(values, (index, side, h.u), arriving);
                 } else if glossy && specular_then_glossy && limits.bounces >= 2 {
                     bins.add_late(values, (index, side, h.u), arriving);
@@ -381,6 +406,20 @@ pub(crate) fn follow_photon(
         if bsdf.is_specular() {
             power *= scattered.weight;
             if !bsdf.is_straight() {
+                if let Some(one) = area {
+                    // The first event of the run: a flat mirror, or a
+                    // refraction into a body (from its outside, now in it).
+                    closed_form_run = !run.specular()
+                        && ((one.mirror
+                            && matches!(wall.material, crate::scene::Material::Mirror { .. })
+                            && wall.as_segment().is_some())
+                            || (one.glass
+                                && wall
+                                    .material
+                                    .glass()
+                                    .is_some_and(|(_, inside)| inside != side)
+                                && glass.inside.is_some()));
+                }
                 let Some(weight) = run.next(limits.specular, power, stream, stats) else {
                     return;
                 };

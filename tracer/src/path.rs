@@ -217,6 +217,9 @@ pub(crate) fn follow(
     let mut events = 0u32;
     let mut first_flat_mirror = false;
     let mut first_glass_exit = false;
+    // Whether the current run of specular events began at a glossy wall
+    // (not the floor or a diffuse wall).
+    let mut from_glossy = false;
     // Where the ray left a glossy wall, and the density of its direction:
     // light with an area that it meets is weighed against next-event
     // estimation there (multiple importance sampling).
@@ -237,10 +240,13 @@ pub(crate) fn follow(
                 .closest_hit_within(&ray, f64::INFINITY, skip, line_walls),
         };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        let taken_at_vertex = events == 1
-            && glossy_from.is_none()
-            && ((trace.mirror_lights && first_flat_mirror)
-                || (trace.glass_lights && first_glass_exit));
+        // Only after the floor or a diffuse wall: a glossy wall's
+        // next-event estimation takes no light through mirrors or glass.
+        let taken_at_vertex = !from_glossy
+            && ((events == 1
+                && ((trace.mirror_lights && first_flat_mirror)
+                    || (trace.glass_lights && first_glass_exit)))
+                || (trace.area_photons && events >= 1));
         if mirror_emission && (after_mirror || force || glossy_from.is_some()) && !taken_at_vertex {
             stats.work.emission_tests += 1;
             let emitted =
@@ -432,6 +438,7 @@ pub(crate) fn follow(
             run = Run::new(throughput);
             after_mirror = false;
             events = 0;
+            from_glossy = bsdf.is_glossy();
             unfolded = 0.0;
             line_walls = None;
         }
@@ -480,6 +487,10 @@ pub(crate) struct Trace<'a> {
     /// one edge of their body in closed form (`Plan::glass_lights`); path
     /// rays then add nothing for them right after that one refraction.
     pub glass_lights: bool,
+    /// Whether the caustic pass takes line and circle lights after runs
+    /// of specular events (`Plan::area_photons`): path rays then add none
+    /// they meet after such a run from the floor or a diffuse wall.
+    pub area_photons: bool,
     /// Per wall side, whether a path goes on past its last diffuse bounce
     /// there, to meet such lights after mirrors or glass
     /// (`run::last_leg_sides`); `None`: it never does.

@@ -142,6 +142,14 @@ pub struct Plan {
     pub glass_lights: bool,
     /// Pairs of a glass edge and a line or circle light.
     pub glass_pairs: usize,
+    /// Line and circle lights send caustic photons at the mirror and
+    /// glass edges, which take their light after runs of specular events
+    /// that no closed form takes; path rays then add no light they meet
+    /// after a run of specular events from the floor or a diffuse wall
+    /// (`lights::aimed`).
+    pub area_photons: bool,
+    /// The segments those photons are aimed at.
+    pub area_targets: usize,
     /// Paths go on past their last diffuse bounce, to meet lights with an
     /// area after mirrors and glass.
     pub last_legs: bool,
@@ -244,9 +252,29 @@ impl Plan {
             && glass_pairs > 0
             && glass_pairs <= crate::lights::MAX_GLASS_PAIRS
             && crate::lights::glass_is_plain(scene);
+        // Lines and circles through glass: what enters a body and leaves
+        // it, or reflects inside it first, photons take far better than
+        // paths, which meet a small light by chance. Not with arc lights,
+        // which paths find as walls.
+        let area_targets = if glass_edges > 0 {
+            crate::caustics::area_targets(scene).len()
+        } else {
+            0
+        };
+        let area_photons = options.caustics
+            && !tracing_light
+            && specular_paths
+            && areas > 0
+            && glass_edges > 0
+            && area_targets <= crate::caustics::MAX_AREA_TARGETS
+            && !scene
+                .lights
+                .iter()
+                .any(|l| matches!(l.shape, crate::scene::LightShape::Arc { .. }));
         // Past its last diffuse bounce a path goes on only where such a
-        // light could be met; not forced, as it would find none.
-        let last_legs = indirect && specular_paths && areas > 0;
+        // light could be met, and photons do not take it; not forced, as
+        // it would find none.
+        let last_legs = indirect && specular_paths && areas > 0 && !area_photons;
         // Path tracing cannot find their light after a mirror or glass,
         // and leaves it to photons off a rough mirror at a path's first
         // bounce (where a narrow lobe makes paths noisy): the caustic pass
@@ -256,7 +284,7 @@ impl Plan {
         let caustics = options.caustics
             && !tracing_light
             && !no_lights
-            && (((specular_paths || glossy_paths) && aimed > 0) || lasers > 0);
+            && (((specular_paths || glossy_paths) && aimed > 0) || lasers > 0 || area_photons);
         let wall_memo_wanted = !tracing_light
             && indirect
             && options.bounces > 0
@@ -364,6 +392,8 @@ impl Plan {
             mirror_pairs,
             glass_lights,
             glass_pairs,
+            area_photons,
+            area_targets,
             last_legs,
             caustics,
             wall_memo,

@@ -88,6 +88,8 @@ impl Plan {
             mirror_pairs,
             glass_lights,
             glass_pairs,
+            area_photons,
+            area_targets,
             caustics,
             wall_memo,
             onward,
@@ -469,7 +471,8 @@ impl Plan {
         );
         add(
             "points, spots and sun seen in mirrors or glass",
-            caustics || (tracing_light && specular_limit > 0 && specular > 0 && aimed > 0),
+            (caustics && aimed > 0)
+                || (tracing_light && specular_limit > 0 && specular > 0 && aimed > 0),
             if specular == 0 {
                 "no mirror or glass in the scene".into()
             } else if aimed == 0 {
@@ -495,6 +498,35 @@ impl Plan {
                     ),
                     n(specular, "mirror or glass edge")
                 )
+            },
+        );
+        add(
+            "lines and circles after mirrors and glass, photons",
+            area_photons,
+            if area_photons {
+                format!(
+                    "photons from {} aimed at {} of mirrors and glass: their light after every run of mirror and glass events from the floor or a diffuse wall but one taken in closed form, on the floor by track length, on diffuse walls in bins; path rays add none of it",
+                    n(areas, "line or circle light"),
+                    n(area_targets, "segment")
+                )
+            } else if tracing_light {
+                "light tracing follows their light through mirrors and glass".into()
+            } else if areas == 0 {
+                "no line or circle light in the scene".into()
+            } else if glass_edges == 0 {
+                "no glass in the scene: path rays find them after mirrors".into()
+            } else if specular_limit == 0 {
+                "specular = 0: light stops at mirrors and glass".into()
+            } else if !caustics_enabled {
+                "the caustic pass is switched off (--caustics off): path rays find them".into()
+            } else if area_targets > crate::caustics::MAX_AREA_TARGETS {
+                format!(
+                    "{}, over {}: path rays find them",
+                    n(area_targets, "mirror or glass segment"),
+                    crate::caustics::MAX_AREA_TARGETS
+                )
+            } else {
+                "an arc light in the scene: path rays find them".into()
             },
         );
         add(
