@@ -153,3 +153,24 @@ fn an_exr_is_byte_identical_across_identical_writes() {
     }
     assert_eq!(flatray_io::read_exr(&path), Ok(image));
 }
+
+/// The glass pentagon under a circle light, whose floor inside the glass
+/// takes the light through one edge in closed form and whose caustic pass
+/// aims the circle light's photons at the glass: the same image on any
+/// number of threads.
+#[test]
+fn light_through_glass_renders_the_same_on_any_number_of_threads() {
+    let loaded = flatray_io::load(&workspace_root().join("scenes/pentagon.ron")).unwrap();
+    let mut options = loaded.options;
+    options.samples = 4;
+    options.scale = 0.25;
+    let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
+    assert!(plan.glass_lights && plan.area_photons);
+    let one = render_on(&loaded.scene, &options, 1);
+    for threads in [2, 5] {
+        let many = render_on(&loaded.scene, &options, threads);
+        assert_eq!(one.image, many.image, "{threads} threads");
+        assert_eq!(one.stats, many.stats, "{threads} threads");
+    }
+    assert!(one.image.pixels.iter().any(|p| p[0] > 0.0));
+}

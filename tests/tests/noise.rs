@@ -51,6 +51,9 @@ fn the_noise_estimate_agrees_with_the_true_error() {
         ("first-flat", 0.25, 64, Integrator::Path),
         // Three bounces, many lights: the onward memo and the light table.
         ("apartment", 0.25, 16, Integrator::Path),
+        // Light through glass: the closed form through one edge, and the
+        // caustic pass's photons from the circle light.
+        ("pentagon", 0.25, 16, Integrator::Path),
         ("room", 0.2, 2, Integrator::Light),
         // One sample per pixel: the photons' halves give the estimate.
         ("room", 0.2, 1, Integrator::Light),

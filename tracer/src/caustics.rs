@@ -466,13 +466,15 @@ pub(crate) fn trace_caustics(
             material.turns_specularly() || (material.is_glossy() && options.bounces > 0)
         })
         .collect();
+    // What line and circle lights aim at, where they send photons.
+    let aimed_at = area.map(|_| area_targets(scene));
     let emitters: Vec<Emitter> = scene
         .lights
         .iter()
         .enumerate()
         .filter_map(|(index, light)| {
             if crate::lights::is_exact(&light.shape) {
-                let aim = area.and_then(|_| Aim::new(light.shape, area_targets(scene)))?;
+                let aim = Aim::new(light.shape, aimed_at.clone()?)?;
                 return (light.intensity > 0.0).then_some(Emitter {
                     light: index,
                     apertures: Vec::new(),
