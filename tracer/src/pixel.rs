@@ -374,9 +374,9 @@ pub(crate) fn render_pixel(
 
 /// One floor point in this many takes the light through glass edges
 /// (`lights::refracted`) for its half of the pass's points: the light
-/// inside glass varies gently across a pixel, and each look costs about
-/// as much as a path sample.
-pub(crate) const GLASS_POINT_SHARE: usize = 16;
+/// inside glass varies gently across a pixel, and each look costs several
+/// path samples (`docs/model.md` has the study that chose 8).
+pub(crate) const GLASS_POINT_SHARE: usize = 8;
 
 /// One half of a pass's floor points ([`noise_halves`]): all its points,
 /// and the first of them, one in [`GLASS_POINT_SHARE`] and at least one,
