@@ -615,18 +615,20 @@ impl Estimator for CausticPass<'_> {
             stats.physics.caustic_photons += 1;
             let emitter = &self.emitters[pick(&self.shares, stream.uniform())];
             let light = &scene.lights[emitter.light];
-            if let Some(aim) = &emitter.area {
+            let colour = |stream: &mut Stream| match scene
+                .spectra
+                .photon(emitter.light, || stream.uniform())
+            {
+                Some((wavelength, colour)) => (Some(wavelength), colour),
+                None => (None, light.color),
+            };
+            let (photon, power, area) = if let Some(aim) = &emitter.area {
                 // Its share of the photons stands for its aimed power as
                 // measured; each carries what its own point sees.
                 let Some(aimed) = aim.draw(&mut stream, &mut scratch) else {
                     continue;
                 };
-                let (wavelength, colour) =
-                    match scene.spectra.photon(emitter.light, || stream.uniform()) {
-                        Some((wavelength, colour)) => (Some(wavelength), colour),
-                        None => (None, light.color),
-                    };
-                let power = colour * (weight * aimed.factor / aim.measure());
+                let (wavelength, colour) = colour(&mut stream);
                 let photon = Photon {
                     origin: aimed.origin,
                     dir: aimed.dir,
@@ -636,59 +638,42 @@ impl Estimator for CausticPass<'_> {
                     unseen: false,
                     wavelength,
                 };
-                let mut deposits = Deposits {
-                    grid: &self.grid,
-                    floor: &mut floor,
-                    walls: Some((&self.bins, &mut walls)),
-                    area: self.area,
+                let power = colour * (weight * aimed.factor / aim.measure());
+                (photon, power, self.area)
+            } else {
+                let aperture = &emitter.apertures[pick(&emitter.cumulative, stream.uniform())];
+                let (origin, dir) = aperture.ray(stream.uniform());
+                // The density of this ray among the light's apertures:
+                // every aperture that holds it could have drawn it.
+                let holding = emitter
+                    .apertures
+                    .iter()
+                    .filter(|a| a.contains(origin, dir))
+                    .count()
+                    .max(1);
+                let window = light.spot_window(dir);
+                let (wavelength, colour) = colour(&mut stream);
+                let photon = Photon {
+                    origin,
+                    dir,
+                    scale: 1.0,
+                    kernel: light.shape.kernel(light),
+                    skip: scene
+                        .laser_wall(emitter.light)
+                        .map_or(Skip::NONE, Skip::one),
+                    unseen: !light.shape.found_by_paths(),
+                    wavelength,
                 };
-                follow_photon(
-                    scene,
-                    photon,
-                    power,
-                    self.limits,
-                    &mut deposits,
-                    &mut stream,
-                    stats,
-                );
-                continue;
-            }
-            let aperture = &emitter.apertures[pick(&emitter.cumulative, stream.uniform())];
-            let (origin, dir) = aperture.ray(stream.uniform());
-            // The density of this ray among the light's apertures: every
-            // aperture that holds it could have drawn it.
-            let holding = emitter
-                .apertures
-                .iter()
-                .filter(|a| a.contains(origin, dir))
-                .count()
-                .max(1);
-            let window = light.spot_window(dir);
-            let (wavelength, colour) =
-                match scene.spectra.photon(emitter.light, || stream.uniform()) {
-                    Some((wavelength, colour)) => (Some(wavelength), colour),
-                    None => (None, light.color),
-                };
-            let power = colour * (weight * window / holding as f64);
+                (photon, colour * (weight * window / holding as f64), None)
+            };
             if power == Rgb::ZERO {
                 continue;
             }
-            let photon = Photon {
-                origin,
-                dir,
-                scale: 1.0,
-                kernel: light.shape.kernel(light),
-                skip: scene
-                    .laser_wall(emitter.light)
-                    .map_or(Skip::NONE, Skip::one),
-                unseen: !light.shape.found_by_paths(),
-                wavelength,
-            };
             let mut deposits = Deposits {
                 grid: &self.grid,
                 floor: &mut floor,
                 walls: Some((&self.bins, &mut walls)),
-                area: None,
+                area,
             };
             follow_photon(
                 scene,
