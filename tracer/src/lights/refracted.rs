@@ -17,7 +17,9 @@
 //! the edge's line or the light, and at the edge's own ends. Each piece
 //! between those cuts is tested at its middle (both legs, panes tinting)
 //! and integrated in `tau` by 12-point Gauss-Legendre, split where the
-//! falloff has a kink: per radian at `x`, `(1 - F) n I G(r) r`, with the
+//! falloff has a kink, and in the square root of the distance to an end
+//! where the leaving ray grazes the edge: per radian at `x`,
+//! `(1 - F) n I G(r) r`, with the
 //! Fresnel transmittance `1 - F` of the edge, the radiance factor `n` of
 //! leaving glass of index `n` (`L / n` is invariant along a ray in the
 //! plane, `material::glass`), Beer-Lambert absorption over the inside
@@ -48,10 +50,8 @@ pub const MAX_GLASS_PAIRS: usize = 256;
 const MAX_STEPS: usize = 200;
 
 /// The sine of the leaving ray's angle above which a piece's end counts
-/// as grazing, and how many times a piece is split towards such an end
-/// (each part a quarter of the rest).
+/// as grazing.
 const GRAZING_SINE: f64 = 0.98;
-const GRADED_STEPS: usize = 8;
 
 /// Whether every glass body of `scene` is smooth and disperses nothing:
 /// where one refraction is a single direction for every wavelength, so
@@ -503,9 +503,10 @@ fn piece(
         sum * half
     };
     // Where a ray leaves the glass near grazing the integrand has a square
-    // root's edge (Fresnel, and the turn of the refracted ray): a piece
-    // that ends there is split ever closer to that end, each part
-    // integrated by the rule.
+    // root's edge (the Fresnel transmittance falls as the leaving ray's
+    // cosine, a square root in `tau`): a piece that ends there is split at
+    // its middle, and the half at that end integrated in the square root
+    // of the distance from it.
     let grazing = |tau: f64| {
         let u = tau - edge.tau_x;
         edge.n * u.abs() / (u * u + edge.depth * edge.depth).sqrt() > GRAZING_SINE
@@ -520,14 +521,16 @@ fn piece(
             if !rough {
                 return gauss(end.min(other), end.max(other));
             }
+            // tau = end + (other - end) w^2 over w in [0, 1]: a square
+            // root's edge at `end` becomes smooth in `w`.
+            let span = other - end;
             let mut sum = Rgb::ZERO;
-            let mut far = other;
-            for _ in 0..GRADED_STEPS {
-                let near = end + (far - end) * 0.25;
-                sum += gauss(near.min(far), near.max(far));
-                far = near;
+            for (node, weight) in GAUSS_12 {
+                for w in [0.5 - 0.5 * node, 0.5 + 0.5 * node] {
+                    sum += value(end + span * w * w).0 * (2.0 * w * weight);
+                }
             }
-            sum + gauss(end.min(far), end.max(far))
+            sum * (0.5 * span.abs())
         };
         graded(a, mid, at_a) + graded(b, mid, at_b)
     };
