@@ -76,16 +76,18 @@ fn path_tracing_through_glass_edges_agrees_with_light_tracing() {
     }
 }
 
+/// The point `(x, y)` of the room's frame, turned by 0.25 radians about
+/// the canvas's centre, as the scene format writes it.
+fn at(x: f64, y: f64) -> String {
+    let (s, c) = 0.25f64.sin_cos();
+    let p = DVec2::new(24.0, 24.0) + DVec2::new(c * x - s * y, s * x + c * y);
+    format!("({}, {})", p.x, p.y)
+}
+
 /// A turned room of diffuse, coloured and mirror walls (one rough), a
 /// circle light and a solid line light, with `column` among its walls and
 /// `glass` as its glass bodies.
 fn room(column: &str, glass: &str) -> flatray_tracer::Scene {
-    let (s, c) = 0.25f64.sin_cos();
-    let centre = DVec2::new(24.0, 24.0);
-    let at = |x: f64, y: f64| {
-        let p = centre + DVec2::new(c * x - s * y, s * x + c * y);
-        format!("({}, {})", p.x, p.y)
-    };
     let text = format!(
         "Scene(canvas: (48, 48), floor: Color((0.8, 0.8, 0.8)),
                    walls: [Wall(a: {}, b: {}),
@@ -117,12 +119,6 @@ fn room(column: &str, glass: &str) -> flatray_tracer::Scene {
 /// bounces.
 #[test]
 fn photons_and_paths_share_lines_and_circles_after_glass() {
-    let (s, c) = 0.25f64.sin_cos();
-    let centre = DVec2::new(24.0, 24.0);
-    let at = |x: f64, y: f64| {
-        let p = centre + DVec2::new(c * x - s * y, s * x + c * y);
-        format!("({}, {})", p.x, p.y)
-    };
     let glass = format!(
         "Glass(points: [{}, {}, {}], ior: 1.5)",
         at(-8.0, 6.0),
