@@ -325,13 +325,13 @@ fn through_edge(
             }
         }
         if let LightShape::Line { segment, .. } = light.shape {
-            // Where the light's line meets the edge's, rays start to
-            // reach its other side.
-            if let Some(h) = flatray_geometry::line_crossing(
-                &Ray::new(edge.a, edge.along),
-                &Segment::new(segment.a, segment.b),
-            ) {
-                cuts.push(h.t);
+            // Where the light's line (beyond the light too) meets the
+            // edge's, the rays start to reach its other side.
+            let e = segment.b - segment.a;
+            let t = flatray_geometry::cross(segment.a - edge.a, e)
+                / flatray_geometry::cross(edge.along, e);
+            if t.is_finite() {
+                cuts.push(t);
             }
         }
         for &w in &scratch.walls {
