@@ -22,10 +22,13 @@ use flatray_geometry::{DVec2, Segment};
 use crate::sampling::Stream;
 use crate::scene::{EMITTING_SIDE, LightShape};
 
-/// Points along the light at which [`Aim::mean_measure`] averages the
-/// targets' measure: only the shares of the lights' photons depend on it,
-/// never a photon's expected power.
+/// Points along the light at which [`Aim::new`] averages the targets'
+/// measure: only the shares of the lights' photons depend on it, never a
+/// photon's expected power.
 const MEASURE_POINTS: usize = 256;
+
+/// The least mean measure a light takes its share of the photons by.
+const MIN_MEAN: f64 = 1e-9;
 
 /// A line or circle light's photons towards `targets`.
 pub(crate) struct Aim {
@@ -47,8 +50,7 @@ pub(crate) struct Aimed {
 }
 
 impl Aim {
-    /// `None` for a light that is not a line or a circle, or that sees no
-    /// target at any of the points where its measure is averaged.
+    /// `None` for a light that is not a line or a circle, or no target.
     pub(crate) fn new(shape: LightShape, targets: Vec<Segment>) -> Option<Aim> {
         let length = match shape {
             LightShape::Line { segment, .. } => segment.length(),
@@ -66,11 +68,16 @@ impl Aim {
         for k in 0..MEASURE_POINTS {
             let u = (k as f64 + 0.5) / MEASURE_POINTS as f64;
             for (y, normal) in aim.points(u) {
+                intervals.clear();
                 sum += aim.intervals(y, normal, &mut intervals);
             }
         }
-        aim.mean = sum / MEASURE_POINTS as f64;
-        (aim.mean > 0.0 && aim.mean.is_finite() && length > 0.0).then_some(aim)
+        // A light that sees the targets only between the points looked at
+        // still sends photons, rarely (each then carries the more): its
+        // light after mirrors and glass is the photons' alone.
+        aim.mean = (sum / MEASURE_POINTS as f64).max(MIN_MEAN);
+        (aim.mean.is_finite() && length > 0.0 && length.is_finite() && !aim.targets.is_empty())
+            .then_some(aim)
     }
 
     /// The light's power towards the targets, per unit intensity
