@@ -35,9 +35,7 @@ mod exact;
 pub(crate) use exact::{MAX_MIRROR_PAIRS, is_exact, through_mirrors, through_mirrors_of};
 pub(crate) mod aimed;
 mod refracted;
-pub(crate) use refracted::{
-    MAX_GLASS_PAIRS, glass_is_plain, glass_pairs, through_glass, through_glass_of,
-};
+pub(crate) use refracted::{MAX_GLASS_PAIRS, glass_pairs, through_glass, through_glass_of};
 mod kernel;
 pub(crate) use contribution::{
     Receiver, Visibility, light_contribution, transmittance, weighed_contribution,

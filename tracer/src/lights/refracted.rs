@@ -34,7 +34,7 @@
 use flatray_geometry::{DVec2, Ray, Segment, Side, Skip, intersect};
 
 use super::exact::{GAUSS_12, SCRATCH, SLIVER, find_walls, is_exact, kinks, legs};
-use super::{Receiver, line};
+use super::{Receiver, circle, line};
 use crate::optics::fresnel;
 use crate::scene::{Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
@@ -52,16 +52,6 @@ const MAX_STEPS: usize = 200;
 /// The sine of the leaving ray's angle above which a piece's end counts
 /// as grazing.
 const GRAZING_SINE: f64 = 0.98;
-
-/// Whether every glass body of `scene` is smooth and disperses nothing:
-/// where one refraction is a single direction for every wavelength, so
-/// that light through one edge has a closed form.
-pub(crate) fn glass_is_plain(scene: &Scene) -> bool {
-    scene
-        .glass
-        .iter()
-        .all(|g| g.roughness == 0.0 && g.dispersion == 0.0 && g.ior.is_finite() && g.ior > 0.0)
-}
 
 /// The glass edge and line or circle light pairs of `scene`.
 pub(crate) fn glass_pairs(scene: &Scene) -> usize {
@@ -305,8 +295,18 @@ fn through_edge(
     let r0 = scene.small_radius;
     SCRATCH.with(|scratch| {
         let scratch = &mut *scratch.borrow_mut();
-        let (lo, hi) = light_box(&light.shape);
-        let points = [edge.x, edge.point(0.0), edge.point(edge.length), lo, hi];
+        let Some([h0, h1, h2, h3]) = light.shape.hull() else {
+            return Rgb::ZERO;
+        };
+        let points = [
+            edge.x,
+            edge.point(0.0),
+            edge.point(edge.length),
+            h0,
+            h1,
+            h2,
+            h3,
+        ];
         // Every wall near the edge and the light: the receiver's own and
         // the light's are left out by `find_walls`.
         let around = Receiver {
@@ -432,16 +432,10 @@ impl Leaving {
                 let hit = intersect(&Ray::new(p, dir), &segment)?;
                 (hit.t, segment.side_of(p))
             }
-            LightShape::Circle { at, radius } => {
-                let o = p - at;
-                let b = o.dot(dir);
-                let c = o.length_squared() - radius * radius;
-                let disc = b * b - c;
-                if c <= 0.0 || b >= 0.0 || disc < 0.0 {
-                    return None;
-                }
-                (-b - disc.sqrt(), None)
-            }
+            LightShape::Circle { at, radius } => (
+                circle::met_by(at, radius, &Ray::new(p, dir), f64::INFINITY)?,
+                None,
+            ),
             _ => return None,
         };
         Some(Leaving {
@@ -587,15 +581,6 @@ fn light_front(edge: &Edge, shape: &LightShape) -> f64 {
     }
 }
 
-/// The box around a line or circle light.
-fn light_box(shape: &LightShape) -> (DVec2, DVec2) {
-    match *shape {
-        LightShape::Line { segment, .. } => (segment.a.min(segment.b), segment.a.max(segment.b)),
-        LightShape::Circle { at, radius } => (at - DVec2::splat(radius), at + DVec2::splat(radius)),
-        _ => (DVec2::ZERO, DVec2::ZERO),
-    }
-}
-
 /// Where the line `p + t dir` meets the circle: 0 or 2 values of `t`.
 fn circle_crossings(c: DVec2, radius: f64, p: DVec2, dir: DVec2) -> impl Iterator<Item = f64> {
     let o = p - c;
@@ -656,13 +641,9 @@ fn circle_span(edge: &Edge, c: DVec2, radius: f64) -> Option<(f64, f64)> {
     // The rays that leave at all: `n |sin| < 1`.
     let reach = edge.depth / (edge.n * edge.n - 1.0).max(0.0).sqrt();
     let meets = |tau: f64| {
-        let Some((dir, _)) = edge.leaving(tau) else {
-            return false;
-        };
-        let o = edge.point(tau) - c;
-        let b = o.dot(dir);
-        let cc = o.length_squared() - radius * radius;
-        cc > 0.0 && b < 0.0 && b * b - cc >= 0.0
+        edge.leaving(tau).is_some_and(|(dir, _)| {
+            circle::met_by(c, radius, &Ray::new(edge.point(tau), dir), f64::INFINITY).is_some()
+        })
     };
     if !meets(start) {
         return None;

@@ -251,7 +251,8 @@ impl Plan {
             && options.specular > 0
             && glass_pairs > 0
             && glass_pairs <= crate::lights::MAX_GLASS_PAIRS
-            && crate::lights::glass_is_plain(scene);
+            && inventory.dispersive == 0
+            && inventory.rough_glass == 0;
         // Lines and circles through glass: what enters a body and leaves
         // it, or reflects inside it first, photons take far better than
         // paths, which meet a small light by chance. Not with arc lights,
