@@ -18,6 +18,10 @@ pub(crate) enum Config {
     /// Path tracing with the cache of light on walls (`--cache on`).
     #[value(alias = "path-memo")]
     PathCache,
+    /// Path tracing with the cache, the floor's indirect light taken by
+    /// each pixel's own path samples rather than along lines
+    /// (`--indirect samples`).
+    PathSamples,
     /// Path tracing without the cache (`--cache off`): every shadow ray
     /// cast.
     Path,
@@ -35,6 +39,7 @@ impl Config {
     fn name(self) -> &'static str {
         match self {
             Config::PathCache => "path-cache",
+            Config::PathSamples => "path-samples",
             Config::Path => "path",
             Config::Original => "original",
             Config::Light => "light",
@@ -44,7 +49,7 @@ impl Config {
 
     fn options(self, base: &RenderOptions) -> RenderOptions {
         let (integrator, memo) = match self {
-            Config::PathCache | Config::Adaptive => (Integrator::Path, true),
+            Config::PathCache | Config::PathSamples | Config::Adaptive => (Integrator::Path, true),
             Config::Path => (Integrator::Path, false),
             Config::Original => (Integrator::Original, false),
             Config::Light => (Integrator::Light, false),
@@ -55,6 +60,7 @@ impl Config {
             options.memo = base.memo;
             options.memo.enabled = memo;
             options.adaptive = self == Config::Adaptive;
+            options.floor_lines = self != Config::PathSamples;
             options
         }
     }

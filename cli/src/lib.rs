@@ -299,6 +299,11 @@ struct RenderArgs {
     /// pixel takes.
     #[arg(long)]
     adaptive: bool,
+    /// How the floor's indirect light is gathered: along lines across the
+    /// image (default, where the plan allows; docs/model.md, "Lines
+    /// across the floor"), or by each pixel's own path samples.
+    #[arg(long, value_enum, value_name = "HOW")]
+    indirect: Option<IndirectArg>,
     /// Write a picture of the samples each pixel took to this PNG file:
     /// grey in proportion, white the most.
     #[arg(long, value_name = "PNG")]
@@ -344,6 +349,16 @@ impl Switch {
     fn on(self) -> bool {
         matches!(self, Switch::On)
     }
+}
+
+/// How the floor's indirect light is gathered.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum IndirectArg {
+    /// Along lines across the image, each piece between two walls
+    /// looking both ways
+    Lines,
+    /// By each pixel's own path samples, one direction each
+    Samples,
 }
 
 /// What the cache holds.
@@ -899,6 +914,7 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
             .lights
             .map_or(loaded.options.light_choice, LightsArg::choice);
         options.adaptive = args.adaptive;
+        options.floor_lines = !matches!(args.indirect, Some(IndirectArg::Samples));
         options
     };
     if let Some(map) = &args.write_spp {

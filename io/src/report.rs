@@ -353,6 +353,8 @@ pub fn stats_json(stats: &flatray_tracer::Stats) -> serde_json::Value {
             "memo_lookups": w.memo_lookups,
             "memo_checks": w.memo_checks,
             "floor_memo_reuses": w.floor_memo_reuses,
+            "lines": w.lines,
+            "line_pieces": w.line_pieces,
             "floor_shared_visibility": w.floor_shared_visibility,
             "floor_square_lights": w.floor_square_lights,
             "chosen_lights": w.chosen_lights,

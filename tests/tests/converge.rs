@@ -162,9 +162,10 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
 }
 
 /// The adaptive configuration is path tracing with the cache whose later
-/// passes go only where the noise is: up to 32 spp (the passes every
-/// pixel takes) it does the same work as `path-cache`, and past that its
-/// error stays of the same size.
+/// passes go only where the noise is, each pixel's indirect light from its
+/// own path samples: up to 32 spp (the passes every pixel takes) it does
+/// the same work as `path-samples`, and past that its error stays of the
+/// same size.
 #[test]
 fn converge_measures_the_adaptive_passes() {
     let dir = TempDir::new("converge-adaptive");
@@ -176,7 +177,7 @@ fn converge_measures_the_adaptive_passes() {
             "--max-spp",
             "256",
             "--configs",
-            "path-cache,adaptive",
+            "path-samples,adaptive",
         ],
     );
     let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
@@ -190,14 +191,14 @@ fn converge_measures_the_adaptive_passes() {
         (fields[3].parse().unwrap(), fields[6].parse().unwrap())
     };
     for samples in [1, 2, 4, 8, 16, 32] {
-        let (plain, adaptive) = (row("path-cache", samples).0, row("adaptive", samples).0);
+        let (plain, adaptive) = (row("path-samples", samples).0, row("adaptive", samples).0);
         assert!(
             (adaptive / plain - 1.0).abs() < 0.02,
             "{samples} spp: {adaptive} rays against {plain}"
         );
     }
     for samples in [64, 128, 256] {
-        let (plain, adaptive) = (row("path-cache", samples).1, row("adaptive", samples).1);
+        let (plain, adaptive) = (row("path-samples", samples).1, row("adaptive", samples).1);
         assert!(
             adaptive < 1.5 * plain,
             "{samples} spp: {adaptive} against {plain}"

@@ -92,8 +92,14 @@ fn ending_paths_at_the_first_diffuse_wall_keeps_the_expected_image() {
 #[test]
 fn paths_cast_one_ray_to_the_first_diffuse_wall() {
     let loaded = scene(ROOMS);
-    let on = render(&loaded.scene, &options(true, 3)).stats;
-    let off = render(&loaded.scene, &options(false, 3)).stats;
+    // Each pixel's own path samples, which lines would replace.
+    let samples = |onward: bool| {
+        let mut options = options(onward, 3);
+        options.floor_lines = false;
+        options
+    };
+    let on = render(&loaded.scene, &samples(true)).stats;
+    let off = render(&loaded.scene, &samples(false)).stats;
     let per_sample =
         |s: &flatray_tracer::Stats| s.work.bounce_rays as f64 / s.physics.camera_samples as f64;
     assert!(on.physics.paths_onward > 0);

@@ -182,14 +182,15 @@ fn a_window_takes_the_whole_renders_points() {
 }
 
 /// The later passes' floor points follow the first pass's measure: the
-/// room, whose noise is its bounce, takes under an eighth of a point per
-/// sample (a quarter would be 64 a pixel); nine lamps under a light table,
+/// room, whose noise is its bounce when path samples take it, takes under
+/// an eighth of a point per sample (a quarter would be 64 a pixel), and
+/// more where lines take the bounce with less noise; nine lamps under a light table,
 /// where each point draws one light beside the brightest, with little
 /// other noise (one dark wall), take over a quarter (one a sample, 256 a
 /// pixel).
 #[test]
 fn floor_points_go_where_the_noise_is() {
-    let points = |text: &str, samples: u32, scale: f64| {
+    let points = |text: &str, samples: u32, scale: f64, lines: bool| {
         let loaded = flatray_io::parse(
             text,
             std::path::Path::new("test.ron"),
@@ -200,6 +201,7 @@ fn floor_points_go_where_the_noise_is() {
             let mut options = loaded.options;
             options.samples = samples;
             options.scale = scale;
+            options.floor_lines = lines;
             options
         };
         let rendered = render(&loaded.scene, &options);
@@ -207,11 +209,17 @@ fn floor_points_go_where_the_noise_is() {
         rendered.stats.work.floor_points as f64 / pixels
     };
     let room = std::fs::read_to_string(workspace_root().join("scenes/room.ron")).unwrap();
-    let room_points = points(&room, 256, 0.5);
-    // 8 in the first pass, then a few a pass.
+    // With its bounce taken by path samples, 8 in the first pass, then a
+    // few a pass; along lines, whose noise is far lower, more.
+    let room_points = points(&room, 256, 0.5, false);
     assert!(
         room_points < 256.0 / 8.0,
         "room: {room_points} points a pixel"
+    );
+    let room_lines = points(&room, 256, 0.5, true);
+    assert!(
+        room_lines > 1.5 * room_points,
+        "room along lines: {room_lines} points a pixel, against {room_points}"
     );
     let lamps = "Scene(canvas: (64, 64), floor: Color((1, 1, 1)),
         walls: [Wall(a: (30, -1000), b: (30, 40.9), material: Diffuse(albedo: Some((0.05, 0.05, 0.05)))),
@@ -220,6 +228,6 @@ fn floor_points_go_where_the_noise_is() {
                  Point(at: (40.3, 30.2)), Point(at: (50.3, 10.2)), Point(at: (55.3, 55.2)),
                  Point(at: (8.3, 5.2)), Point(at: (45.3, 44.2)), Point(at: (20.3, 60.2))],
         render: (bounces: 1))";
-    let lamp_points = points(lamps, 256, 1.0);
+    let lamp_points = points(lamps, 256, 1.0, true);
     assert!(lamp_points > 256.0 / 4.0, "nine lamps: {lamp_points}");
 }

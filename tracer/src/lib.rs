@@ -29,6 +29,7 @@ mod direct;
 mod film;
 mod light_tracer;
 mod lights;
+mod lines;
 mod material;
 mod memo;
 pub mod metrics;

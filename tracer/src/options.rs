@@ -157,6 +157,11 @@ pub struct RenderOptions {
     /// (`passes::ADAPT_FROM`, `passes::adaptive_mask`); the others keep
     /// the samples they have. Passes are then taken one at a time.
     pub adaptive: bool,
+    /// The floor's indirect light gathered along lines across the image
+    /// (on by default, where the plan allows: `Plan::floor_lines`), rather
+    /// than by each pixel's own path samples. Both estimate the same
+    /// image; the lines' noise is lower for the time.
+    pub floor_lines: bool,
 }
 
 /// A rectangle of an image's pixels: columns `x0..x1`, rows `y0..y1`.
@@ -321,6 +326,7 @@ impl Default for RenderOptions {
             light_choice: LightChoice::Auto,
             window: None,
             adaptive: false,
+            floor_lines: true,
         }
     }
 }

@@ -18,6 +18,7 @@ use crate::direct::{direct_light_chosen, direct_light_points, numbers_per_point}
 use crate::film::PixelSums;
 use crate::lights::square::{Square, square_light, takes_square};
 use crate::lights::{Receiver, Visibility, through_glass, through_mirrors};
+use crate::lines::Lines;
 use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
 use crate::path::{Trace, path_begin, path_finish, path_sample};
@@ -51,6 +52,9 @@ pub(crate) struct Context<'a> {
     /// Whether the floor memo's points are taken light by light
     /// (`accel::strata`).
     pub(crate) strata_loops: bool,
+    /// The pass's lines (`lines.rs`): where the render has them, they
+    /// take the floor's indirect light, and pixels take no path samples.
+    pub(crate) lines: Option<&'a Lines>,
     /// [`render_pixel`], compiled for this processor.
     pub(crate) render_pixel: PixelFn,
 }
@@ -329,6 +333,8 @@ pub(crate) fn render_pixel(
     sums.clear();
     sums.extend(contexts.iter().map(|c| Sums::new(c.pass.middle)));
     match culled {
+        // The lines took the floor's indirect light: no path samples.
+        _ if first.lines.is_some() => {}
         Some(culled) => {
             // Unchecked, a sample that is not finite makes the sum not
             // finite; then the pixel's samples are taken again, each
@@ -439,16 +445,28 @@ pub(crate) fn pass_sums(
             }
         }
         stats.work.floor_memo_reuses += pass.count() as u64;
+        if context.lines.is_some() {
+            // The pass's samples of the pixel are its points and its share
+            // of the lines: counted as its samples, as paths would be.
+            stats.physics.camera_samples += pass.count() as u64;
+        }
         stats.work.floor_points += pass.points.len() as u64;
     }
     // The caustic pass's light on the floor, from each half of its
-    // photons.
+    // photons, and the lines' indirect light, from each half of their
+    // directions: both are "the rest", beside the floor points.
     let mut caustic_halves = (Rgb::ZERO, Rgb::ZERO);
+    let k = (y * context.size.0 + x) as usize;
     if let Some(caustics) = context.trace.caustics {
-        let k = (y * context.size.0 + x) as usize;
         caustic_halves = caustics.floor_halves(k);
         halves = (halves.0 + caustic_halves.0, halves.1 + caustic_halves.1);
         whole += caustics.floor_at(k);
+    }
+    if let Some(lines) = context.lines {
+        let (a, b) = lines.floor_halves(k);
+        caustic_halves = (caustic_halves.0 + a, caustic_halves.1 + b);
+        halves = (halves.0 + a, halves.1 + b);
+        whole += lines.floor_at(k);
     }
     if context.measures && crate::passes::is_probe((x, y)) {
         // The points' halves against the rest's: the paths' means over

@@ -93,6 +93,10 @@ pub struct Work {
     pub floor_memo_reuses: u64,
     /// Points of the floor memo (each pixel's, summed over its passes).
     pub floor_points: u64,
+    /// Lines walked across the image for the floor's indirect light, and
+    /// the pieces between walls they were cut into (`lines.rs`).
+    pub lines: u64,
+    pub line_pieces: u64,
     /// (pixel, light) pairs of the floor memo whose strata shared one
     /// visibility (one shadow ray, or none for a clear line light).
     pub floor_shared_visibility: u64,
@@ -322,6 +326,8 @@ impl Work {
         self.memo_checks += other.memo_checks;
         self.floor_memo_reuses += other.floor_memo_reuses;
         self.floor_points += other.floor_points;
+        self.lines += other.lines;
+        self.line_pieces += other.line_pieces;
         self.floor_shared_visibility += other.floor_shared_visibility;
         self.floor_square_lights += other.floor_square_lights;
         self.floor_albedo_reads += other.floor_albedo_reads;
@@ -422,6 +428,8 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  wall cache checks{:>14}", w.memo_checks)?;
             writeln!(f, "  floor reuses     {:>14}", w.floor_memo_reuses)?;
             writeln!(f, "  floor points     {:>14}", w.floor_points)?;
+            writeln!(f, "  floor lines      {:>14}", w.lines)?;
+            writeln!(f, "  line pieces      {:>14}", w.line_pieces)?;
             writeln!(f, "  floor shared     {:>14}", w.floor_shared_visibility)?;
             writeln!(f, "  floor squares    {:>14}", w.floor_square_lights)?;
             writeln!(f, "  chosen lights    {:>14}", w.chosen_lights)?;

@@ -15,6 +15,7 @@ use crate::caustics::Caustics;
 use crate::film::PixelSums;
 use crate::film::{Estimator, Film, Part, run};
 use crate::lights::choice::LightTable;
+use crate::lines::Lines;
 use crate::memo::build_wall_memo;
 use crate::memo::{Onward, OnwardMemo};
 use crate::options::MemoOptions;
@@ -110,6 +111,8 @@ fn tile_meets(window: Window, (tx, ty): (u32, u32)) -> bool {
 pub(crate) struct Fills {
     pub(crate) caustics: Option<Caustics>,
     pub(crate) onward: Option<OnwardMemo>,
+    /// The floor's indirect light along lines (`Plan::floor_lines`).
+    pub(crate) lines: Option<Lines>,
 }
 
 impl Fills {
@@ -162,7 +165,19 @@ impl Fills {
                 );
                 crate::onward::build_onward(&trace, wall_memo, (gathers, copies), pass.seed, stats)
             });
-        Fills { caustics, onward }
+        // The floor's indirect light along lines, whose paths read all
+        // of the above.
+        let lines = plan.floor_lines.then(|| {
+            let onward = onward.as_ref().map(|memo| Onward::of(memo, pass.middle));
+            let mut trace = trace_for(scene, options, shared, (caustics.as_ref(), onward));
+            trace.floor_direct = false;
+            crate::lines::gather_lines(trace, options, pass, stats, progress)
+        });
+        Fills {
+            caustics,
+            onward,
+            lines,
+        }
     }
 }
 
@@ -216,6 +231,7 @@ pub(crate) fn path_passes(
                 ),
             ),
             one_bounce_memo: shared.memo.as_ref().filter(|_| plan.fast.shortcut.runs),
+            lines: fills.lines.as_ref(),
             strata_loops: plan.fast.strata_loops.runs,
             render_pixel: if plan.fast.avx.runs {
                 pixel_fn()
@@ -529,6 +545,7 @@ pub fn pixel_sample(
         ),
         one_bounce_memo: None,
         strata_loops: false,
+        lines: None,
         render_pixel,
     };
     sample_with(

@@ -177,6 +177,18 @@ pub struct Plan {
     /// The floor's rays test only the walls that rays from their block of
     /// pixels, in their arc of directions, can meet (`ArcCandidates`).
     pub floor_ray_culling: bool,
+    /// The floor's indirect light is gathered along lines across the
+    /// image (`lines.rs`), not by each pixel's path samples: with the
+    /// floor memo, which takes the floor's direct light, where no glass
+    /// absorbs (a piece of line inside it would not see one radiance) and
+    /// passes are not adaptive (lines cross every pixel).
+    pub floor_lines: bool,
+    /// Whether the render options allow lines (`--indirect lines`, the
+    /// default), and whether its passes are adaptive.
+    pub lines_enabled: bool,
+    pub adaptive: bool,
+    /// Glass bodies that absorb.
+    pub absorbing_glass: usize,
     /// The fast paths the settings allow (`reference` aside).
     pub fast_paths: FastPaths,
     /// Where each fast path runs, and why, as it declares.
@@ -343,6 +355,17 @@ impl Plan {
             && options.memo.enabled
             && ((indirect_possible && reflectors > 0) || (squares && occluders > 0));
         let floor_squares = floor_memo && squares;
+        let absorbing_glass = scene
+            .glass
+            .iter()
+            .filter(|g| g.absorption != crate::Rgb::ZERO)
+            .count();
+        let floor_lines = floor_memo
+            && indirect
+            && options.floor_lines
+            && options.integrator == Integrator::Path
+            && !options.adaptive
+            && absorbing_glass == 0;
         // Each fast path says where it runs (`accel`). With a light table
         // too, a pixel's points trace a shared transmittance once, when
         // one of them first takes that light.
@@ -404,6 +427,10 @@ impl Plan {
             floor_memo,
             floor_coherence,
             floor_squares,
+            floor_lines,
+            lines_enabled: options.floor_lines,
+            adaptive: options.adaptive,
+            absorbing_glass,
             floor_ray_culling,
         }
     }

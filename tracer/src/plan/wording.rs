@@ -98,6 +98,10 @@ impl Plan {
             floor_memo,
             floor_coherence,
             floor_squares,
+            floor_lines,
+            lines_enabled,
+            adaptive,
+            absorbing_glass,
             floor_ray_culling,
             light_choice,
             light_table,
@@ -462,6 +466,30 @@ impl Plan {
                 format!(
                     "{floor_points} stratified points per pixel in the first pass (each point's direct light is exact), then as many as its noise asks"
                 )
+            },
+        );
+        add(
+            "floor's indirect light along lines",
+            floor_lines,
+            if tracing_light {
+                "light tracing follows its photons instead".into()
+            } else if !indirect {
+                "no indirect light is traced".into()
+            } else if !floor_memo {
+                "without the floor cache, each pixel's path samples take the floor's light".into()
+            } else if original {
+                "the original estimator takes one uniform bounce per sample".into()
+            } else if !lines_enabled {
+                "switched off (--indirect samples): each pixel's path samples take it".into()
+            } else if adaptive {
+                "adaptive passes: each pixel's path samples take it, where the passes go".into()
+            } else if absorbing_glass > 0 {
+                format!(
+                    "{} absorbs: each pixel's path samples take it",
+                    n(absorbing_glass, "glass body")
+                )
+            } else {
+                "lines across the image in stratified directions, each piece between two walls looking both ways: pixels take no path samples".into()
             },
         );
         add(
