@@ -90,7 +90,7 @@ pub(crate) struct ConvergeArgs {
     #[arg(long, default_value_t = 120.0, allow_negative_numbers = true)]
     budget: f64,
     /// The configurations to compare (comma-separated).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathCache, Config::Path, Config::Original, Config::Light])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Config::PathCache, Config::PathSamples, Config::Path, Config::Original, Config::Light])]
     configs: Vec<Config>,
     /// Pixels per world unit, as for `render`.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]

@@ -4,7 +4,8 @@
 //! line's error is shared by the pixels it crosses), in a turned,
 //! non-convex room of every kind of wall, at one and at three bounces;
 //! no light through shared corners; radiance that is not finite left out
-//! and counted; the same bits on any number of threads.
+//! and counted; the same bits on any number of threads; path samples
+//! where walls stand a few pixels apart.
 
 use flatray_geometry::DVec2;
 use flatray_tests::{block_stats, options, render, render_on, scene};
@@ -172,9 +173,9 @@ fn lines_through_shared_corners_leak_nothing() {
 #[test]
 fn lines_leave_light_that_is_not_finite_out() {
     let mut loaded = scene(
-        "Scene(canvas: (12, 12), floor: Color((0.8, 0.8, 0.8)),
-            walls: [Wall(a: (2, 2), b: (10, 2)), Wall(a: (10, 2), b: (10, 10))],
-            lights: [Point(at: (6, 6))],
+        "Scene(canvas: (40, 40), floor: Color((0.8, 0.8, 0.8)),
+            walls: [Wall(a: (5, 5), b: (35, 5)), Wall(a: (35, 5), b: (35, 35))],
+            lights: [Point(at: (20, 20))],
             render: (samples: 16))",
     );
     let mut parts = loaded.scene.parts();
@@ -187,7 +188,7 @@ fn lines_leave_light_that_is_not_finite_out() {
     assert!(rendered.stats.work.line_pieces > 0);
     let image = &rendered.image;
     assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
-    assert!(image.get(6, 8)[0] > 0.0);
+    assert!(image.get(20, 26)[0] > 0.0);
 }
 
 #[test]
@@ -199,4 +200,36 @@ fn lines_give_the_same_bits_on_any_thread_count() {
     assert!(one.image == three.image);
     assert_eq!(one.stats.work.line_pieces, three.stats.work.line_pieces);
     assert!(one.stats.work.lines > 0);
+}
+
+/// Where walls stand a few pixels apart, each piece of line would serve a
+/// pixel or two: the plan takes each pixel's path samples there, and says
+/// why; the room takes lines.
+#[test]
+fn walls_a_few_pixels_apart_take_path_samples() {
+    let walls: Vec<String> = (0..30)
+        .map(|k| {
+            format!(
+                "Wall(a: ({}, 1), b: ({}, 63))",
+                2.0 + 2.0 * k as f64,
+                2.5 + 2.0 * k as f64
+            )
+        })
+        .collect();
+    let dense = scene(&format!(
+        "Scene(canvas: (64, 64), floor: Color((1, 1, 1)), walls: [{}],
+               lights: [Point(at: (31, 32))])",
+        walls.join(", ")
+    ))
+    .scene;
+    let plan = Plan::new(&dense, &options(16, 1, 0));
+    assert!(!plan.floor_lines);
+    let said = plan
+        .effects()
+        .into_iter()
+        .find(|e| e.name == "floor's indirect light along lines")
+        .map(|e| e.why)
+        .unwrap_or_default();
+    assert!(said.starts_with("walls so dense"), "{said}");
+    assert!(Plan::new(&room(""), &options(16, 1, 0)).floor_lines);
 }

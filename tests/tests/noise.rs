@@ -2,7 +2,8 @@
 //! The estimate is checked against the true error: the relative RMS
 //! difference from a reference rendered with 64 times the samples (whose
 //! own noise, estimated the same way, is taken out in quadrature), on
-//! three scenes and both integrators. Fixed seeds.
+//! four scenes and both integrators, with the floor's indirect light along
+//! lines (the default) and by path samples. Fixed seeds.
 
 use flatray_tests::{render, workspace_root};
 use flatray_tracer::Integrator;
@@ -10,11 +11,19 @@ use flatray_tracer::metrics::compare;
 
 /// The estimate over the true error, for `scene` at `scale` and `samples`.
 fn ratio(name: &str, scale: f64, samples: u32, integrator: Integrator) -> f64 {
-    ratio_of(name, scale, samples, integrator, false)
+    ratio_of(name, scale, samples, integrator, (false, true))
 }
 
-/// [`ratio`], the render's passes adaptive or not (the reference's never).
-fn ratio_of(name: &str, scale: f64, samples: u32, integrator: Integrator, adaptive: bool) -> f64 {
+/// [`ratio`], the render's passes adaptive or not (the reference's never),
+/// the floor's indirect light along lines or by path samples (the
+/// reference's too).
+fn ratio_of(
+    name: &str,
+    scale: f64,
+    samples: u32,
+    integrator: Integrator,
+    (adaptive, lines): (bool, bool),
+) -> f64 {
     let loaded = flatray_io::load(&workspace_root().join(format!("scenes/{name}.ron")))
         .unwrap_or_else(|e| panic!("{e}"));
     let options = |samples: u32, seed: u64| {
@@ -23,6 +32,7 @@ fn ratio_of(name: &str, scale: f64, samples: u32, integrator: Integrator, adapti
         options.seed = seed;
         options.scale = scale;
         options.integrator = integrator;
+        options.floor_lines = lines;
         options
     };
     let rendered = render(&loaded.scene, &{
@@ -65,6 +75,14 @@ fn the_noise_estimate_agrees_with_the_true_error() {
             "{name}, {integrator:?}, {samples} spp: estimate / true error = {r}"
         );
     }
+    // Each pixel's own path samples in place of the lines.
+    for (name, scale) in [("room", 0.2), ("first-flat", 0.25)] {
+        let r = ratio_of(name, scale, 64, Integrator::Path, (false, false));
+        assert!(
+            (0.7..=1.4).contains(&r),
+            "{name}, path samples, 64 spp: estimate / true error = {r}"
+        );
+    }
 }
 
 /// With adaptive passes each pixel's halves are its own: every pass it
@@ -72,7 +90,7 @@ fn the_noise_estimate_agrees_with_the_true_error() {
 #[test]
 fn the_noise_estimate_of_an_adaptive_render_agrees_with_the_true_error() {
     for (name, scale) in [("room", 0.2), ("first-flat", 0.25)] {
-        let r = ratio_of(name, scale, 64, Integrator::Path, true);
+        let r = ratio_of(name, scale, 64, Integrator::Path, (true, false));
         assert!(
             (0.7..=1.4).contains(&r),
             "{name}, adaptive, 64 spp: estimate / true error = {r}"

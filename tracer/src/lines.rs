@@ -41,6 +41,7 @@ use crate::options::{RenderOptions, Window, image_size};
 use crate::passes::Pass;
 use crate::path::{Trace, path_finish};
 use crate::sampling::Stream;
+use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
 /// Directions of lines per pixel sample of a pass: each gives every
@@ -51,6 +52,11 @@ pub const DIRECTIONS_PER_SAMPLE: f64 = 8.0;
 /// lines' worth of track, whatever their shift.
 pub const LINES_PER_PIXEL: u32 = 1;
 
+/// Where lines run, they report this fraction (one over it) of a pass's
+/// pixel samples to the progress callback as their directions are done,
+/// and the pixels' tiles the rest: the lines take most of the time.
+pub(crate) const LINE_PROGRESS: u64 = 2;
+
 /// The stream index of a direction's numbers, apart from every other
 /// stream of the pass.
 const LINES_STREAM: u64 = (1 << 44) + (1 << 30);
@@ -58,6 +64,40 @@ const LINES_STREAM: u64 = (1 << 44) + (1 << 30);
 const CHUNK_BUDGET: usize = 64 << 20;
 /// The most chunks a pass is cut into.
 const MAX_CHUNKS: usize = 16;
+
+/// Lines run where a direction's lines are cut into at most this many
+/// pieces per pixel, on average over directions ([`pieces_per_pixel`]).
+/// A piece costs three ray queries and two path continuations, and serves
+/// the pixels along it: in a plan of walls a few pixels apart (a maze)
+/// each piece serves a pixel or two, and a pixel's own path samples cost
+/// less for the same noise.
+pub const MAX_PIECES_PER_PIXEL: f64 = 0.1;
+
+/// The pieces that one direction's lines are cut into, on average over
+/// directions, per pixel of a `size` image of `scene`: the lines, and the
+/// crossings with the walls that meet the canvas (a wall of length `ℓ`
+/// crosses `2ℓ / (π s)` lines `s` apart, on average over directions).
+pub(crate) fn pieces_per_pixel(scene: &Scene, (width, height): (u32, u32)) -> f64 {
+    let step = scene.canvas.pixel_step((width, height)).abs();
+    let spacing = step.x.min(step.y) / LINES_PER_PIXEL as f64;
+    let (a, b) = (
+        scene.canvas.origin,
+        scene.canvas.origin + DVec2::new(width as f64, height as f64) * step,
+    );
+    let (lo, hi) = (a.min(b), a.max(b));
+    let crossings: f64 = scene
+        .walls
+        .iter()
+        .filter(|w| {
+            let (l, h) = w.shape.bounds();
+            l.x <= hi.x && l.y <= hi.y && h.x >= lo.x && h.y >= lo.y
+        })
+        .map(|w| 2.0 * w.shape.length() / (std::f64::consts::PI * spacing))
+        .sum();
+    let lines = (hi - lo).length() / spacing;
+    let pixels = (width as f64 * height as f64).max(1.0);
+    (lines + crossings) / pixels
+}
 
 /// What the lines of one pass gathered: the mean indirect fluence of each
 /// pixel, and that of the first half of the directions.
@@ -107,6 +147,8 @@ struct LinePass<'a> {
     seed: u64,
     /// The sample indices whose onward memo copy each half reads.
     samples: (u32, u32),
+    /// The pixel samples the lines report as done, over all directions.
+    work: u64,
 }
 
 /// Gathers one pass's indirect light on the floor along lines, for the
@@ -140,6 +182,18 @@ pub(crate) fn gather_lines(
     let chunks_per_half = (CHUNK_BUDGET / (2 * pixels * 24).max(1))
         .clamp(1, MAX_CHUNKS / 2)
         .min(per_half as usize);
+    // The pixels whose samples the progress counts: the tiles' that meet
+    // the window (whole tiles, as the pixels' tiles count them).
+    let pixels_counted = match options.window {
+        Some(Window { x0, y0, x1, y1 }) => {
+            let tile = crate::options::TILE;
+            let (x0, y0) = (x0 / tile * tile, y0 / tile * tile);
+            let x1 = x1.div_ceil(tile).saturating_mul(tile).min(width);
+            let y1 = y1.div_ceil(tile).saturating_mul(tile).min(height);
+            x1.saturating_sub(x0) as u64 * y1.saturating_sub(y0) as u64
+        }
+        None => pixels as u64,
+    };
     let line_pass = LinePass {
         trace,
         size: (width, height),
@@ -155,6 +209,7 @@ pub(crate) fn gather_lines(
         per_pixel: LINES_PER_PIXEL,
         seed: pass.seed,
         samples: (pass.samples.start, pass.middle),
+        work: pixels_counted * pass.count() as u64 / LINE_PROGRESS,
     };
     let outcome = run(&line_pass, Stats::default(), progress);
     stats.merge(&outcome.stats);
@@ -316,9 +371,13 @@ impl Estimator for LinePass<'_> {
         let n = 2 * self.per_half;
         let (lo, hi) = (self.lo, self.hi);
         let centre = 0.5 * (lo + hi);
+        let directions = 2 * self.per_half;
         for k in (within as u64..self.per_half).step_by(self.chunks_per_half) {
-            progress(0);
             let direction = half * self.per_half + k;
+            // This direction's share of the work, so that the shares sum
+            // to the whole; reported before the walk, as a heartbeat too.
+            let share = |d: u64| (self.work as u128 * d as u128 / directions as u128) as u64;
+            progress(share(direction + 1) - share(direction));
             let mut stream = Stream::new(self.seed, direction, LINES_STREAM);
             let angle = std::f64::consts::PI * (k as f64 + stream.uniform()) / self.per_half as f64;
             let dir = DVec2::new(angle.cos(), angle.sin());

@@ -401,7 +401,13 @@ impl Estimator for PixelEstimator<'_> {
             };
         }
         let samples: u64 = contexts.iter().map(|c| c.pass.count() as u64).sum();
-        progress(values.len() as u64 * samples);
+        // Where lines run, they report half of the pixels' samples as
+        // their directions are walked (`lines::LINE_PROGRESS`).
+        let work = values.len() as u64 * samples;
+        progress(match context.lines {
+            Some(_) => work - work / crate::lines::LINE_PROGRESS,
+            None => work,
+        });
         Part::Tile {
             x0,
             y0,

@@ -257,7 +257,7 @@ fn options(
     seed: Option<u64>,
     integrator: Option<&str>,
     cache: Option<&str>,
-    caustics: Option<bool>,
+    (caustics, indirect): (Option<bool>, Option<&str>),
     exposure: Option<f64>,
     scale: f64,
     window: Option<(u32, u32, u32, u32)>,
@@ -314,6 +314,17 @@ fn options(
     }
     if let Some(caustics) = caustics {
         options.caustics = caustics;
+    }
+    if let Some(name) = indirect {
+        options.floor_lines = match name {
+            "lines" => true,
+            "samples" => false,
+            other => {
+                return Err(format!(
+                    "indirect: expected \"lines\" or \"samples\", found {other:?}"
+                ));
+            }
+        };
     }
     if let Some(exposure) = exposure {
         flatray_tracer::scene::checks::exposure(exposure).map_err(|m| format!("exposure: {m}"))?;
@@ -375,7 +386,8 @@ fn image_of(bytes: &[u8], width: u32, height: u32) -> PyResult<Image> {
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, spp = None, bounces = None, specular = None, seed = None, integrator = None,
-    cache = None, caustics = None, exposure = None, scale = 1.0, window = None, threads = None,
+    cache = None, caustics = None, indirect = None, exposure = None, scale = 1.0, window = None,
+    threads = None,
     progress = None
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -389,6 +401,7 @@ fn render<'py>(
     integrator: Option<&str>,
     cache: Option<&str>,
     caustics: Option<bool>,
+    indirect: Option<&str>,
     exposure: Option<f64>,
     scale: f64,
     window: Option<(u32, u32, u32, u32)>,
@@ -397,7 +410,17 @@ fn render<'py>(
 ) -> PyResult<(Bound<'py, PyBytes>, u32, u32, String, f64)> {
     let loaded = &scene.get().loaded;
     let options = options(
-        loaded, spp, bounces, specular, seed, integrator, cache, caustics, exposure, scale, window,
+        loaded,
+        spp,
+        bounces,
+        specular,
+        seed,
+        integrator,
+        cache,
+        (caustics, indirect),
+        exposure,
+        scale,
+        window,
     )
     .map_err(PyValueError::new_err)?;
     let pool = match threads {

@@ -233,6 +233,7 @@ def test_warnings_name_what_would_render_wrong():
 def test_bad_render_settings_raise_value_errors():
     scene = flatray.Scene(**ROOM_VALUES)
     for bad in [dict(spp=0), dict(integrator="photon"), dict(cache="maybe"), dict(scale=0),
+                dict(indirect="rays"),
                 dict(window=(0, 0, 100, 10)), dict(exposure=-1), dict(threads=0)]:
         with pytest.raises(ValueError):
             flatray.render(scene, **bad)
@@ -358,3 +359,14 @@ def test_scenes_pickle_and_write(tmp_path):
     assert (tmp_path / "out.png").read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(OSError):
         result.write(tmp_path / "out.tiff")
+
+
+def test_the_floors_indirect_light_along_lines_or_by_samples(repo):
+    scene = flatray.load(repo / "scenes" / "room.ron")
+    lines = flatray.render(scene, spp=16, scale=0.25, seed=3)
+    samples = flatray.render(scene, spp=16, scale=0.25, seed=3, indirect="samples")
+    assert samples.settings["indirect"] == "samples"
+    assert lines.stats["work"]["lines"] > 0 and samples.stats["work"]["lines"] == 0
+    # The same image, in expectation; along lines, far less noise.
+    assert abs(lines.image.mean() / samples.image.mean() - 1) < 0.03
+    assert lines.noise < samples.noise / 2

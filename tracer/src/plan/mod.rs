@@ -189,6 +189,11 @@ pub struct Plan {
     pub adaptive: bool,
     /// Glass bodies that absorb.
     pub absorbing_glass: usize,
+    /// How long the pieces of a line between walls would be, on average,
+    /// in tenths of a pixel (`lines::pieces_per_pixel`), and whether that
+    /// is too short for lines to pay.
+    pub line_piece_tenths: u32,
+    pub dense_walls: bool,
     /// The fast paths the settings allow (`reference` aside).
     pub fast_paths: FastPaths,
     /// Where each fast path runs, and why, as it declares.
@@ -360,9 +365,13 @@ impl Plan {
             .iter()
             .filter(|g| g.absorption != crate::Rgb::ZERO)
             .count();
+        let line_pieces = crate::lines::pieces_per_pixel(scene, (width, height));
+        let dense_walls = line_pieces > crate::lines::MAX_PIECES_PER_PIXEL;
+        let line_piece_tenths = (10.0 / line_pieces).round().min(u32::MAX as f64) as u32;
         let floor_lines = floor_memo
             && indirect
             && options.floor_lines
+            && !dense_walls
             && options.integrator == Integrator::Path
             && !options.adaptive
             && absorbing_glass == 0;
@@ -431,6 +440,8 @@ impl Plan {
             lines_enabled: options.floor_lines,
             adaptive: options.adaptive,
             absorbing_glass,
+            line_piece_tenths,
+            dense_walls,
             floor_ray_culling,
         }
     }

@@ -102,6 +102,8 @@ impl Plan {
             lines_enabled,
             adaptive,
             absorbing_glass,
+            line_piece_tenths,
+            dense_walls,
             floor_ray_culling,
             light_choice,
             light_table,
@@ -487,6 +489,11 @@ impl Plan {
                 format!(
                     "{} absorbs: each pixel's path samples take it",
                     n(absorbing_glass, "glass body")
+                )
+            } else if dense_walls {
+                format!(
+                    "walls so dense that a line would be cut every {:.1} pixels: each pixel's path samples take it",
+                    line_piece_tenths as f64 / 10.0
                 )
             } else {
                 "lines across the image in stratified directions, each piece between two walls looking both ways: pixels take no path samples".into()

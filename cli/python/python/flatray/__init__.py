@@ -318,6 +318,7 @@ def render(
     integrator: Optional[str] = None,
     cache: Optional[str] = None,
     caustics: Optional[bool] = None,
+    indirect: Optional[str] = None,
     exposure: Optional[float] = None,
     scale: float = 1.0,
     window: Optional[Sequence[int]] = None,
@@ -327,8 +328,10 @@ def render(
     """Renders ``scene``. The keywords override the scene's own render
     settings, as ``flatray render``'s flags do: ``spp``, ``bounces``,
     ``specular``, ``seed``, ``integrator`` ("path", "original", "light"),
-    ``cache`` ("on", "off", "direct"), ``caustics``, ``exposure`` and
-    ``scale``. ``window`` = (x0, y0, x1, y1) renders only those pixels
+    ``cache`` ("on", "off", "direct"), ``caustics``, ``indirect``
+    ("lines", the default: the floor's indirect light along lines across
+    the image; "samples": by each pixel's own path samples), ``exposure``
+    and ``scale``. ``window`` = (x0, y0, x1, y1) renders only those pixels
     (the others are 0), with the bits of the whole render. ``threads``
     sets the worker threads (all cores by default).
 
@@ -353,6 +356,7 @@ def render(
         integrator=integrator,
         cache=cache,
         caustics=caustics,
+        indirect=indirect,
         exposure=exposure,
         scale=scale,
         window=win,
@@ -369,6 +373,7 @@ def render(
         "integrator": integrator,
         "cache": cache,
         "caustics": caustics,
+        "indirect": indirect,
         "exposure": exposure,
     }
     settings.update({k: v for k, v in given.items() if v is not None})

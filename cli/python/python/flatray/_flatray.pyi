@@ -50,6 +50,7 @@ def render(
     integrator: Optional[str] = None,
     cache: Optional[str] = None,
     caustics: Optional[bool] = None,
+    indirect: Optional[str] = None,
     exposure: Optional[float] = None,
     scale: float = 1.0,
     window: Optional[Tuple[int, int, int, int]] = None,
