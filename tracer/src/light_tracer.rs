@@ -480,63 +480,6 @@ impl Grid {
     }
 
     /// Adds `power * length / area` to every pixel that `ray` crosses for
-    /// `0 <= t < t_end`: [`Grid::deposit`] with no kernel and no
-    /// absorption, the walk alone.
-    pub(crate) fn deposit_flat(&self, ray: &Ray, t_end: f64, power: Rgb, buffer: &mut [Rgb]) {
-        let o = (ray.origin - self.origin) * self.scale;
-        let d = ray.dir * self.scale;
-        let (w, h) = (self.width as f64, self.height as f64);
-        let Some((t0, t1)) = clip_to_box(o, d, 0.0, t_end, DVec2::ZERO, DVec2::new(w, h)) else {
-            return;
-        };
-        if t0 >= t1 {
-            return;
-        }
-        let start = o + d * t0;
-        let width = self.width as i64;
-        let mut ix = (start.x.floor() as i64).clamp(0, width - 1);
-        let mut iy = (start.y.floor() as i64).clamp(0, self.height as i64 - 1);
-        let step_x: i64 = if d.x > 0.0 { 1 } else { -1 };
-        let step_y: i64 = if d.y > 0.0 { 1 } else { -1 };
-        let boundary = |i: i64, s: i64| (if s > 0 { i + 1 } else { i }) as f64;
-        let (mut t_next_x, dt_x) = if d.x != 0.0 {
-            ((boundary(ix, step_x) - o.x) / d.x, 1.0 / d.x.abs())
-        } else {
-            (f64::INFINITY, f64::INFINITY)
-        };
-        let (mut t_next_y, dt_y) = if d.y != 0.0 {
-            ((boundary(iy, step_y) - o.y) / d.y, 1.0 / d.y.abs())
-        } else {
-            (f64::INFINITY, f64::INFINITY)
-        };
-        let scaled = power * self.per_length;
-        let mut t = t0;
-        loop {
-            let t_exit = t_next_x.min(t_next_y).min(t1);
-            if let Some(pixel) = buffer.get_mut((iy * width + ix) as usize) {
-                *pixel += scaled * (t_exit - t).max(0.0);
-            }
-            t = t_exit;
-            if t >= t1 {
-                break;
-            }
-            if t_next_x <= t_next_y {
-                ix += step_x;
-                t_next_x += dt_x;
-                if ix < 0 || ix >= width {
-                    break;
-                }
-            } else {
-                iy += step_y;
-                t_next_y += dt_y;
-                if iy < 0 || iy >= self.height as i64 {
-                    break;
-                }
-            }
-        }
-    }
-
-    /// Adds `power * length / area` to every pixel that `ray` crosses for
     /// `0 <= t < t_end` (Amanatides-Woo), with the kernel factor (the
     /// light `offset + t` away) and the absorption (`exp(-absorb t)`)
     /// integrated exactly along each crossing; where both vary there, at
@@ -554,6 +497,49 @@ impl Grid {
         buffer: &mut [Rgb],
         stream: &mut Stream,
     ) {
+        let flat = kernel.is_flat_beyond_r0();
+        let scaled = power * self.per_length;
+        self.walk(ray, t_end, |pixel, t, t_exit| {
+            let length = t_exit - t;
+            let flat_here = flat && offset + t >= r0;
+            let deposit = if absorb == Rgb::ZERO {
+                // The kernel's exact integral along the crossing.
+                let along = if flat_here {
+                    length
+                } else {
+                    kernel.integral(offset + t, offset + t_exit, r0)
+                };
+                scaled * along
+            } else if flat_here {
+                // Beer-Lambert's exact integral along the crossing.
+                scaled * absorbed_length(absorb, t, length)
+            } else {
+                // Both vary along the crossing: their product at one
+                // uniform point of it, an unbiased estimate.
+                let at = t + length * stream.uniform();
+                scaled * (length * kernel.factor(offset + at, r0)) * transmit(absorb, at)
+            };
+            buffer[pixel] += deposit;
+        });
+    }
+
+    /// Adds `power * length / area` to every pixel that `ray` crosses for
+    /// `0 <= t < t_end`: [`Grid::deposit`] with no kernel and no
+    /// absorption.
+    #[inline]
+    pub(crate) fn deposit_flat(&self, ray: &Ray, t_end: f64, power: Rgb, buffer: &mut [Rgb]) {
+        let scaled = power * self.per_length;
+        self.walk(ray, t_end, |pixel, t, t_exit| {
+            buffer[pixel] += scaled * (t_exit - t);
+        });
+    }
+
+    /// Calls `cross(pixel, t, t_exit)` for every pixel that `ray` crosses
+    /// for `0 <= t < t_end`, in order, with the crossing's range of `t`
+    /// (Amanatides-Woo; `t` in world units, crossings of no length left
+    /// out).
+    #[inline(always)]
+    fn walk(&self, ray: &Ray, t_end: f64, mut cross: impl FnMut(usize, f64, f64)) {
         // In pixel coordinates: p(t) = o + t d, t still in world units.
         let o = (ray.origin - self.origin) * self.scale;
         let d = ray.dir * self.scale;
@@ -591,32 +577,11 @@ impl Grid {
         } else {
             f64::INFINITY
         };
-        let flat = kernel.is_flat_beyond_r0();
-        let scaled = power * self.per_length;
         let mut t = t0;
         while t < t1 {
             let t_exit = t_next_x.min(t_next_y).min(t1);
             if t_exit > t {
-                let length = t_exit - t;
-                let flat_here = flat && offset + t >= r0;
-                let deposit = if absorb == Rgb::ZERO {
-                    // The kernel's exact integral along the crossing.
-                    let along = if flat_here {
-                        length
-                    } else {
-                        kernel.integral(offset + t, offset + t_exit, r0)
-                    };
-                    scaled * along
-                } else if flat_here {
-                    // Beer-Lambert's exact integral along the crossing.
-                    scaled * absorbed_length(absorb, t, length)
-                } else {
-                    // Both vary along the crossing: their product at one
-                    // uniform point of it, an unbiased estimate.
-                    let at = t + length * stream.uniform();
-                    scaled * (length * kernel.factor(offset + at, r0)) * transmit(absorb, at)
-                };
-                buffer[(iy as usize) * self.width as usize + ix as usize] += deposit;
+                cross((iy as usize) * self.width as usize + ix as usize, t, t_exit);
             }
             t = t_exit;
             if t >= t1 {
