@@ -4,8 +4,9 @@
 //! line's error is shared by the pixels it crosses), in a turned,
 //! non-convex room of every kind of wall, at one and at three bounces;
 //! no light through shared corners; radiance that is not finite left out
-//! and counted; the same bits on any number of threads; path samples
-//! where walls stand a few pixels apart.
+//! and counted; the same bits on any number of threads; the same light a
+//! million units from the origin; path samples where walls stand a few
+//! pixels apart.
 
 use flatray_geometry::DVec2;
 use flatray_tests::{block_stats, options, render, render_on, scene};
@@ -232,4 +233,47 @@ fn walls_a_few_pixels_apart_take_path_samples() {
         .unwrap_or_default();
     assert!(said.starts_with("walls so dense"), "{said}");
     assert!(Plan::new(&room(""), &options(16, 1, 0)).floor_lines);
+}
+
+/// The room moved `offset` units along both axes, as the scene format
+/// writes it (the canvas with it).
+fn moved(offset: f64) -> String {
+    let p = |x: f64, y: f64| format!("({:?}, {:?})", offset + x, offset + y);
+    format!(
+        "Scene(canvas: (60, 40), origin: {}, floor: Color((1, 1, 1)),
+            walls: [Wall(a: {}, b: {}), Wall(a: {}, b: {}, material: Mirror()),
+                    Wall(a: {}, b: {}, material: Diffuse(albedo: (0.8, 0.3, 0.3))),
+                    Wall(a: {}, b: {})],
+            lights: [Point(at: {}, intensity: 5.0), Line(a: {}, b: {}, intensity: 0.5)])",
+        p(0.0, 0.0),
+        p(10.0, 8.0),
+        p(50.0, 8.0),
+        p(50.0, 8.0),
+        p(50.0, 35.0),
+        p(5.0, 30.0),
+        p(25.0, 38.0),
+        p(30.0, 14.0),
+        p(30.0, 26.0),
+        p(30.3, 20.7),
+        p(12.0, 15.0),
+        p(20.0, 13.0),
+    )
+}
+
+/// Coordinates a million units out: no light lost or gained. (Which of
+/// the wall memo's reads are checked hangs on the bits of the hit's place
+/// along its wall, which rounding near 1e6 moves, so the images differ by
+/// their noise, and only the whole image's light is compared.)
+#[test]
+fn lines_a_million_units_away_give_the_same_light() {
+    let options = options(64, 2, 5);
+    let near = scene(&moved(0.0)).scene;
+    let far = scene(&moved(1e6)).scene;
+    assert!(Plan::new(&near, &options).floor_lines && Plan::new(&far, &options).floor_lines);
+    let (a, b) = (render(&near, &options), render(&far, &options));
+    assert!(b.image.pixels.iter().flatten().all(|v| v.is_finite()));
+    assert!(b.stats.work.line_pieces > 0);
+    let sum = |i: &flatray_tracer::Image| i.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>();
+    let ratio = sum(&b.image) / sum(&a.image);
+    assert!((ratio - 1.0).abs() < 0.01, "{ratio}");
 }

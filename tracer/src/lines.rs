@@ -272,8 +272,9 @@ impl LinePass<'_> {
         let eps = 1e-9 * (base.abs().max_element() + t0.abs().max(t1.abs()))
             + 1e-6 * self.pixel.min_element();
         let mut t = t0;
-        // A line crosses a segment once and an arc at most twice.
-        let most = 2 * self.trace.scene.walls.len() + 2;
+        // A line crosses a segment once and an arc at most twice; a few
+        // more for a crossing found again past the step by rounding.
+        let most = 2 * self.trace.scene.walls.len() + 8;
         for _ in 0..most {
             let start = base + dir * t;
             let ahead = segments.closest_hit(&Ray::new(start, dir), f64::INFINITY, Skip::NONE);

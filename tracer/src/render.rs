@@ -220,7 +220,7 @@ impl<'a> Passes<'a> {
     }
 
     /// About the bytes of a pass's own fills: its caustic pass's floor
-    /// (and the first half's) and its onward memo.
+    /// and its lines' (each with the first half's) and its onward memo.
     fn fill_bytes(&self) -> u64 {
         let Some(shared) = &self.shared else {
             return 0;
@@ -228,6 +228,9 @@ impl<'a> Passes<'a> {
         let (width, height) = self.size();
         let mut bytes = 0u64;
         if shared.plan.caustics {
+            bytes += width as u64 * height as u64 * 48;
+        }
+        if shared.plan.floor_lines {
             bytes += width as u64 * height as u64 * 48;
         }
         if let Some(memo) = shared.memo.as_ref().filter(|_| shared.plan.onward) {
