@@ -12,12 +12,17 @@
 //! light tracer (`light_tracer::Grid`) with the radiance that a path from
 //! the floor would bring in place of a photon's power.
 //!
-//! A pass draws `n` directions `θ_k` stratified over a half turn, each
-//! with parallel lines `Δs` apart at a random shift; a line's piece of
-//! track length `ℓ` in a pixel adds `(L(θ) + L(θ + π)) ℓ π Δs / n`,
-//! divided by the pixel's area. For any point, the lines of one direction
-//! pass within `ds` of it with probability `ds / Δs`, so the sum
-//! estimates the pixel's mean fluence without bias. The radiance of each
+//! A pass draws `n` directions `θ_k` ([`DIRECTIONS_PER_SAMPLE`] per pixel
+//! sample) in two halves, each stratified over a half turn. A direction's
+//! lines cross the pixel grid's axis nearer to their normal once a pixel,
+//! all at one random shift, `Δs` apart across their direction; a line's
+//! piece of track length `ℓ` in a pixel adds
+//! `(L(θ) + L(θ + π)) ℓ π Δs / n`, divided by the pixel's area. For any
+//! point, the lines of one direction pass within `ds` of it with
+//! probability `ds / Δs`, so the sum estimates the pixel's mean fluence
+//! without bias; and every column (or row) of pixels holds exactly one
+//! line's worth of track in each pixel, so the track lengths add no
+//! noise of their own. The radiance of each
 //! piece is what [`path_finish`] returns from the piece's middle, the
 //! same continuation (wall memo, onward memo, mirrors, glass, caustic
 //! bins, the closed forms' exclusions) that a pixel's path sample takes
@@ -249,7 +254,7 @@ impl LinePass<'_> {
         value / std::f64::consts::TAU
     }
 
-    /// Walks the line `base + t dir` across the rendered rectangle,
+    /// Walks the line `base + t dir` across the canvas,
     /// adding `weight` times the radiance both ways of each piece between
     /// walls to the pixels it crosses.
     #[allow(clippy::too_many_arguments)]
