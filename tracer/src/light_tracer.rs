@@ -479,6 +479,13 @@ impl Grid {
         }
     }
 
+    /// The pixel that holds world point `x`, clamped to the image.
+    pub(crate) fn pixel_at(&self, x: DVec2) -> (u32, u32) {
+        let at = (x - self.origin) * self.scale;
+        let clamp = |v: f64, n: u32| (v.floor().max(0.0) as u32).min(n.saturating_sub(1));
+        (clamp(at.x, self.width), clamp(at.y, self.height))
+    }
+
     /// Adds `power * length / area` to every pixel that `ray` crosses for
     /// `0 <= t < t_end` (Amanatides-Woo), with the kernel factor (the
     /// light `offset + t` away) and the absorption (`exp(-absorb t)`)

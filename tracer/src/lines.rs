@@ -83,13 +83,10 @@ pub const MAX_PIECES_PER_PIXEL: f64 = 0.1;
 /// crossings with the walls that meet the canvas (a wall of length `ℓ`
 /// crosses `2ℓ / (π s)` lines `s` apart, on average over directions).
 pub(crate) fn pieces_per_pixel(scene: &Scene, (width, height): (u32, u32)) -> f64 {
-    let step = scene.canvas.pixel_step((width, height)).abs();
+    let step = scene.canvas.pixel_step((width, height));
     let spacing = step.x.min(step.y) / LINES_PER_PIXEL as f64;
-    let (a, b) = (
-        scene.canvas.origin,
-        scene.canvas.origin + DVec2::new(width as f64, height as f64) * step,
-    );
-    let (lo, hi) = (a.min(b), a.max(b));
+    let lo = scene.canvas.origin;
+    let hi = lo + DVec2::new(width as f64, height as f64) * step;
     let crossings: f64 = scene
         .walls
         .iter()
@@ -141,14 +138,8 @@ struct LinePass<'a> {
     /// Directions per half, and the chunks of each half.
     per_half: u64,
     chunks_per_half: usize,
-    /// A pixel's width and height, in world units, and the canvas's
-    /// pixel step and origin (as `Canvas::pixel_step` gives them).
+    /// A pixel's width and height, in world units.
     pixel: DVec2,
-    step: DVec2,
-    origin: DVec2,
-    /// Lines of one direction per pixel, across the pixel grid's axis
-    /// nearer to that direction's normal.
-    per_pixel: u32,
     seed: u64,
     /// The sample indices whose onward memo copy each half reads.
     samples: (u32, u32),
@@ -169,17 +160,13 @@ pub(crate) fn gather_lines(
     let (width, height) = image_size(scene, options.scale);
     let step = scene.canvas.pixel_step((width, height));
     let corner = |x: u32, y: u32| scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
-    let (a, b) = (corner(0, 0), corner(width, height));
-    let (lo, hi) = (a.min(b), a.max(b));
+    let (lo, hi) = (corner(0, 0), corner(width, height));
     // The first pass measures the split of its noise at probe pixels all
     // over the image (`passes::is_probe`), outside a window too: its lines
     // cover the whole canvas, so that a window takes the whole render's
     // floor points.
     let window = match options.window.filter(|_| pass.index > 0) {
-        Some(Window { x0, y0, x1, y1 }) => {
-            let (a, b) = (corner(x0, y0), corner(x1, y1));
-            (a.min(b), a.max(b))
-        }
+        Some(Window { x0, y0, x1, y1 }) => (corner(x0, y0), corner(x1, y1)),
         None => (lo, hi),
     };
     let per_half = ((pass.count() as f64 * DIRECTIONS_PER_SAMPLE / 2.0).ceil() as u64).max(1);
@@ -208,10 +195,7 @@ pub(crate) fn gather_lines(
         window,
         per_half,
         chunks_per_half,
-        pixel: step.abs(),
-        step,
-        origin: scene.canvas.origin,
-        per_pixel: LINES_PER_PIXEL,
+        pixel: step,
         seed: pass.seed,
         samples: (pass.samples.start, pass.middle),
         work: pixels_counted * pass.count() as u64 / LINE_PROGRESS,
@@ -222,13 +206,6 @@ pub(crate) fn gather_lines(
 }
 
 impl LinePass<'_> {
-    /// The pixel that holds world point `x`, clamped to the image.
-    fn pixel_at(&self, x: DVec2) -> (u32, u32) {
-        let at = (x - self.origin) / self.step;
-        let clamp = |v: f64, n: u32| (v.floor().max(0.0) as u32).min(n.saturating_sub(1));
-        (clamp(at.x, self.size.0), clamp(at.y, self.size.1))
-    }
-
     /// The radiance reaching `x` from direction `-dir` (looking along
     /// `dir`): a path sample's value after its first ray, less the `2π`
     /// of its direction's density. `hit` is where that ray meets the
@@ -313,7 +290,7 @@ impl LinePass<'_> {
                 if !power.is_finite() {
                     // Left out and counted, as a path sample would be
                     // (at the piece's middle's pixel).
-                    let (px, py) = self.pixel_at(x);
+                    let (px, py) = self.grid.pixel_at(x);
                     stats.record_nonfinite(px, py, sample);
                 } else if power != Rgb::ZERO {
                     self.grid
@@ -388,8 +365,8 @@ impl Estimator for LinePass<'_> {
             let angle = std::f64::consts::PI * (k as f64 + stream.uniform()) / self.per_half as f64;
             let dir = DVec2::new(angle.cos(), angle.sin());
             // The lines cross the axis nearer to their normal at a fixed
-            // step, `per_pixel` to a pixel, from a random shift: every
-            // column (or row) of pixels then holds exactly `per_pixel`
+            // step, `LINES_PER_PIXEL` to a pixel, from a random shift:
+            // every column (or row) of pixels then holds exactly that many
             // lines' worth of track in each pixel's square, so the lines
             // cover each pixel exactly, whatever the shift and direction.
             let shift = stream.uniform();
@@ -402,7 +379,7 @@ impl Estimator for LinePass<'_> {
                 (0, self.pixel.x, (dir.x / dir.y).abs())
             };
             let other = 1 - axis;
-            let h = size / self.per_pixel as f64;
+            let h = size / LINES_PER_PIXEL as f64;
             // The spacing across the lines, for the weight.
             let spacing = h * if across_y { dir.x.abs() } else { dir.y.abs() };
             let weight = std::f64::consts::PI * spacing / n as f64;
@@ -441,17 +418,11 @@ impl Estimator for LinePass<'_> {
     }
 
     fn finish(&self, film: Film, _stats: &mut Stats) -> Lines {
-        let pixels = self.size.0 as usize * self.size.1 as usize;
-        let floor = if film.fluence.is_empty() {
-            vec![Rgb::ZERO; pixels]
-        } else {
-            film.fluence
-        };
-        let first = if film.first.is_empty() {
-            vec![Rgb::ZERO; pixels]
-        } else {
-            film.first
-        };
-        Lines { floor, first }
+        // Every chunk splats the whole floor, and each half has one, so
+        // both sums are whole; `Lines` reads them by `get` all the same.
+        Lines {
+            floor: film.fluence,
+            first: film.first,
+        }
     }
 }

@@ -455,18 +455,17 @@ pub(crate) fn pass_sums(
     // The caustic pass's light on the floor, from each half of its
     // photons, and the lines' indirect light, from each half of their
     // directions: both are "the rest", beside the floor points.
-    let mut caustic_halves = (Rgb::ZERO, Rgb::ZERO);
+    let mut rest_halves = (Rgb::ZERO, Rgb::ZERO);
     let k = (y * context.size.0 + x) as usize;
-    if let Some(caustics) = context.trace.caustics {
-        caustic_halves = caustics.floor_halves(k);
-        halves = (halves.0 + caustic_halves.0, halves.1 + caustic_halves.1);
-        whole += caustics.floor_at(k);
-    }
-    if let Some(lines) = context.lines {
-        let (a, b) = lines.floor_halves(k);
-        caustic_halves = (caustic_halves.0 + a, caustic_halves.1 + b);
+    let caustics = context
+        .trace
+        .caustics
+        .map(|c| (c.floor_halves(k), c.floor_at(k)));
+    let lines = context.lines.map(|l| (l.floor_halves(k), l.floor_at(k)));
+    for ((a, b), all) in caustics.into_iter().chain(lines) {
+        rest_halves = (rest_halves.0 + a, rest_halves.1 + b);
         halves = (halves.0 + a, halves.1 + b);
-        whole += lines.floor_at(k);
+        whole += all;
     }
     if context.measures && crate::passes::is_probe((x, y)) {
         // The points' halves against the rest's: the paths' means over
@@ -481,7 +480,7 @@ pub(crate) fn pass_sums(
             );
             let ((p1, p2), (m1, m2)) = point_halves;
             let paths = sums.first / a as f64 - (sums.all - sums.first) / b as f64
-                + (caustic_halves.0 - caustic_halves.1);
+                + (rest_halves.0 - rest_halves.1);
             stats.split.add(
                 ((p1 - p2) * scale, m1 as u32, m2 as u32),
                 (paths * scale, a, b),
