@@ -1,12 +1,15 @@
 //! `flatray serve` in a real browser: headless Chromium loads the page
 //! the real binary serves, waits for the render, drags a lamp with the
 //! mouse through the page's own handles, checks that the light moved in
-//! the image, saves through the page's button and checks the file.
+//! the image, saves through the page's button and checks the file; and
+//! with an edit of the page's own, sees a change made to the file on disk
+//! offered as a choice, and keeps each side once.
 //!
 //! Chromium is Debian's `chromium` package (`apt-get install chromium`),
 //! or the browser `FLATRAY_CHROMIUM` names. The screenshot it takes is
 //! written to `FLATRAY_SCREENSHOTS` (a folder) when that is set: that is
-//! how `docs/images/serve.png` is made.
+//! how `docs/images/serve.png` and `docs/images/serve-conflict.png` are
+//! made.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -119,17 +122,9 @@ fn on_screen(tab: &Tab, (x, y): (f64, f64)) -> (f64, f64) {
     (v[0], v[1])
 }
 
-#[test]
-fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
-    let dir = std::env::temp_dir().join(format!("flatray-browser-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let scene = dir.join("room.ron");
-    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
-    std::fs::copy(&room, &scene).unwrap();
-    let server = common::serve(&scene);
-    let url = server.url.clone();
-
+/// Headless Chromium with a profile of its own in `dir`, showing the page
+/// at `url`.
+fn open(dir: &Path, url: &str) -> (Browser, std::sync::Arc<Tab>) {
     let options = LaunchOptions::default_builder()
         .path(Some(chromium()))
         .headless(true)
@@ -158,6 +153,55 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
         .unwrap()
         .wait_until_navigated()
         .unwrap();
+    (browser, tab)
+}
+
+/// Drags with the mouse from world point `from` to `to`, in ten steps.
+fn drag(tab: &Tab, from: (f64, f64), to: (f64, f64)) {
+    let start = on_screen(tab, from);
+    let end = on_screen(tab, to);
+    mouse(tab, Input::DispatchMouseEventTypeOption::MouseMoved, start);
+    mouse(
+        tab,
+        Input::DispatchMouseEventTypeOption::MousePressed,
+        start,
+    );
+    for k in 1..=10 {
+        let t = k as f64 / 10.0;
+        let p = (
+            start.0 + (end.0 - start.0) * t,
+            start.1 + (end.1 - start.1) * t,
+        );
+        mouse(tab, Input::DispatchMouseEventTypeOption::MouseMoved, p);
+    }
+    mouse(tab, Input::DispatchMouseEventTypeOption::MouseReleased, end);
+}
+
+/// Waits, up to 30 s, for the page's `js` to give `true`.
+fn wait_until(tab: &Tab, what: &str, js: &str) {
+    let started = Instant::now();
+    while evaluate(tab, js) != serde_json::Value::Bool(true) {
+        assert!(
+            started.elapsed() < Duration::from_secs(30),
+            "{what}: the page says {}",
+            evaluate(tab, "document.getElementById('message').textContent")
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+#[test]
+fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
+    let dir = std::env::temp_dir().join(format!("flatray-browser-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("room.ron");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    std::fs::copy(&room, &scene).unwrap();
+    let server = common::serve(&scene);
+    let url = server.url.clone();
+
+    let (browser, tab) = open(&dir, &url);
     tab.wait_for_element("circle[data-light='1']").unwrap();
     let first_job = wait_for_render(&tab, 0, 64);
     let export = |path: &str| -> Vec<u8> {
@@ -172,27 +216,7 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
 
     // Drag the second lamp, (313, 134), to (420, 420), as a user would.
     let (from, to) = ((313.0, 134.0), (420.0, 420.0));
-    let start = on_screen(&tab, from);
-    let end = on_screen(&tab, to);
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, start);
-    mouse(
-        &tab,
-        Input::DispatchMouseEventTypeOption::MousePressed,
-        start,
-    );
-    for k in 1..=10 {
-        let t = k as f64 / 10.0;
-        let p = (
-            start.0 + (end.0 - start.0) * t,
-            start.1 + (end.1 - start.1) * t,
-        );
-        mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, p);
-    }
-    mouse(
-        &tab,
-        Input::DispatchMouseEventTypeOption::MouseReleased,
-        end,
-    );
+    drag(&tab, from, to);
     wait_for_render(&tab, first_job, 64);
     let after = export("/api/export.png");
     let near_new = (brightness(&before, to, 12.0), brightness(&after, to, 12.0));
@@ -267,6 +291,104 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
     assert!(
         message.as_str().unwrap_or_default().starts_with("saved"),
         "{message}"
+    );
+    drop(browser);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_change_on_disk_never_replaces_the_pages_edit_and_each_side_can_be_kept() {
+    let dir = std::env::temp_dir().join(format!("flatray-conflict-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("room.ron");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    std::fs::copy(&room, &scene).unwrap();
+    let original = std::fs::read_to_string(&scene).unwrap();
+    let server = common::serve(&scene);
+    let (browser, tab) = open(&dir, &server.url);
+    tab.wait_for_element("circle[data-light='1']").unwrap();
+    let first = wait_for_render(&tab, 0, 16);
+    let lamp = "JSON.stringify(items.lights[1].at.map(Math.round))";
+    let conflict_shown = "!document.getElementById('conflict').hidden";
+
+    // Keep mine: the page's lamp stays where it was dragged, the editor's
+    // text is in the backup after the page saves.
+    drag(&tab, (313.0, 134.0), (420.0, 420.0));
+    wait_until(&tab, "the edit", &format!("{lamp} === '[420,420]'"));
+    let editor = original.replace("intensity: 0.02", "intensity: 0.05");
+    std::fs::write(&scene, &editor).unwrap();
+    wait_until(&tab, "the conflict shown", conflict_shown);
+    assert_eq!(
+        evaluate(&tab, lamp),
+        "[420,420]",
+        "the page's edit is not replaced"
+    );
+    assert_eq!(
+        evaluate(&tab, "document.getElementById('save').textContent"),
+        "Save*"
+    );
+    if let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") {
+        tab.find_element("#conflict summary")
+            .unwrap()
+            .click()
+            .unwrap();
+        let shot = tab
+            .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
+            .unwrap();
+        std::fs::write(Path::new(&folder).join("serve-conflict.png"), &shot).unwrap();
+    }
+    tab.find_element("#keep-mine").unwrap().click().unwrap();
+    wait_until(
+        &tab,
+        "the conflict settled",
+        &format!("!({conflict_shown})"),
+    );
+    tab.find_element("#save").unwrap().click().unwrap();
+    wait_until(
+        &tab,
+        "saved",
+        "document.getElementById('message').textContent.startsWith('saved')",
+    );
+    let saved = std::fs::read_to_string(&scene).unwrap();
+    assert!(saved.contains("Point(at: (420, 420)"), "{saved}");
+    assert!(saved.contains("intensity: 0.02"), "mine, whole: {saved}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("room.ron.bak")).unwrap(),
+        editor
+    );
+
+    // Take the file's: the editor's lamp is shown and rendered; Undo
+    // brings the page's edit back.
+    std::thread::sleep(Duration::from_millis(600));
+    drag(&tab, (420.0, 420.0), (100.0, 400.0));
+    wait_until(&tab, "the second edit", &format!("{lamp} === '[100,400]'"));
+    let editor2 = saved.replace("Point(at: (420, 420)", "Point(at: (250, 250)");
+    std::fs::write(&scene, &editor2).unwrap();
+    wait_until(&tab, "the second conflict shown", conflict_shown);
+    assert_eq!(evaluate(&tab, lamp), "[100,400]");
+    tab.find_element("#take-file").unwrap().click().unwrap();
+    wait_until(&tab, "the file's lamp", &format!("{lamp} === '[250,250]'"));
+    wait_until(
+        &tab,
+        "the conflict settled",
+        &format!("!({conflict_shown})"),
+    );
+    assert_eq!(
+        evaluate(&tab, "document.getElementById('save').textContent"),
+        "Save"
+    );
+    wait_for_render(&tab, first, 16);
+    tab.find_element("#undo").unwrap().click().unwrap();
+    wait_until(
+        &tab,
+        "the page's edit back",
+        &format!("{lamp} === '[100,400]'"),
+    );
+    assert_eq!(
+        std::fs::read_to_string(&scene).unwrap(),
+        editor2,
+        "the file's text kept"
     );
     drop(browser);
     let _ = std::fs::remove_dir_all(&dir);

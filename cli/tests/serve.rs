@@ -1,8 +1,11 @@
 //! `flatray serve`, the real binary on a real port, asked over HTTP as a
 //! page asks it: edits, undo, save, the watch of the file on disk, two
-//! pages at once, and nothing served but the page and the one scene.
+//! pages at once, and nothing served but the page and the one scene; and
+//! as another site's page, a stalled client or a strange file would ask
+//! it: foreign hosts and origins, missing tokens, large and slow bodies,
+//! a pipe or a link at the scene's path, a file changed behind the page.
 
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -27,6 +30,7 @@ Scene(
 struct Server {
     _serving: common::Serving,
     url: String,
+    token: String,
     dir: PathBuf,
     scene: PathBuf,
 }
@@ -40,9 +44,11 @@ impl Server {
         std::fs::write(&scene, text).unwrap();
         let serving = common::serve(&scene);
         let url = serving.url.clone();
+        let token = serving.token.clone();
         Server {
             _serving: serving,
             url,
+            token,
             dir,
             scene,
         }
@@ -70,6 +76,7 @@ impl Server {
         let mut r = agent
             .post(&format!("{}{path}", self.url))
             .content_type("application/json")
+            .header("x-flatray-token", &self.token)
             .send(body)
             .unwrap();
         let code = r.status().as_u16();
@@ -370,4 +377,559 @@ fn render_watch_renders_again_on_save() {
     let mut rest = String::new();
     let _ = stdout.read_to_string(&mut rest);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A request's headers, as name and value.
+type Headers = Vec<(String, String)>;
+
+/// What a raw request got: the status (0 when none came), the body, and
+/// whether the server closed the connection before `wait` ran out.
+struct Answer {
+    status: u16,
+    body: String,
+    closed: bool,
+    after: Duration,
+}
+
+/// Sends `request` byte for byte, as another site's page, a broken client
+/// or an attacker would, and reads what comes back within `wait`.
+fn raw(url: &str, request: &[u8], wait: Duration) -> Answer {
+    let address = url.trim_start_matches("http://");
+    let mut stream = std::net::TcpStream::connect(address).unwrap();
+    stream.set_read_timeout(Some(wait)).unwrap();
+    let started = Instant::now();
+    stream.write_all(request).unwrap();
+    let mut answer = Vec::new();
+    let closed = stream.read_to_end(&mut answer).is_ok();
+    let text = String::from_utf8_lossy(&answer).into_owned();
+    let status = text
+        .split_whitespace()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    let body = text
+        .split_once("\r\n\r\n")
+        .map(|(_, b)| b.to_string())
+        .unwrap_or_default();
+    Answer {
+        status,
+        body,
+        closed,
+        after: started.elapsed(),
+    }
+}
+
+/// A whole request: `headers` as given, then `Connection: close` and the
+/// body's length (unless `headers` declare one).
+fn request(method: &str, path: &str, headers: &[(&str, &str)], body: &[u8]) -> Vec<u8> {
+    let mut out = format!("{method} {path} HTTP/1.1\r\n");
+    for (k, v) in headers {
+        out.push_str(&format!("{k}: {v}\r\n"));
+    }
+    if !headers
+        .iter()
+        .any(|(k, _)| k.eq_ignore_ascii_case("content-length"))
+    {
+        out.push_str(&format!("Content-Length: {}\r\n", body.len()));
+    }
+    out.push_str("Connection: close\r\n\r\n");
+    let mut bytes = out.into_bytes();
+    bytes.extend_from_slice(body);
+    bytes
+}
+
+impl Server {
+    fn host(&self) -> String {
+        self.url.trim_start_matches("http://").to_string()
+    }
+
+    /// The headers the page itself sends with a change.
+    fn page_headers(&self) -> Headers {
+        vec![
+            ("Host".into(), self.host()),
+            ("Origin".into(), self.url.clone()),
+            ("Content-Type".into(), "application/json".into()),
+            ("X-Flatray-Token".into(), self.token.clone()),
+        ]
+    }
+
+    /// The page's headers with `name` set to `value` (or left out when
+    /// `value` is `None`).
+    fn headers_but(&self, name: &str, value: Option<&str>) -> Headers {
+        let mut h: Vec<_> = self
+            .page_headers()
+            .into_iter()
+            .filter(|(k, _)| !k.eq_ignore_ascii_case(name))
+            .collect();
+        if let Some(v) = value {
+            h.push((name.to_string(), v.to_string()));
+        }
+        h
+    }
+
+    fn send(&self, method: &str, path: &str, headers: &[(String, String)], body: &[u8]) -> Answer {
+        let h: Vec<(&str, &str)> = headers
+            .iter()
+            .map(|(k, v)| (k.as_str(), v.as_str()))
+            .collect();
+        raw(
+            &self.url,
+            &request(method, path, &h, body),
+            Duration::from_secs(20),
+        )
+    }
+}
+
+const MOVE: &str = r#"{"op": "move_light", "index": 0, "to": [90, 45]}"#;
+
+#[test]
+fn another_sites_page_can_neither_read_nor_change_the_scene() {
+    let server = Server::start("foreign", ROOM);
+    // The page's own headers pass: the check is not refusing everything.
+    let ok = server.send("POST", "/api/edit", &server.page_headers(), MOVE.as_bytes());
+    assert_eq!(ok.status, 200, "{}", ok.body);
+    let (code, _) = server.post("/api/undo", "{}");
+    assert_eq!(code, 200);
+    let version = server.json("/api/items")["version"].clone();
+
+    // DNS rebinding: the attacker's name, pointed at this machine.
+    let rebound = [("Host", "attacker.example:8421")];
+    for path in ["/", "/api/scene.ron", "/api/items", "/api/frame.png"] {
+        let a = raw(
+            &server.url,
+            &request("GET", path, &rebound, b""),
+            Duration::from_secs(20),
+        );
+        assert_eq!(a.status, 403, "{path}: {}", a.body);
+        assert!(!a.body.contains("partition"), "{path}: the scene leaked");
+    }
+    let port = server.host().rsplit(':').next().unwrap().to_string();
+    let cases: Vec<(&str, Headers, u16)> = vec![
+        (
+            "a foreign Host",
+            server.headers_but("Host", Some(&format!("attacker.example:{port}"))),
+            403,
+        ),
+        (
+            "a foreign Origin",
+            server.headers_but("Origin", Some("http://attacker.example")),
+            403,
+        ),
+        (
+            "Origin null",
+            server.headers_but("Origin", Some("null")),
+            403,
+        ),
+        (
+            "another port's page",
+            server.headers_but("Origin", Some("http://127.0.0.1:1")),
+            403,
+        ),
+        (
+            "cross-site",
+            server.headers_but("Sec-Fetch-Site", Some("cross-site")),
+            403,
+        ),
+        (
+            "text/plain",
+            server.headers_but("Content-Type", Some("text/plain")),
+            415,
+        ),
+        (
+            "a form",
+            server.headers_but("Content-Type", Some("application/x-www-form-urlencoded")),
+            415,
+        ),
+        ("no token", server.headers_but("X-Flatray-Token", None), 403),
+        (
+            "a wrong token",
+            server.headers_but("X-Flatray-Token", Some("00112233445566778899aabbccddeeff")),
+            403,
+        ),
+    ];
+    for (case, headers, status) in &cases {
+        for (path, body) in [
+            ("/api/edit", MOVE),
+            ("/api/undo", "{}"),
+            ("/api/save", "{}"),
+            ("/api/resolve", r#"{"keep": "mine"}"#),
+        ] {
+            let a = server.send("POST", path, headers, body.as_bytes());
+            assert_eq!(a.status, *status, "{case} {path}: {}", a.body);
+            assert!(a.body.contains("message"), "{case} {path}: {}", a.body);
+        }
+    }
+    // The cross-site form post of the attack, exactly: text/plain, a
+    // foreign Origin, no token.
+    let attack = request(
+        "POST",
+        "/api/edit",
+        &[
+            ("Host", &server.host()),
+            ("Origin", "http://attacker.example"),
+            ("Content-Type", "text/plain"),
+        ],
+        MOVE.as_bytes(),
+    );
+    assert_ne!(
+        raw(&server.url, &attack, Duration::from_secs(20)).status,
+        200
+    );
+    let items = server.json("/api/items");
+    assert_eq!(items["version"], version, "nothing changed");
+    assert_eq!(items["lights"][0]["at"], serde_json::json!([30.0, 45.0]));
+    assert_eq!(items["undo"], 0, "the undo was not taken either");
+    assert_eq!(std::fs::read_to_string(&server.scene).unwrap(), ROOM);
+    assert!(!server.dir.join("room.ron.bak").exists(), "no save ran");
+    // The page may not be framed by another site.
+    let page = ureq::get(&format!("{}/", server.url)).call().unwrap();
+    assert_eq!(page.headers().get("x-frame-options").unwrap(), "DENY");
+}
+
+#[test]
+fn bodies_are_bounded_on_every_route_and_a_stalled_client_is_let_go() {
+    let server = Server::start("bodies", ROOM);
+    assert_eq!(server.post("/api/edit", MOVE).0, 200);
+    // A declared length past the limit: refused at once, nothing read.
+    let mut headers = server.page_headers();
+    headers.push(("Content-Length".into(), "20000".into()));
+    let a = server.send("POST", "/api/edit", &headers, b"");
+    assert_eq!(a.status, 413, "{}", a.body);
+    assert!(a.after < Duration::from_secs(2), "at once: {:?}", a.after);
+    // A 1 MiB body on every route that changes something.
+    let large = vec![b' '; 1 << 20];
+    for path in ["/api/edit", "/api/undo", "/api/save", "/api/resolve"] {
+        let a = server.send("POST", path, &server.page_headers(), &large);
+        assert_eq!(a.status, 413, "{path}: {}", a.body);
+    }
+    // The same without a declared length (chunked): still refused.
+    let mut chunked = format!(
+        "POST /api/undo HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nX-Flatray-Token: {}\r\nTransfer-Encoding: chunked\r\nConnection: close\r\n\r\n",
+        server.host(),
+        server.token
+    )
+    .into_bytes();
+    for _ in 0..64 {
+        chunked.extend_from_slice(b"4000\r\n");
+        chunked.extend_from_slice(&[b' '; 0x4000]);
+        chunked.extend_from_slice(b"\r\n");
+    }
+    chunked.extend_from_slice(b"0\r\n\r\n");
+    assert_eq!(
+        raw(&server.url, &chunked, Duration::from_secs(20)).status,
+        413
+    );
+    let items = server.json("/api/items");
+    assert_eq!(items["undo"], 1, "no undo was done");
+    assert_eq!(items["lights"][0]["at"], serde_json::json!([90.0, 45.0]));
+    assert_eq!(
+        std::fs::read_to_string(&server.scene).unwrap(),
+        ROOM,
+        "no save"
+    );
+
+    // Headers that never end, and a body that never comes: both let go
+    // within seconds, and the server answers others meanwhile.
+    let url = server.url.clone();
+    let host = server.host();
+    let stalled_headers = std::thread::spawn({
+        let (url, host) = (url.clone(), host.clone());
+        move || {
+            raw(
+                &url,
+                format!("GET /api/items HTTP/1.1\r\nHost: {host}\r\n").as_bytes(),
+                Duration::from_secs(30),
+            )
+        }
+    });
+    let mut headers = server.page_headers();
+    headers.push(("Content-Length".into(), "100".into()));
+    let h: Vec<(&str, &str)> = headers
+        .iter()
+        .map(|(k, v)| (k.as_str(), v.as_str()))
+        .collect();
+    let short = request("POST", "/api/edit", &h, b"{\"op\"");
+    let stalled_body = std::thread::spawn(move || raw(&url, &short, Duration::from_secs(30)));
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(server.json("/api/items")["undo"], 1, "others are answered");
+    let a = stalled_headers.join().unwrap();
+    assert!(
+        a.closed && a.after < Duration::from_secs(15),
+        "headers: {:?} {}",
+        a.after,
+        a.body
+    );
+    let b = stalled_body.join().unwrap();
+    assert_eq!(b.status, 408, "{}", b.body);
+    assert!(b.after < Duration::from_secs(15), "body: {:?}", b.after);
+}
+
+/// A server that answers within 10 s, or the test fails.
+fn answers(server: &Server) -> serde_json::Value {
+    let agent: ureq::Agent = ureq::Agent::config_builder()
+        .timeout_global(Some(Duration::from_secs(10)))
+        .build()
+        .into();
+    let mut r = agent
+        .get(&format!("{}/api/items", server.url))
+        .call()
+        .expect("the server answers");
+    serde_json::from_str(&r.body_mut().read_to_string().unwrap()).unwrap()
+}
+
+#[test]
+fn a_pipe_at_the_scene_path_blocks_nothing() {
+    let server = Server::start("fifo", ROOM);
+    assert_eq!(server.post("/api/edit", MOVE).0, 200);
+    std::fs::remove_file(&server.scene).unwrap();
+    let made = Command::new("mkfifo").arg(&server.scene).status().unwrap();
+    assert!(made.success());
+    // The watcher sees it, says so, and reads nothing.
+    let started = Instant::now();
+    loop {
+        let items = answers(&server);
+        if items["error"]["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("not a regular file"))
+        {
+            break;
+        }
+        assert!(started.elapsed() < Duration::from_secs(20), "{items}");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let (code, reply) = server.post("/api/save", "{}");
+    assert_eq!(code, 403, "{reply}");
+    assert!(
+        reply["message"]
+            .as_str()
+            .unwrap()
+            .contains("not a regular file"),
+        "{reply}"
+    );
+    // Every route still answers.
+    assert_eq!(server.post("/api/undo", "{}").0, 200);
+    assert_eq!(
+        answers(&server)["lights"][0]["at"],
+        serde_json::json!([30.0, 45.0])
+    );
+    assert_eq!(server.get("/api/scene.ron").0, 200);
+    let _ = std::fs::remove_file(&server.scene);
+}
+
+#[test]
+fn a_link_is_followed_once_and_a_link_put_in_the_files_place_never() {
+    let server = Server::start("link", ROOM);
+    // The scene served through a link: saves go to the file it points
+    // at, and the link stays.
+    let real = server.dir.join("real.ron");
+    std::fs::write(&real, ROOM).unwrap();
+    let link = server.dir.join("link.ron");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    let through = common::serve(&link);
+    let headers = |agent: &ureq::Agent, path: &str, body: &str| {
+        agent
+            .post(&format!("{}{path}", through.url))
+            .content_type("application/json")
+            .header("x-flatray-token", &through.token)
+            .send(body)
+            .map(|r| r.status().as_u16())
+            .unwrap_or(0)
+    };
+    let agent: ureq::Agent = ureq::Agent::config_builder().build().into();
+    assert_eq!(headers(&agent, "/api/edit", MOVE), 200);
+    assert_eq!(headers(&agent, "/api/save", "{}"), 200);
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert!(std::fs::read_to_string(&real).unwrap().contains("(90, 45)"));
+    assert_eq!(
+        std::fs::read_to_string(server.dir.join("real.ron.bak")).unwrap(),
+        ROOM
+    );
+    drop(through);
+
+    // A link to another file put where the scene was: not read, not
+    // replaced, and the other file's text never reaches a page.
+    let secret = server.dir.join("secret.txt");
+    std::fs::write(&secret, "hunter2 is the password").unwrap();
+    std::fs::remove_file(&server.scene).unwrap();
+    std::os::unix::fs::symlink(&secret, &server.scene).unwrap();
+    let started = Instant::now();
+    let items = loop {
+        let items = answers(&server);
+        if !items["error"].is_null() {
+            break items;
+        }
+        assert!(started.elapsed() < Duration::from_secs(20), "{items}");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert!(
+        items["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("symbolic link"),
+        "{items}"
+    );
+    assert!(!items.to_string().contains("hunter2"), "{items}");
+    assert_eq!(server.post("/api/edit", MOVE).0, 200);
+    let (code, reply) = server.post("/api/save", "{}");
+    assert_eq!(code, 403, "{reply}");
+    assert_eq!(
+        std::fs::read_to_string(&secret).unwrap(),
+        "hunter2 is the password"
+    );
+    assert!(
+        std::fs::symlink_metadata(&server.scene)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+}
+
+/// Waits for the watcher to see the file (it looks every 250 ms).
+fn settle() {
+    std::thread::sleep(Duration::from_millis(800));
+}
+
+#[test]
+fn an_edit_in_the_page_outlives_a_change_on_disk_and_the_user_chooses() {
+    let server = Server::start("conflict", ROOM);
+    let editor = ROOM.replace("intensity: 20", "intensity: 35");
+    // Keep mine: the page's edit stays; the file's change is kept in the
+    // backup when the page saves.
+    assert_eq!(server.post("/api/edit", MOVE).0, 200);
+    std::fs::write(&server.scene, &editor).unwrap();
+    let items = server.wait_for("the conflict", |i| !i["conflict"].is_null());
+    assert_eq!(
+        items["lights"][0]["at"],
+        serde_json::json!([90.0, 45.0]),
+        "the page's edit stays"
+    );
+    assert_eq!(items["conflict"]["file"], editor.as_str());
+    assert_eq!(items["unsaved"], true);
+    assert_eq!(
+        std::fs::read_to_string(&server.scene).unwrap(),
+        editor,
+        "the file's stays too"
+    );
+    let (code, reply) = server.post("/api/save", "{}");
+    assert_eq!(code, 409, "a save would lose the file's change: {reply}");
+    assert_eq!(reply["changed"], true);
+    assert_eq!(std::fs::read_to_string(&server.scene).unwrap(), editor);
+    assert_eq!(server.post("/api/resolve", r#"{"keep": "mine"}"#).0, 200);
+    let items = server.json("/api/items");
+    assert!(items["conflict"].is_null());
+    assert_eq!(items["unsaved"], true);
+    assert_eq!(server.post("/api/save", "{}").0, 200);
+    let saved = std::fs::read_to_string(&server.scene).unwrap();
+    assert!(saved.contains("(90, 45), intensity: 20"), "{saved}");
+    assert_eq!(
+        std::fs::read_to_string(server.dir.join("room.ron.bak")).unwrap(),
+        editor
+    );
+    assert_eq!(
+        server.post("/api/resolve", r#"{"keep": "mine"}"#).0,
+        409,
+        "nothing to choose"
+    );
+
+    // Take the file's: the file's text is rendered; undo brings the
+    // page's edit back.
+    settle();
+    let page_edit = r#"{"op": "light_intensity", "index": 0, "value": 7}"#;
+    assert_eq!(server.post("/api/edit", page_edit).0, 200);
+    let editor2 = saved.replace("(90, 45)", "(20, 20)");
+    std::fs::write(&server.scene, &editor2).unwrap();
+    server.wait_for("the second conflict", |i| !i["conflict"].is_null());
+    assert_eq!(server.post("/api/resolve", r#"{"keep": "file"}"#).0, 200);
+    let items = server.json("/api/items");
+    assert_eq!(items["lights"][0]["at"], serde_json::json!([20.0, 20.0]));
+    assert_eq!(items["lights"][0]["intensity"], 20.0);
+    assert_eq!(items["unsaved"], false);
+    assert_eq!(server.post("/api/undo", "{}").0, 200);
+    let items = server.json("/api/items");
+    assert_eq!(
+        items["lights"][0]["intensity"], 7.0,
+        "the page's edit, back"
+    );
+    assert_eq!(std::fs::read_to_string(&server.scene).unwrap(), editor2);
+}
+
+#[test]
+fn save_refuses_a_file_changed_since_it_was_loaded_and_a_read_only_one() {
+    let server = Server::start("stale", ROOM);
+    // Changed on disk, then saved at once (before the watcher may look):
+    // refused, then written when told to overwrite, the editor's text in
+    // the backup.
+    let editor = ROOM.replace("intensity: 20", "intensity: 35");
+    assert_eq!(server.post("/api/edit", MOVE).0, 200);
+    std::fs::write(&server.scene, &editor).unwrap();
+    let (code, reply) = server.post("/api/save", "{}");
+    assert_eq!(code, 409, "{reply}");
+    assert!(
+        reply["message"]
+            .as_str()
+            .unwrap()
+            .contains("changed on disk"),
+        "{reply}"
+    );
+    assert_eq!(std::fs::read_to_string(&server.scene).unwrap(), editor);
+    let (code, reply) = server.post("/api/save", r#"{"overwrite": true}"#);
+    assert_eq!(code, 200, "{reply}");
+    assert!(
+        std::fs::read_to_string(&server.scene)
+            .unwrap()
+            .contains("(90, 45)")
+    );
+    assert_eq!(
+        std::fs::read_to_string(server.dir.join("room.ron.bak")).unwrap(),
+        editor
+    );
+    // A second save keeps the first backup a generation down.
+    settle();
+    assert_eq!(
+        server
+            .post(
+                "/api/edit",
+                r#"{"op": "light_intensity", "index": 0, "value": 9}"#
+            )
+            .0,
+        200
+    );
+    let before = std::fs::read_to_string(&server.scene).unwrap();
+    assert_eq!(server.post("/api/save", "{}").0, 200);
+    assert_eq!(
+        std::fs::read_to_string(server.dir.join("room.ron.bak")).unwrap(),
+        before
+    );
+    assert_eq!(
+        std::fs::read_to_string(server.dir.join("room.ron.bak.1")).unwrap(),
+        editor
+    );
+    // Read-only: refused, the file untouched (even for root, who could).
+    settle();
+    let mut permissions = std::fs::metadata(&server.scene).unwrap().permissions();
+    permissions.set_readonly(true);
+    std::fs::set_permissions(&server.scene, permissions).unwrap();
+    let kept = std::fs::read_to_string(&server.scene).unwrap();
+    assert_eq!(
+        server
+            .post("/api/edit", MOVE.replace("90", "80").as_str())
+            .0,
+        200
+    );
+    let (code, reply) = server.post("/api/save", r#"{"overwrite": true}"#);
+    assert_eq!(code, 403, "{reply}");
+    assert!(
+        reply["message"].as_str().unwrap().contains("read-only"),
+        "{reply}"
+    );
+    assert_eq!(std::fs::read_to_string(&server.scene).unwrap(), kept);
+    let mut permissions = std::fs::metadata(&server.scene).unwrap().permissions();
+    #[allow(clippy::permissions_set_readonly_false)]
+    permissions.set_readonly(false);
+    std::fs::set_permissions(&server.scene, permissions).unwrap();
 }

@@ -9,7 +9,17 @@
 //! worker thread renders (`render.rs`): a quick small frame first, then
 //! the full size pass after pass, each published to every open page as
 //! it is done (server-sent events).
+//!
+//! Every request passes `guard` first (only this server's own page may
+//! change anything), and the file is read and written through `disk`
+//! (regular files only, never a read-only one, backups kept). Edits made
+//! in the page are never replaced without the user's word: a change on
+//! disk while the page has unsaved edits is held as a conflict that the
+//! page shows, and a save refuses to overwrite a file that changed since
+//! it was loaded unless told to.
 
+mod disk;
+mod guard;
 mod render;
 
 use std::net::{IpAddr, SocketAddr};
@@ -25,17 +35,18 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
 use flatray_io::edit::Edit;
 use flatray_io::{Loaded, SceneError};
+use guard::Guard;
 use tokio_stream::StreamExt;
 use tokio_stream::wrappers::WatchStream;
 
 use crate::{Failure, stamp};
 use render::{Frame, Job, Worker};
 
-/// The page, served as it is.
+/// The page, served with its token in place of [`TOKEN_SLOT`].
 const PAGE: &str = include_str!("page.html");
 
-/// The largest request body: an edit is a few dozen bytes.
-const MAX_BODY: usize = 16 * 1024;
+/// Where the page holds the token it sends with every change.
+const TOKEN_SLOT: &str = "{{TOKEN}}";
 
 /// How often the scene file is looked at for changes made elsewhere.
 const WATCH_EVERY: Duration = Duration::from_millis(250);
@@ -58,8 +69,16 @@ pub(crate) struct ServeArgs {
 
 /// What every request and the watcher share.
 struct Shared {
+    /// The scene file as the user named it, for messages.
+    shown: PathBuf,
+    /// The file itself, read, watched and saved (a symbolic link resolved
+    /// once, when the server starts, so that a save replaces the file it
+    /// points at, and a link put in its place later is never followed).
     path: PathBuf,
+    /// The folder that the scene's own paths (its floor image) are taken
+    /// from.
     base: PathBuf,
+    guard: Arc<Guard>,
     state: Mutex<Scene>,
     worker: Worker,
 }
@@ -70,10 +89,14 @@ struct Scene {
     text: String,
     /// Texts before each edit, for undo.
     undo: Vec<String>,
-    /// The text last read from or written to the file, and the file's
-    /// modification time and length then.
+    /// The file's identity: the text the page's edits start from (the
+    /// file's as last loaded, when it loaded, or as saved), and the file's
+    /// modification time and length when last looked at.
     on_disk: String,
     stamp: Option<(SystemTime, u64)>,
+    /// The file's text when it changed on disk while the page had edits
+    /// not saved: shown on the page, applied only when the user says so.
+    conflict: Option<String>,
     /// The last good scene and its items, as JSON.
     items: serde_json::Value,
     /// What is wrong with the file on disk, when a change made there does
@@ -84,26 +107,11 @@ struct Scene {
 }
 
 pub(crate) fn serve(args: ServeArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
-    let path = args.scene.clone();
-    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let (text, loaded) = read_scene(&path).map_err(|e| Failure::usage(e.message))?;
+    let shown = args.scene.clone();
+    let base = shown.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let path = std::fs::canonicalize(&shown).unwrap_or_else(|_| shown.clone());
+    let (text, loaded) = read_scene(&path, &shown).map_err(|e| Failure::usage(e.message))?;
     let items = items_json(&text, &loaded)?;
-    let worker = Worker::start();
-    let shared = Arc::new(Shared {
-        path: path.clone(),
-        base,
-        state: Mutex::new(Scene {
-            on_disk: text.clone(),
-            stamp: stamp(&path),
-            text,
-            undo: Vec::new(),
-            items,
-            error: None,
-            version: 1,
-        }),
-        worker,
-    });
-    shared.worker.submit(Job::new(1, loaded));
 
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -117,15 +125,37 @@ pub(crate) fn serve(args: ServeArgs, out: &mut dyn std::io::Write) -> Result<(),
     let bound = listener
         .local_addr()
         .map_err(|e| Failure::other(format!("cannot listen on {address}: {e}")))?;
+    let guard = Arc::new(Guard::new(bound.port()).map_err(Failure::other)?);
+
+    let worker = Worker::start();
+    let shared = Arc::new(Shared {
+        shown: shown.clone(),
+        path: path.clone(),
+        base,
+        guard: Arc::clone(&guard),
+        state: Mutex::new(Scene {
+            on_disk: text.clone(),
+            stamp: stamp(&path),
+            text,
+            undo: Vec::new(),
+            conflict: None,
+            items,
+            error: None,
+            version: 1,
+        }),
+        worker,
+    });
+    shared.worker.submit(Job::new(1, loaded));
+
     let url = format!("http://{bound}/");
     if !args.host.is_loopback() {
         let _ = writeln!(
             out,
-            "WARNING: listening on {bound}, not on loopback: anyone who can reach this machine can see and edit {} and save it",
-            path.display()
+            "WARNING: listening on {bound}, not on loopback: anyone who can reach this machine can see {} and, with the page, edit it and save it",
+            shown.display()
         );
     }
-    let _ = writeln!(out, "serving {} at {url} (Ctrl-C to stop)", path.display());
+    let _ = writeln!(out, "serving {} at {url} (Ctrl-C to stop)", shown.display());
     let _ = out.flush();
     if args.open {
         open_browser(&url);
@@ -142,38 +172,33 @@ pub(crate) fn serve(args: ServeArgs, out: &mut dyn std::io::Write) -> Result<(),
         .route("/api/edit", post(edit))
         .route("/api/undo", post(undo))
         .route("/api/save", post(save))
+        .route("/api/resolve", post(resolve))
         .route("/api/export.png", get(export_png))
         .route("/api/export.exr", get(export_exr))
         .route("/api/noise.txt", get(export_noise))
         .route("/api/scene.ron", get(export_scene))
-        .layer(DefaultBodyLimit::max(MAX_BODY))
+        .layer(DefaultBodyLimit::max(guard::MAX_BODY))
+        .layer(axum::middleware::from_fn_with_state(guard, guard::check))
         .with_state(shared);
-    runtime
-        .block_on(async { axum::serve(listener, app).await })
-        .map_err(|e| Failure::other(format!("the server stopped: {e}")))
+    runtime.block_on(guard::run(listener, app));
+    Ok(())
 }
 
-/// A scene file's text and what it loads as.
-fn read_scene(path: &Path) -> Result<(String, Loaded), Refusal> {
-    let bytes = flatray_io::read_within(path, flatray_io::MAX_INPUT_BYTES).map_err(|e| {
-        Refusal::plain(format!(
-            "{}: cannot read the scene file: {e}",
-            path.display()
-        ))
-    })?;
-    let text = String::from_utf8(bytes).map_err(|_| {
-        Refusal::plain(format!(
-            "{}: the scene file is not UTF-8 text",
-            path.display()
-        ))
-    })?;
-    let loaded = load_text(&text, path)?;
+/// The text of the scene file at `path` (named `shown` in messages) and
+/// what it loads as.
+fn read_scene(path: &Path, shown: &Path) -> Result<(String, Loaded), Refusal> {
+    let text = disk::read_text(path)
+        .map_err(|m| {
+            Refusal::plain(m.replace(&path.display().to_string(), &shown.display().to_string()))
+        })?
+        .ok_or_else(|| Refusal::plain(format!("{}: no such file", shown.display())))?;
+    let base = shown.parent().unwrap_or(Path::new("."));
+    let loaded = flatray_io::parse(&text, shown, base).map_err(|e| Refusal::of(&e))?;
     Ok((text, loaded))
 }
 
-fn load_text(text: &str, path: &Path) -> Result<Loaded, Refusal> {
-    let base = path.parent().unwrap_or(Path::new("."));
-    flatray_io::parse(text, path, base).map_err(|e| Refusal::of(&e))
+fn load_text(text: &str, shared: &Shared) -> Result<Loaded, Refusal> {
+    flatray_io::parse(text, &shared.shown, &shared.base).map_err(|e| Refusal::of(&e))
 }
 
 fn items_json(text: &str, loaded: &Loaded) -> Result<serde_json::Value, Failure> {
@@ -233,44 +258,93 @@ fn adopt(shared: &Shared, scene: &mut Scene, text: String, loaded: Loaded) -> Re
     Ok(())
 }
 
-/// Looks at the scene file every [`WATCH_EVERY`]: a change made elsewhere
-/// (an editor's save) is loaded and rendered, replacing the edits not
-/// saved (they stay undoable); a change that does not load is shown on
-/// the page, and the last good scene keeps rendering.
+/// Tells the pages that the state changed without a new render.
+fn announce(shared: &Shared, scene: &mut Scene) {
+    scene.version += 1;
+    shared.worker.announce();
+}
+
+/// Looks at the scene file every [`WATCH_EVERY`]. A change made elsewhere
+/// (an editor's save) is loaded and rendered when the page has no edits
+/// of its own to lose; when it has, the change is held as a conflict for
+/// the user to settle on the page. A change that does not load is shown
+/// on the page, and the last good scene keeps rendering. The file is read
+/// with no lock held.
 fn watch(shared: &Shared) {
     loop {
         std::thread::sleep(WATCH_EVERY);
         let now = stamp(&shared.path);
+        if now == lock(shared).stamp {
+            continue;
+        }
+        let read = disk::read_text(&shared.path);
         let mut scene = lock(shared);
-        if now == scene.stamp {
-            continue;
-        }
         scene.stamp = now;
-        let Ok(bytes) = flatray_io::read_within(&shared.path, flatray_io::MAX_INPUT_BYTES) else {
-            continue;
+        let text = match read {
+            Ok(Some(text)) => text,
+            // Removed, or being replaced: the next look sees the new file.
+            Ok(None) => continue,
+            Err(message) => {
+                scene.error = Some(Refusal::plain(message).json());
+                announce(shared, &mut scene);
+                continue;
+            }
         };
-        let text = String::from_utf8_lossy(&bytes).into_owned();
-        if text == scene.on_disk {
-            continue;
+        take_from_disk(shared, &mut scene, text);
+    }
+}
+
+/// What the watcher does with the file's new `text`.
+fn take_from_disk(shared: &Shared, scene: &mut Scene, text: String) {
+    let unsaved = scene.text != scene.on_disk;
+    if text == scene.on_disk {
+        // Back to what the page started from: nothing to settle.
+        if scene.conflict.take().is_some() || scene.error.take().is_some() {
+            announce(shared, scene);
         }
-        scene.on_disk = text.clone();
-        match load_text(&text, &shared.path) {
-            Ok(loaded) => {
-                let before = std::mem::take(&mut scene.text);
-                scene.undo.push(before);
-                let _ = adopt(shared, &mut scene, text, loaded);
-            }
-            Err(refusal) => {
-                scene.error = Some(refusal.json());
-                scene.version += 1;
-                shared.worker.note_error(scene.version);
-            }
+        return;
+    }
+    if text == scene.text {
+        // The file now holds just what the page shows.
+        scene.on_disk = text;
+        scene.conflict = None;
+        announce(shared, scene);
+        return;
+    }
+    if unsaved {
+        scene.conflict = Some(text);
+        announce(shared, scene);
+        return;
+    }
+    // A text that does not load is shown as an error, and not taken as
+    // what the page follows: the last good scene stays, with no edits of
+    // the page's own, and the fixed file is taken when it comes.
+    match load_text(&text, shared) {
+        Ok(loaded) => {
+            scene.on_disk = text.clone();
+            let before = std::mem::take(&mut scene.text);
+            scene.undo.push(before);
+            let _ = adopt(shared, scene, text, loaded);
+        }
+        Err(refusal) => {
+            scene.error = Some(refusal.json());
+            announce(shared, scene);
         }
     }
 }
 
-async fn page() -> Html<&'static str> {
-    Html(PAGE)
+/// The page, with this server's token in it. It may not be shown inside
+/// another site's frame (where a click could be stolen).
+async fn page(State(shared): State<Arc<Shared>>) -> Response {
+    (
+        [
+            (header::CACHE_CONTROL, "no-store"),
+            (header::X_FRAME_OPTIONS, "DENY"),
+            (header::CONTENT_SECURITY_POLICY, "frame-ancestors 'none'"),
+        ],
+        Html(PAGE.replace(TOKEN_SLOT, shared.guard.token())),
+    )
+        .into_response()
 }
 
 /// Server-sent events: one per published frame, with what the page
@@ -334,6 +408,10 @@ async fn scene_items(State(shared): State<Arc<Shared>>) -> Response {
     value["error"] = scene.error.clone().unwrap_or_default();
     value["undo"] = scene.undo.len().into();
     value["unsaved"] = (scene.text != scene.on_disk).into();
+    value["conflict"] = match &scene.conflict {
+        Some(file) => serde_json::json!({"file": file, "mine": scene.text}),
+        None => serde_json::Value::Null,
+    };
     axum::Json(value).into_response()
 }
 
@@ -351,7 +429,7 @@ async fn edit(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> Res
     };
     let mut scene = lock(&shared);
     let (edited, loaded) =
-        match flatray_io::edit::apply(&scene.text, &edit, &shared.path, &shared.base) {
+        match flatray_io::edit::apply(&scene.text, &edit, &shared.shown, &shared.base) {
             Ok(done) => done,
             Err(message) => {
                 return refused(
@@ -381,7 +459,7 @@ async fn undo(State(shared): State<Arc<Shared>>) -> Response {
             serde_json::json!({"message": "nothing to undo"}),
         );
     };
-    match load_text(&text, &shared.path) {
+    match load_text(&text, &shared) {
         Ok(loaded) => match adopt(&shared, &mut scene, text, loaded) {
             Ok(()) => axum::Json(serde_json::json!({"version": scene.version})).into_response(),
             Err(f) => refused(
@@ -393,43 +471,178 @@ async fn undo(State(shared): State<Arc<Shared>>) -> Response {
     }
 }
 
+/// What a save may be told.
+#[derive(Debug, Default, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SaveRequest {
+    /// Replace the file even though it changed on disk since it was
+    /// loaded.
+    #[serde(default)]
+    overwrite: bool,
+}
+
 /// Writes the scene being rendered to its file, atomically, the file's
-/// previous text kept beside it as `NAME.bak`.
-async fn save(State(shared): State<Arc<Shared>>) -> Response {
-    let mut scene = lock(&shared);
-    let backup = backup_path(&shared.path);
-    let previous = std::fs::read(&shared.path).ok();
-    if let Some(previous) = &previous
-        && let Err(e) = flatray_io::write_bytes(&backup, previous)
-    {
+/// previous texts kept beside it (`disk::keep_backup`). Refused, with
+/// nothing written, when the file is read-only or not a regular file, and
+/// (409) when it changed on disk since it was loaded and the request does
+/// not say `overwrite`.
+async fn save(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> Response {
+    let request: SaveRequest = if body.iter().all(u8::is_ascii_whitespace) {
+        SaveRequest::default()
+    } else {
+        match serde_json::from_slice(&body) {
+            Ok(request) => request,
+            Err(e) => {
+                return refused(
+                    StatusCode::BAD_REQUEST,
+                    serde_json::json!({"message": format!("not a save: {e}")}),
+                );
+            }
+        }
+    };
+    let shown = |m: String| {
+        m.replace(
+            &shared.path.display().to_string(),
+            &shared.shown.display().to_string(),
+        )
+    };
+    if let Err(message) = disk::check_writable(&shared.path) {
         return refused(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            serde_json::json!({"message": e.to_string()}),
+            StatusCode::FORBIDDEN,
+            serde_json::json!({"message": shown(message)}),
         );
     }
+    // Read with no lock held: the checks above do not rule out a file
+    // replaced in between, and a read that waits must not stop the rest.
+    let current = match disk::read_text(&shared.path) {
+        Ok(current) => current,
+        Err(message) => {
+            return refused(
+                StatusCode::FORBIDDEN,
+                serde_json::json!({"message": shown(message)}),
+            );
+        }
+    };
+    let mut scene = lock(&shared);
+    if let Some(current) = &current
+        && *current != scene.on_disk
+        && *current != scene.text
+        && !request.overwrite
+    {
+        if scene.conflict.as_ref() != Some(current) {
+            scene.conflict = Some(current.clone());
+            announce(&shared, &mut scene);
+        }
+        return refused(
+            StatusCode::CONFLICT,
+            serde_json::json!({
+                "message": format!(
+                    "{} changed on disk since it was loaded: saving would lose that change. Keep yours or take the file's, or save with overwrite",
+                    shared.shown.display()
+                ),
+                "changed": true,
+            }),
+        );
+    }
+    let backup = match &current {
+        Some(previous) => match disk::keep_backup(&shared.path, previous) {
+            Ok(path) => Some(path),
+            Err(message) => {
+                return refused(
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    serde_json::json!({"message": shown(message)}),
+                );
+            }
+        },
+        None => None,
+    };
     if let Err(e) = flatray_io::write_text(&shared.path, &scene.text) {
         return refused(
             StatusCode::INTERNAL_SERVER_ERROR,
-            serde_json::json!({"message": e.to_string()}),
+            serde_json::json!({"message": shown(e.to_string())}),
         );
     }
     scene.on_disk = scene.text.clone();
     scene.stamp = stamp(&shared.path);
+    if scene.conflict.take().is_some() {
+        announce(&shared, &mut scene);
+    }
     axum::Json(serde_json::json!({
-        "saved": shared.path.display().to_string(),
-        "backup": previous.map(|_| backup.display().to_string()),
+        "saved": shared.shown.display().to_string(),
+        "backup": backup.map(|b| b.display().to_string()),
     }))
     .into_response()
 }
 
-/// `scene.ron` -> `scene.ron.bak`.
-fn backup_path(path: &Path) -> PathBuf {
-    let mut name = path
-        .file_name()
-        .map(|n| n.to_os_string())
-        .unwrap_or_default();
-    name.push(".bak");
-    path.with_file_name(name)
+/// Which side of a conflict the user keeps.
+#[derive(Debug, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum Side {
+    /// The page's edits: they stay, unsaved, and a save may replace the
+    /// file's change.
+    Mine,
+    /// The file's text: it is loaded and rendered; the page's edits can
+    /// be had back with undo.
+    File,
+}
+
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ResolveRequest {
+    keep: Side,
+}
+
+/// Settles a conflict between the page's unsaved edits and a change made
+/// to the file on disk.
+async fn resolve(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> Response {
+    let request: ResolveRequest = match serde_json::from_slice(&body) {
+        Ok(request) => request,
+        Err(e) => {
+            return refused(
+                StatusCode::BAD_REQUEST,
+                serde_json::json!({"message": format!("not a choice (expected {{\"keep\": \"mine\"}} or {{\"keep\": \"file\"}}): {e}")}),
+            );
+        }
+    };
+    let mut scene = lock(&shared);
+    let Some(file) = scene.conflict.clone() else {
+        return refused(
+            StatusCode::CONFLICT,
+            serde_json::json!({"message": "the file has not changed on disk: there is nothing to choose"}),
+        );
+    };
+    match request.keep {
+        Side::Mine => {
+            scene.on_disk = file;
+            scene.conflict = None;
+            announce(&shared, &mut scene);
+        }
+        Side::File => {
+            let loaded = match load_text(&file, &shared) {
+                Ok(loaded) => loaded,
+                Err(r) => {
+                    let mut body = r.json();
+                    body["message"] = format!(
+                        "the file's text does not load, so it cannot be taken (fix it in your editor, or keep yours): {}",
+                        r.message
+                    )
+                    .into();
+                    return refused(StatusCode::UNPROCESSABLE_ENTITY, body);
+                }
+            };
+            let before = scene.text.clone();
+            if let Err(f) = adopt(&shared, &mut scene, file.clone(), loaded) {
+                return refused(
+                    StatusCode::UNPROCESSABLE_ENTITY,
+                    serde_json::json!({"message": f.message}),
+                );
+            }
+            scene.undo.push(before);
+            scene.on_disk = file;
+            scene.conflict = None;
+        }
+    }
+    axum::Json(serde_json::json!({"version": scene.version})).into_response()
 }
 
 async fn export_png(State(shared): State<Arc<Shared>>) -> Response {

@@ -99,9 +99,9 @@ impl Worker {
     }
 
     /// Tells the pages that the state changed without a new frame (a
-    /// scene on disk that does not load): they are sent the last frame
-    /// again, with the state's news.
-    pub(crate) fn note_error(&self, _version: u64) {
+    /// scene on disk that does not load, a conflict with the file): they
+    /// are sent the last frame again, with the state's news.
+    pub(crate) fn announce(&self) {
         self.frames.send_modify(|frame| {
             let mut next = Frame::clone(frame);
             next.number += 1;

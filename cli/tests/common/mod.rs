@@ -9,6 +9,10 @@ pub struct Serving {
     child: Child,
     /// `http://127.0.0.1:PORT`, without a trailing slash.
     pub url: String,
+    /// The token the page carries, which every change must send (the
+    /// browser's tests let the page send it).
+    #[allow(dead_code)]
+    pub token: String,
 }
 
 /// Starts `flatray serve SCENE --port 0` and reads the address it prints.
@@ -30,7 +34,19 @@ pub fn serve(scene: &Path) -> Serving {
         .unwrap_or_else(|| panic!("no address in {first:?}"))
         .trim_end_matches('/')
         .to_string();
-    Serving { child, url }
+    let page = ureq::get(&format!("{url}/"))
+        .call()
+        .unwrap()
+        .body_mut()
+        .read_to_string()
+        .unwrap();
+    let token = page
+        .split("name=\"flatray-token\" content=\"")
+        .nth(1)
+        .and_then(|rest| rest.split('"').next())
+        .unwrap_or_else(|| panic!("no token in the page"))
+        .to_string();
+    Serving { child, url, token }
 }
 
 impl Drop for Serving {
