@@ -136,7 +136,7 @@ The page: docs/serve.md.")]
     /// TMX or JSON, a wall-mask image) into a commented scene file.
     #[command(after_help = "Examples:
   flatray import plan.svg -o plan.ron                 an Inkscape drawing (docs/import.md)
-  flatray import plan.svg --scale 3.78 -o plan.ron    millimetres to canvas pixels
+  flatray import plan.svg --scale 0.5 -o plan.ron     half size: 2 SVG units to a canvas pixel
   flatray import level.tmx -o level.ron               a Tiled map
   flatray import walls.png --tolerance 2 -o w.ron     a wall mask, outlines simplified")]
     Import(ImportArgs),
@@ -233,8 +233,8 @@ struct RenderArgs {
     /// Default: the scene's name with .png, in the current folder.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Samples per pixel (overrides the scene; default 16).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=(1 << 20)), conflicts_with_all = ["target_error", "time"])]
+    /// Samples per pixel (overrides the scene's `samples`; default 16).
+    #[arg(long, visible_alias = "samples", value_parser = clap::value_parser!(u32).range(1..=(1 << 20)), conflicts_with_all = ["target_error", "time"])]
     spp: Option<u32>,
     /// Most diffuse reflections off walls between a light and the floor
     /// (overrides the scene; default 1). Mirrors, glass and panes do not
@@ -563,13 +563,16 @@ fn manual(subcommand: Option<&str>, out: &mut dyn Write) -> Result<(), Failure> 
                     names.join(", ")
                 )));
             };
+            // The page is `flatray-render(1)`, as man pages of
+            // subcommands are named; its synopsis is the command as typed.
             found
                 .clone()
-                .name(format!("flatray-{name}"))
-                .version(env!("CARGO_PKG_VERSION"))
+                .display_name(format!("flatray-{name}"))
+                .bin_name(format!("flatray {name}"))
         }
     };
-    match clap_mangen::Man::new(page).render(out) {
+    let source = format!("flatray {}", env!("CARGO_PKG_VERSION"));
+    match clap_mangen::Man::new(page).source(source).render(out) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
             Err(Failure::other(format!("cannot write the manual: {e}")))
         }

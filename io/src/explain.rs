@@ -17,6 +17,21 @@ pub(crate) fn explain(error: &ron::error::SpannedError, text: &str) -> (usize, S
     let field = context.field.as_deref();
     let for_field = field.map_or(String::new(), |f| format!(" for `{f}`"));
     use ron::Error as E;
+    let value = rest.trim_start();
+    if let Some(inner) = value.strip_prefix("Some")
+        && inner.trim_start().starts_with('(')
+        && !matches!(error.code, E::NoSuchEnumVariant { .. })
+    {
+        return (
+            at + (rest.len() - value.len()),
+            match field {
+                Some(f) => format!(
+                    "write the value for `{f}` bare, as `{f}: (...)`, without `Some(...)`: a value that may be left out is written as it is when given"
+                ),
+                None => "write the value bare, without `Some(...)`: a value that may be left out is written as it is when given".to_string(),
+            },
+        );
+    }
     match &error.code {
         E::ExpectedComma
         | E::ExpectedStructLikeEnd

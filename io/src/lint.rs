@@ -14,6 +14,10 @@ use crate::format::{LightSpec, SceneFile};
 use crate::load::{Warning, inside_polygon};
 use crate::locate;
 
+/// A spot's cone below this many degrees is warned of: such a narrow beam
+/// is more often a cone meant in radians.
+const MIN_CONE_DEGREES: f64 = 2.0;
+
 /// The warnings for `file` (whose text is `text`) on `canvas`.
 pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning> {
     let mut out = Vec::new();
@@ -91,7 +95,23 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
             LightSpec::Point { at, .. } | LightSpec::Laser { at, .. } => {
                 (DVec2::new(at.0, at.1), 0.0, "light")
             }
-            LightSpec::Spot { at, .. } => (DVec2::new(at.0, at.1), 0.0, "light"),
+            LightSpec::Spot {
+                at: place, cone, ..
+            } => {
+                if cone.0 < MIN_CONE_DEGREES {
+                    at(
+                        item(&light_items, k),
+                        format!(
+                            "light {k}'s cone is {}°, a beam only {}° across: `cone` is the half-angle in degrees (a cone of {} radians is written `cone: {:.1}`)",
+                            cone.0,
+                            2.0 * cone.0,
+                            cone.0,
+                            cone.0.to_degrees()
+                        ),
+                    );
+                }
+                (DVec2::new(place.0, place.1), 0.0, "light")
+            }
             LightSpec::Circle { at, radius, .. } => {
                 (DVec2::new(at.0, at.1), radius.0, "circle light")
             }
@@ -164,4 +184,173 @@ fn distance(p: DVec2, shape: &Shape) -> f64 {
             p.distance(on).min(p.distance(arc.a)).min(p.distance(arc.b))
         }
     }
+}
+
+/// How many cells the longer side of the grid that [`sealed`] floods has.
+const SEAL_GRID: usize = 128;
+
+/// A sealed light is warned of when its loop holds less than this share
+/// of the canvas.
+const SEALED_SHARE: f64 = 0.1;
+
+/// Warnings for the lights that no opening lets out: each one inside a
+/// closed loop of walls that block light (a column or a box drawn around
+/// a lamp, a room with no door, window or gap), which lights nothing
+/// outside that loop.
+///
+/// The walls' bounding box, one cell wider on each side, is divided into
+/// a grid of [`SEAL_GRID`] cells on its longer side; neighbouring cells'
+/// centres are joined where the segment between them crosses no wall that
+/// blocks light (the crossing rule of the geometry, so that walls which
+/// share an end leave no gap), and the cells joined to the grid's rim are
+/// outside. A light joined to none of its four nearest centres by a clear
+/// segment, and not to the outside through one, is sealed; a light too
+/// closely enclosed to see any centre is sealed when rays in every
+/// direction meet a blocking wall within two cells. A sealed light is
+/// warned of when its loop holds less than [`SEALED_SHARE`] of the canvas
+/// (a larger loop is a room or a bay closed on purpose). An
+/// opening narrower than about two cells can be missed: the warning says
+/// "appears".
+pub(crate) fn sealed(text: &str, file: &SceneFile, scene: &flatray_tracer::Scene) -> Vec<Warning> {
+    use flatray_geometry::{Ray, Skip};
+    let segments = scene.segments();
+    let walls = scene.walls();
+    // Panes (tinted or clear) and glass let light through.
+    let stops = |w: &flatray_tracer::scene::Wall| !w.material.is_pane() && !w.material.is_glass();
+    let blocks = |i: u32| walls.get(i as usize).is_some_and(stops);
+    if !walls.iter().any(stops) {
+        return Vec::new();
+    }
+    // A little past both ends, so that a centre lying on a wall (a grid
+    // lined up with a wall's corners) is cut off from both sides rather
+    // than joining them.
+    let clear = |a: DVec2, b: DVec2| {
+        let d = b - a;
+        let ray = Ray::new(a - d * 1e-6, d * (1.0 + 2e-6));
+        segments.for_each_crossing(&ray, 1.0, Skip::NONE, |i, _| !blocks(i))
+    };
+    // From a light: not behind it (a light on a wall is warned of as such,
+    // and sees both sides).
+    let clear_from = |p: DVec2, b: DVec2| {
+        let ray = Ray::new(p, (b - p) * (1.0 + 1e-6));
+        segments.for_each_crossing(&ray, 1.0, Skip::NONE, |i, _| !blocks(i))
+    };
+    let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+    for w in walls.iter().filter(|w| stops(w)) {
+        let (a, b) = w.shape.bounds();
+        (lo, hi) = (lo.min(a), hi.max(b));
+    }
+    let size = (hi - lo).max_element();
+    if !(size.is_finite() && size > 0.0) {
+        return Vec::new();
+    }
+    let h = size / (SEAL_GRID - 2) as f64;
+    lo -= DVec2::splat(h);
+    let nx = (((hi.x - lo.x) / h).ceil() as usize + 1).clamp(2, SEAL_GRID);
+    let ny = (((hi.y - lo.y) / h).ceil() as usize + 1).clamp(2, SEAL_GRID);
+    let centre = |i: usize, j: usize| lo + DVec2::new((i as f64 + 0.5) * h, (j as f64 + 0.5) * h);
+
+    // The cells joined to each other, region by region; region 0 holds
+    // the rim, the outside of every loop.
+    const NONE: u32 = u32::MAX;
+    let mut region = vec![NONE; nx * ny];
+    let mut on_canvas = Vec::new();
+    let mut queue = Vec::new();
+    let starts = (0..nx)
+        .map(|i| (i, 0))
+        .chain((0..nx * ny).map(|c| (c % nx, c / nx)));
+    for (si, sj) in starts {
+        if region[sj * nx + si] != NONE {
+            continue;
+        }
+        let label = on_canvas.len() as u32;
+        on_canvas.push(0usize);
+        region[sj * nx + si] = label;
+        queue.push((si, sj));
+        while let Some((i, j)) = queue.pop() {
+            let here = centre(i, j);
+            if scene.canvas().contains(here) {
+                on_canvas[label as usize] += 1;
+            }
+            // The rim is all one region, joined around the walls.
+            let rim = |i: usize, j: usize| i == 0 || j == 0 || i == nx - 1 || j == ny - 1;
+            let mut visit = |ni: usize, nj: usize| {
+                if region[nj * nx + ni] == NONE
+                    && ((rim(i, j) && rim(ni, nj)) || clear(here, centre(ni, nj)))
+                {
+                    region[nj * nx + ni] = label;
+                    queue.push((ni, nj));
+                }
+            };
+            if i > 0 {
+                visit(i - 1, j);
+            }
+            if i + 1 < nx {
+                visit(i + 1, j);
+            }
+            if j > 0 {
+                visit(i, j - 1);
+            }
+            if j + 1 < ny {
+                visit(i, j + 1);
+            }
+        }
+    }
+    let canvas = scene.canvas();
+    let canvas_area = (canvas.width as f64 * canvas.height as f64).max(1.0);
+
+    let light_items = locate::list_items(text, "lights");
+    let mut out = Vec::new();
+    for (k, light) in file.lights.iter().enumerate() {
+        let p = match light {
+            LightSpec::Point { at, .. }
+            | LightSpec::Laser { at, .. }
+            | LightSpec::Spot { at, .. }
+            | LightSpec::Circle { at, .. } => DVec2::new(at.0, at.1),
+            LightSpec::Line { a, b, .. } | LightSpec::Beam { a, b, .. } => {
+                DVec2::new(a.0 + b.0, a.1 + b.1) * 0.5
+            }
+            LightSpec::Directional { .. } => continue,
+        };
+        if !(p.cmpgt(lo).all() && p.cmplt(lo + DVec2::new(nx as f64, ny as f64) * h).all()) {
+            continue;
+        }
+        let g = (p - lo) / h - DVec2::splat(0.5);
+        let (i0, j0) = (g.x.floor().max(0.0) as usize, g.y.floor().max(0.0) as usize);
+        let mut seen: Vec<u32> = [(i0, j0), (i0 + 1, j0), (i0, j0 + 1), (i0 + 1, j0 + 1)]
+            .into_iter()
+            .filter(|&(i, j)| i < nx && j < ny && clear_from(p, centre(i, j)))
+            .map(|(i, j)| region[j * nx + i])
+            .collect();
+        seen.sort_unstable();
+        seen.dedup();
+        let seen_any = !seen.is_empty();
+        let reaches_out = seen.contains(&0);
+        // A loop that holds a good part of the canvas is a room or a bay
+        // closed on purpose (the scene's own room, bays each with their
+        // lamp); a small one is a column, a box, a closet with no door.
+        let lit: usize = seen.iter().map(|&r| on_canvas[r as usize]).sum();
+        let share = lit as f64 * h * h / canvas_area;
+        let most = share >= SEALED_SHARE;
+        let enclosed_closely = || {
+            (0..32).all(|r| {
+                let angle = std::f64::consts::TAU * (r as f64 + 0.5) / 32.0;
+                let far = p + DVec2::new(angle.cos(), angle.sin()) * 2.0 * h;
+                !clear_from(p, far)
+            })
+        };
+        if reaches_out || most || (!seen_any && !enclosed_closely()) {
+            continue;
+        }
+        let (line, column) = locate::position(text, light_items.get(k).copied().unwrap_or(0));
+        out.push(Warning {
+            line,
+            column,
+            message: format!(
+                "light {k} appears sealed inside a closed loop of walls: no opening lets its light out, so it lights only the inside of that loop, {:.0} % of the canvas (give the loop a gap, a pane or a door, or move the light out of it)",
+                100.0 * share
+            ),
+        });
+    }
+    out
 }

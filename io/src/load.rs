@@ -646,6 +646,19 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             };
             source.error(place, invalid.to_string())
         })?;
+    let mut warnings = warnings;
+    match *source {
+        Source::Text { text, .. } => warnings.extend(crate::lint::sealed(text, &file, &scene)),
+        Source::Values { .. } => warnings.extend(
+            crate::lint::sealed("", &file, &scene)
+                .into_iter()
+                .map(|w| Warning {
+                    line: 0,
+                    column: 0,
+                    ..w
+                }),
+        ),
+    }
     let mut options = RenderOptions::default();
     options.samples = file.render.samples.0;
     options.bounces = file.render.bounces.0;

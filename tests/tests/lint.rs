@@ -278,3 +278,92 @@ fn no_example_scene_gets_a_warning() {
         );
     }
 }
+
+/// The four walls of a square of side `side` about `(cx, cy)`, turned by
+/// `turn` radians, with `gap` units left open in the middle of one side.
+fn square(cx: f64, cy: f64, side: f64, turn: f64, gap: f64) -> Vec<String> {
+    let (s, c) = turn.sin_cos();
+    let at = |x: f64, y: f64| {
+        let (x, y) = (x - cx, y - cy);
+        (cx + c * x - s * y, cy + s * x + c * y)
+    };
+    let h = side / 2.0;
+    let corners = [
+        at(cx - h, cy - h),
+        at(cx + h, cy - h),
+        at(cx + h, cy + h),
+        at(cx - h, cy + h),
+    ];
+    let mut walls = Vec::new();
+    for k in 0..4 {
+        let (a, b) = (corners[k], corners[(k + 1) % 4]);
+        if k == 0 && gap > 0.0 {
+            let m = ((a.0 + b.0) / 2.0, (a.1 + b.1) / 2.0);
+            let t = gap / 2.0 / side;
+            let p = (m.0 - (b.0 - a.0) * t, m.1 - (b.1 - a.1) * t);
+            let q = (m.0 + (b.0 - a.0) * t, m.1 + (b.1 - a.1) * t);
+            walls.push(format!("Wall(a: {a:?}, b: {p:?})"));
+            walls.push(format!("Wall(a: {q:?}, b: {b:?})"));
+        } else {
+            walls.push(format!("Wall(a: {a:?}, b: {b:?})"));
+        }
+    }
+    walls
+}
+
+#[test]
+fn a_light_sealed_in_a_small_loop_of_walls() {
+    let lamp = "Point(at: (30, 40), intensity: 5)";
+    let other = "Point(at: (80, 80), intensity: 5)";
+    // A round column around the lamp, and a turned box around it, shared
+    // corners and all.
+    let column = "Wall(center: (30, 40), radius: 6)";
+    only(
+        warnings(&scene(&[column], &[lamp, other], &[], "")),
+        8,
+        "light 0 appears sealed inside a closed loop of walls",
+    );
+    for turn in [0.0, 0.3, std::f64::consts::FRAC_PI_4] {
+        let walls = square(30.0, 40.0, 16.0, turn, 0.0);
+        let walls: Vec<&str> = walls.iter().map(String::as_str).collect();
+        let found = warnings(&scene(&walls, &[lamp, other], &[], ""));
+        only(found, 11, "light 0 appears sealed");
+        // A gap of 4 units lets the light out.
+        let open = square(30.0, 40.0, 16.0, turn, 4.0);
+        let open: Vec<&str> = open.iter().map(String::as_str).collect();
+        assert!(
+            warnings(&scene(&open, &[lamp, other], &[], "")).is_empty(),
+            "{turn}"
+        );
+    }
+    // A pane in the loop, or glass, lets light through.
+    let pane = "Wall(a: (22, 32), b: (38, 32), material: Transparent(tint: (0.5, 0.5, 1)))";
+    let mut walls = square(30.0, 40.0, 16.0, 0.0, 0.0);
+    walls[0] = pane.to_string();
+    let walls: Vec<&str> = walls.iter().map(String::as_str).collect();
+    assert!(warnings(&scene(&walls, &[lamp, other], &[], "")).is_empty());
+    // A lamp closely boxed, nearer its walls than the grid's cells.
+    let tight = "Wall(center: (30, 40), radius: 0.2)";
+    let tiny = "Point(at: (30, 40), intensity: 5)";
+    only(
+        warnings(&scene(&[tight], &[tiny, other], &[], "")),
+        8,
+        "light 0 appears sealed",
+    );
+    // The scene's own closed room, or a bay of it, is meant.
+    let room = square(50.0, 50.0, 96.0, 0.2, 0.0);
+    let room: Vec<&str> = room.iter().map(String::as_str).collect();
+    assert!(warnings(&scene(&room, &[LAMP], &[], "")).is_empty());
+}
+
+#[test]
+fn a_spot_whose_cone_reads_as_radians() {
+    let spot = "Spot(at: (50, 50), direction: (1, 0), cone: 0.5)";
+    only(
+        warnings(&scene(&[WALL], &[spot], &[], "")),
+        8,
+        "a cone of 0.5 radians is written `cone: 28.6`",
+    );
+    let wide = "Spot(at: (50, 50), direction: (1, 0), cone: 30)";
+    assert!(warnings(&scene(&[WALL], &[wide], &[], "")).is_empty());
+}

@@ -397,16 +397,17 @@ pub fn image_size(scene: &Scene, scale: f64) -> (u32, u32) {
 /// flatray renders, what it would be and the bounds it passes.
 pub fn checked_image_size(scene: &Scene, scale: f64) -> Result<(u32, u32), String> {
     use crate::scene::{MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE};
-    let (width, height) = image_size(scene, scale);
-    if width > MAX_CANVAS_SIDE
-        || height > MAX_CANVAS_SIDE
-        || width as u64 * height as u64 > MAX_CANVAS_PIXELS
+    // In floats first: a size past u32 is said as it would be, not as
+    // the largest u32.
+    let side = |units: u32| (units as f64 * scale).round().max(1.0);
+    let (w, h) = (side(scene.canvas.width), side(scene.canvas.height));
+    if w > MAX_CANVAS_SIDE as f64 || h > MAX_CANVAS_SIDE as f64 || w * h > MAX_CANVAS_PIXELS as f64
     {
         return Err(format!(
-            "the image would be {width} x {height} pixels, more than flatray renders (at most {MAX_CANVAS_SIDE} a side and {MAX_CANVAS_PIXELS} in all)"
+            "the image would be {w:.0} x {h:.0} pixels, more than flatray renders (at most {MAX_CANVAS_SIDE} a side and {MAX_CANVAS_PIXELS} in all)"
         ));
     }
-    Ok((width, height))
+    Ok(image_size(scene, scale))
 }
 
 /// Rays whose arc lists more walls than this ask the whole set instead

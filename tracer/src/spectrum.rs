@@ -24,6 +24,11 @@ use crate::Rgb;
 
 /// The shortest and the longest wavelength counted, in nanometres.
 pub const RANGE_NM: (f64, f64) = (380.0, 780.0);
+
+/// The wavelengths a spectrum's table may give, in nm: ultraviolet to
+/// infrared (what lies outside [`RANGE_NM`] is not seen, but a measured
+/// lamp's table often reaches beyond it).
+pub const TABLE_NM: (f64, f64) = (100.0, 10_000.0);
 /// The width of the range, `Δ`.
 pub const WIDTH_NM: f64 = RANGE_NM.1 - RANGE_NM.0;
 /// Cells of the grid every spectrum is held on.
@@ -288,8 +293,10 @@ pub type TableError = String;
 impl Spectrum {
     /// A spectrum from (wavelength in nm, value) pairs in increasing order of
     /// wavelength, linear between them and zero outside them, resampled
-    /// every 5 nm: it needs two pairs or more, finite values of at least
-    /// 0, and some light within 380 to 780 nm.
+    /// every 5 nm: it needs two pairs or more, wavelengths within
+    /// [`TABLE_NM`], finite values of at least 0, and some light within
+    /// 380 to 780 nm. Only the values' ratios count (a spectrum sets a
+    /// colour, not a brightness), so values of any size are taken.
     pub fn table(pairs: &[(f64, f64)]) -> Result<Spectrum, TableError> {
         if pairs.len() < 2 {
             return Err(format!(
@@ -303,6 +310,12 @@ impl Spectrum {
                     "a spectrum's pair {k} is ({nm}, {v}): expected a finite wavelength in nm and a value of at least 0"
                 ));
             }
+            if !(TABLE_NM.0..=TABLE_NM.1).contains(&nm) {
+                return Err(format!(
+                    "a spectrum's pair {k} is at {nm} nm: wavelengths are from {} to {} nm (ultraviolet to infrared; 380 to 780 nm is what is seen)",
+                    TABLE_NM.0, TABLE_NM.1
+                ));
+            }
             if k > 0 && nm <= pairs[k - 1].0 {
                 return Err(format!(
                     "a spectrum's wavelengths must increase: pair {k} ({nm} nm) follows {} nm",
@@ -310,6 +323,14 @@ impl Spectrum {
                 ));
             }
         }
+        // Values far outside f32's range are brought into it first: the
+        // same ratios, none lost to infinity or zero.
+        let largest = pairs.iter().map(|p| p.1).fold(0.0, f64::max);
+        let scale = if largest > 1e30 || (largest > 0.0 && largest < 1e-30) {
+            1.0 / largest
+        } else {
+            1.0
+        };
         let at = |nm: f64| {
             let k = pairs.partition_point(|p| p.0 <= nm);
             if k == 0 || k == pairs.len() && nm > pairs[k - 1].0 {
@@ -319,10 +340,10 @@ impl Spectrum {
                 return pairs[k - 1].1;
             }
             let (a, b) = (pairs[k - 1], pairs[k]);
-            a.1 + (b.1 - a.1) * (nm - a.0) / (b.0 - a.0)
+            a.1 + (b.1 - a.1) * ((nm - a.0) / (b.0 - a.0))
         };
         let values: [f32; TABLE_POINTS] =
-            std::array::from_fn(|k| at(RANGE_NM.0 + 5.0 * k as f64) as f32);
+            std::array::from_fn(|k| (at(RANGE_NM.0 + 5.0 * k as f64) * scale) as f32);
         if values.iter().all(|&v| v == 0.0) || values.iter().any(|v| !v.is_finite()) {
             return Err("a spectrum's table gives no light from 380 to 780 nm".into());
         }
@@ -537,6 +558,39 @@ impl<'a> Mixture<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_table_is_checked_and_only_its_ratios_count() {
+        for (bad, says) in [
+            (vec![(-400.0, 1.0), (0.0, 1.0), (500.0, 1.0)], "-400 nm"),
+            (vec![(0.0, 1.0), (500.0, 1.0)], "0 nm"),
+            (vec![(500.0, 1.0), (2e4, 1.0)], "20000 nm"),
+            (vec![(500.0, 1.0), (400.0, 1.0)], "must increase"),
+            (vec![(500.0, 1.0), (500.0, 1.0)], "must increase"),
+            (vec![(400.0, -1.0), (500.0, 1.0)], "at least 0"),
+            (vec![(400.0, f64::NAN), (500.0, 1.0)], "finite"),
+            (vec![(400.0, f64::INFINITY), (500.0, 1.0)], "finite"),
+            (vec![(400.0, 0.0), (500.0, 0.0)], "no light"),
+            (vec![(100.0, 1.0), (300.0, 1.0)], "no light"),
+            (vec![(500.0, 1.0)], "at least 2"),
+        ] {
+            let why = Spectrum::table(&bad).expect_err("refused");
+            assert!(why.contains(says), "{bad:?}: {why}");
+        }
+        let colour = |v: f64| {
+            Spectrum::table(&[(400.0, 0.5 * v), (550.0, v), (700.0, 0.25 * v)])
+                .expect("a table")
+                .sampled()
+                .rgb()
+        };
+        let unit = colour(1.0);
+        for v in [1e308, 1e-300, 1e20] {
+            let c = colour(v);
+            for k in 0..3 {
+                assert!((c[k] - unit[k]).abs() < 1e-5, "{v}: {c:?} vs {unit:?}");
+            }
+        }
+    }
 
     /// The blackbody's chromaticity against the CIE 1931 Planckian locus
     /// (CIE 015:2018's observer, 1 nm sums from 360 to 830 nm), within

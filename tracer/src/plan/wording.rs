@@ -116,7 +116,15 @@ impl Plan {
         let mut effects = Vec::new();
         let mut add =
             |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
-        let n = |k: usize, what: &str| format!("{k} {what}{}", if k == 1 { "" } else { "s" });
+        let n = |k: usize, what: &str| {
+            if k == 1 {
+                format!("{k} {what}")
+            } else if let Some(stem) = what.strip_suffix("body") {
+                format!("{k} {stem}bodies")
+            } else {
+                format!("{k} {what}s")
+            }
+        };
         add(
             "direct light: points and spots",
             points + spots > 0,
