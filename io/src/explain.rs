@@ -200,6 +200,31 @@ fn unknown(what: &str, found: &str, expected: &[&str]) -> String {
     }
 }
 
+/// serde's "unknown field `x`, expected one of `a`, `b`" (or variant)
+/// with the loader's "did you mean" added where a name is near enough.
+pub(crate) fn with_suggestion(message: &str) -> String {
+    let Some(rest) = message
+        .strip_prefix("unknown field `")
+        .or_else(|| message.strip_prefix("unknown variant `"))
+    else {
+        return message.to_string();
+    };
+    let Some((found, tail)) = rest.split_once('`') else {
+        return message.to_string();
+    };
+    let expected: Vec<&str> = tail.split('`').skip(1).step_by(2).collect();
+    match did_you_mean(found, &expected) {
+        Some(near) => {
+            let (head, list) = message.split_at(message.len() - tail.len());
+            format!(
+                "{head}: did you mean `{near}`? ({})",
+                list.trim_start_matches(", ")
+            )
+        }
+        None => message.to_string(),
+    }
+}
+
 /// The name among `expected` nearest `found`, when one is near enough to
 /// be a slip.
 pub fn did_you_mean<'a>(found: &str, expected: &[&'a str]) -> Option<&'a str> {
@@ -245,5 +270,25 @@ mod tests {
         let at = text.find('.').unwrap_or(0);
         assert_eq!(fraction_at(text, at), Some((9, "-360.5".to_string())));
         assert_eq!(fraction_at("(a.b)", 2), None);
+    }
+}
+
+#[cfg(test)]
+mod suggestion_tests {
+    #[test]
+    fn serdes_unknown_names_get_a_suggestion() {
+        assert_eq!(
+            super::with_suggestion(
+                "unknown field `intensty`, expected one of `at`, `intensity`, `color`"
+            ),
+            "unknown field `intensty`: did you mean `intensity`? (expected one of `at`, `intensity`, `color`)"
+        );
+        assert_eq!(
+            super::with_suggestion("unknown variant `Pint`, expected one of `Point`, `Spot`"),
+            "unknown variant `Pint`: did you mean `Point`? (expected one of `Point`, `Spot`)"
+        );
+        let far = "unknown field `zzzzzz`, expected `at`";
+        assert_eq!(super::with_suggestion(far), far);
+        assert_eq!(super::with_suggestion("invalid type"), "invalid type");
     }
 }

@@ -447,6 +447,19 @@ impl LightSpec {
         }
     }
 
+    /// The light's kind, as the scene format names it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            LightSpec::Point { .. } => "Point",
+            LightSpec::Spot { .. } => "Spot",
+            LightSpec::Line { .. } => "Line",
+            LightSpec::Directional { .. } => "Directional",
+            LightSpec::Beam { .. } => "Beam",
+            LightSpec::Laser { .. } => "Laser",
+            LightSpec::Circle { .. } => "Circle",
+        }
+    }
+
     /// The light's colour.
     pub fn color(&self) -> Color {
         match *self {

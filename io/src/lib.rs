@@ -24,15 +24,16 @@ mod locate;
 mod output;
 pub mod overlay;
 pub mod report;
+pub mod values;
 
 pub use error::{SceneError, WriteError};
 pub use format::ToneMap;
 pub use input::{MAX_INPUT_BYTES, read_within};
 pub use load::{Counts, Loaded, Warning, from_json, load, parse};
 pub use output::{
-    Format, exr_bytes, linear_to_srgb, png_bytes, read_exr, remove_pending_files, srgb_to_linear,
-    to_srgb8, tone_map, write_bytes, write_exr, write_image, write_png, write_png_with_walls,
-    write_text,
+    Format, decode_exr, exr_bytes, linear_to_srgb, png_bytes, read_exr, remove_pending_files,
+    srgb_to_linear, to_srgb8, tone_map, write_bytes, write_exr, write_image, write_png,
+    write_png_with_walls, write_text,
 };
 
 /// `n` and the noun, singular for one: "1 wall", "2 walls", "0 glass

@@ -180,10 +180,9 @@ pub fn from_json(json: &str, name: &str, base: &Path) -> Result<Loaded, SceneErr
         SceneError::Value {
             name: name.to_string(),
             at: if at == "." { String::new() } else { at },
-            message: message
-                .strip_suffix(&suffix)
-                .unwrap_or(&message)
-                .to_string(),
+            message: crate::explain::with_suggestion(
+                message.strip_suffix(&suffix).unwrap_or(&message),
+            ),
         }
     })?;
     build(file, &Source::Values { name }, base)
@@ -203,6 +202,8 @@ enum Place {
     /// A field of a wall's material.
     WallField(usize, &'static str),
     Light(usize),
+    /// A field of a light: its index, its kind's name, the field.
+    LightField(usize, &'static str, &'static str),
     Glass(usize),
     Top,
 }
@@ -223,6 +224,13 @@ impl Source<'_> {
                         })
                         .or_else(|| item("walls", k)),
                     Place::Light(k) => item("lights", k),
+                    Place::LightField(k, _, field) => locate::item_range(text, "lights", k)
+                        .map(|(start, end)| {
+                            text[start..end]
+                                .find(&format!("{field}:"))
+                                .map_or(start, |i| start + i)
+                        })
+                        .or_else(|| item("lights", k)),
                     Place::Glass(k) => item("glass", k),
                     Place::Top => None,
                 };
@@ -241,6 +249,7 @@ impl Source<'_> {
                     Place::Wall(k) => format!("walls[{k}]"),
                     Place::WallField(k, field) => format!("walls[{k}].material.{field}"),
                     Place::Light(k) => format!("lights[{k}]"),
+                    Place::LightField(k, kind, field) => format!("lights[{k}].{kind}.{field}"),
                     Place::Glass(k) => format!("glass[{k}]"),
                     Place::Top => String::new(),
                 },
@@ -367,8 +376,17 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         walls.push(Wall { shape, material });
     }
     for (k, light) in file.lights.iter().enumerate() {
-        let spectrum = light_spectrum(light.spectrum(), light.color())
-            .map_err(|message| source.error(Place::Light(k), format!("light {k}: {message}")))?;
+        let spectrum = light_spectrum(light.spectrum(), light.color()).map_err(|message| {
+            let field = if light.spectrum().is_some() {
+                "spectrum"
+            } else {
+                "color"
+            };
+            source.error(
+                Place::LightField(k, light.kind(), field),
+                format!("light {k}: {message}"),
+            )
+        })?;
         lights.push(match *light {
             LightSpec::Point {
                 at,
@@ -393,8 +411,9 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 falloff: f, ..
             } => {
                 if cone.0 > 180.0 || softness.0 > cone.0 {
+                    let field = if cone.0 > 180.0 { "cone" } else { "softness" };
                     return Err(source.error(
-                        Place::Light(k),
+                        Place::LightField(k, "Spot", field),
                         format!(
                             "expected 0 < cone <= 180 and softness <= cone (degrees), found cone {} and softness {}",
                             cone.0, softness.0
@@ -424,7 +443,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             } => {
                 if a == b {
                     return Err(source.error(
-                        Place::Light(k),
+                        Place::LightField(k, "Line", "b"),
                         format!(
                             "a line light needs two different endpoints, found ({}, {}) twice; use a Point light",
                             a.0, a.1
@@ -463,7 +482,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             } => {
                 if radius.0 > MAX_COORDINATE {
                     return Err(source.error(
-                        Place::Light(k),
+                        Place::LightField(k, "Circle", "radius"),
                         format!(
                             "expected a circle light's radius of at most {MAX_COORDINATE:e}, found {}",
                             radius.0

@@ -170,9 +170,18 @@ pub fn write_text(path: &Path, text: &str) -> Result<(), WriteError> {
     })
 }
 
-/// Reads a linear RGB EXR (as written by [`write_exr`]).
+/// Reads a linear RGB EXR (as written by [`write_exr`]): a regular file
+/// only, within the input budget.
 pub fn read_exr(path: &Path) -> Result<Image, String> {
-    let decoded = image::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bytes = crate::read_within(path, crate::MAX_INPUT_BYTES)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    decode_exr(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Decodes the bytes of a linear RGB EXR file.
+pub fn decode_exr(bytes: &[u8]) -> Result<Image, String> {
+    let decoded = image::load_from_memory_with_format(bytes, image::ImageFormat::OpenExr)
+        .map_err(|e| e.to_string())?;
     let rgb = decoded.to_rgb32f();
     let (width, height) = rgb.dimensions();
     let pixels = rgb.pixels().map(|p| p.0).collect();

@@ -478,3 +478,57 @@ fn glass_inside_glass_is_refused() {
         "{run:?}"
     );
 }
+
+/// The small messages a newcomer meets: each says what was meant.
+#[test]
+fn messages_say_what_was_meant() {
+    let dir = TempDir::new("messages");
+    let scene = dir.write("room.ron", ROOM);
+    let out = dir.path().join("o.png");
+    // `--samples`, the scene's own word, is `--spp`.
+    let run = flatray(&["render", s(&scene), "-q", "--samples", "2", "-o", s(&out)]);
+    assert_eq!(run.code, 0, "{run:?}");
+    // A huge scale is said at its size, not at the largest u32.
+    let run = flatray(&["render", s(&scene), "-q", "--scale", "1e9", "-o", s(&out)]);
+    assert_eq!(run.code, 2, "{run:?}");
+    assert!(run.stderr.contains("20000000000 x 20000000000"), "{run:?}");
+    // `Some(...)` around a value that is written bare.
+    let some = dir.write(
+        "some.ron",
+        "Scene(canvas: (20, 20), floor: Color((0.5, 0.5, 0.5)),\n    lights: [Point(at: (10, 12), color: Some((1, 1, 1)))])",
+    );
+    let run = flatray(&["check", s(&some)]);
+    assert_eq!(run.code, 2, "{run:?}");
+    assert!(
+        run.stderr.contains(
+            ":2:41: write the value for `color` bare, as `color: (...)`, without `Some(...)`"
+        ),
+        "{run:?}"
+    );
+    // A manual page's synopsis is the command as typed, and offers only
+    // its own flags.
+    let run = flatray(&["man", "render"]);
+    assert_eq!(run.code, 0, "{run:?}");
+    let synopsis = run
+        .stdout
+        .split(".SH SYNOPSIS")
+        .nth(1)
+        .and_then(|r| r.split(".SH").next())
+        .unwrap_or_default();
+    assert!(synopsis.contains(r"\fBflatray render\fR"), "{synopsis}");
+    assert!(!synopsis.contains("version"), "{synopsis}");
+    assert!(
+        run.stdout.contains(".TH flatray-render 1"),
+        "the page's name"
+    );
+    // Plurals.
+    let glass = dir.write(
+        "glass.ron",
+        "Scene(canvas: (100, 100), floor: Color((0.5, 0.5, 0.5)), lights: [Point(at: (10, 12))],
+         glass: [Glass(points: [(20, 20), (40, 20), (30, 40)]), Glass(points: [(60, 60), (80, 60), (70, 80)])])",
+    );
+    let run = flatray(&["plan", s(&glass)]);
+    assert_eq!(run.code, 0, "{run:?}");
+    assert!(run.stdout.contains("2 glass bodies"), "{run:?}");
+    assert!(!run.stdout.contains("bodys"), "{run:?}");
+}

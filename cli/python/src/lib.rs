@@ -161,12 +161,16 @@ fn loaded(
 /// Reads and validates the scene file at `path`.
 #[pyfunction]
 fn load(py: Python<'_>, path: PathBuf) -> PyResult<LoadedScene> {
-    let result = py.detach(|| flatray_io::load(&path));
-    // Read again only once `load` has found a regular file of a scene.
-    let text = result.as_ref().ok().and_then(|_| {
-        flatray_io::read_within(&path, flatray_io::MAX_INPUT_BYTES)
-            .ok()
-            .and_then(|bytes| String::from_utf8(bytes).ok())
+    // Both reads with the GIL released; the text is read again only once
+    // `load` has found a regular file of a scene.
+    let (result, text) = py.detach(|| {
+        let result = flatray_io::load(&path);
+        let text = result.as_ref().ok().and_then(|_| {
+            flatray_io::read_within(&path, flatray_io::MAX_INPUT_BYTES)
+                .ok()
+                .and_then(|bytes| String::from_utf8(bytes).ok())
+        });
+        (result, text)
     });
     loaded(py, result, text)
 }
@@ -534,10 +538,24 @@ fn work_total(loaded: &Loaded, options: &RenderOptions) -> u64 {
     (pixels * options.samples as u64).max(1)
 }
 
-/// Reads a linear EXR image: (bytes, width, height).
+/// The scene text of scene values given as JSON (as `from_json` takes
+/// them): it loads back as the same scene.
+#[pyfunction]
+fn values_text(json: &str) -> PyResult<String> {
+    flatray_io::values::to_text(json).map_err(PyValueError::new_err)
+}
+
+/// Reads a linear EXR image: (bytes, width, height). Only a regular file
+/// within the input budget is read, with the GIL released.
 #[pyfunction]
 fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyBytes>, u32, u32)> {
-    let image = flatray_io::read_exr(&path).map_err(PyOSError::new_err)?;
+    let image = py
+        .detach(|| {
+            let bytes = flatray_io::read_within(&path, flatray_io::MAX_INPUT_BYTES)
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            flatray_io::decode_exr(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+        })
+        .map_err(PyOSError::new_err)?;
     Ok((
         PyBytes::new(py, &image_bytes(&image)),
         image.width,
@@ -580,6 +598,7 @@ fn _flatray(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(parse, m)?)?;
     m.add_function(wrap_pyfunction!(from_json, m)?)?;
+    m.add_function(wrap_pyfunction!(values_text, m)?)?;
     m.add_function(wrap_pyfunction!(generate, m)?)?;
     m.add_function(wrap_pyfunction!(import_plan, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;

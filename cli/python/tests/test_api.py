@@ -1,5 +1,6 @@
 """The Python binding against the CLI and against bad input."""
 
+import os
 import pathlib
 import subprocess
 import sys
@@ -200,9 +201,13 @@ def test_a_bad_scene_text_and_bad_values_raise_where_they_are_wrong():
     values["lights"] = [{"Spot": {"at": (1, 1), "direction": (1, 0), "cone": 200}}]
     with pytest.raises(flatray.SceneError) as caught:
         flatray.Scene(**values)
-    assert caught.value.at == "lights[0]"
+    assert caught.value.at == "lights[0].Spot.cone", caught.value.at
     assert caught.value.line is None and caught.value.file is None
     assert "cone" in caught.value.message
+    values["lights"] = [{"Point": {"at": (1, 1), "intensty": 2}}]
+    with pytest.raises(flatray.SceneError) as caught:
+        flatray.Scene(**values)
+    assert "did you mean `intensity`?" in caught.value.message, caught.value.message
     values["lights"] = [{"Point": {"at": (1, float("nan"))}}]
     with pytest.raises(flatray.SceneError) as caught:
         flatray.Scene(**values)
@@ -370,3 +375,112 @@ def test_the_floors_indirect_light_along_lines_or_by_samples(repo):
     # The same image, in expectation; along lines, far less noise.
     assert abs(lines.image.mean() / samples.image.mean() - 1) < 0.03
     assert lines.noise < samples.noise / 2
+
+
+@pytest.mark.parametrize(
+    "keyword, value, error, says",
+    [
+        ("spp", -1, ValueError, "spp: expected 1 to 1048576, found -1"),
+        ("spp", 2**64, ValueError, "spp: expected 1 to 1048576"),
+        ("spp", 0, ValueError, "spp: expected 1 to"),
+        ("spp", 1.5, TypeError, "spp: expected a whole number"),
+        ("spp", "4", TypeError, "spp: expected a whole number"),
+        ("bounces", -1, ValueError, "bounces: expected 0 to 1000, found -1"),
+        ("bounces", 2**64, ValueError, "bounces: expected 0 to 1000"),
+        ("specular", -1, ValueError, "specular: expected 0 to 1000"),
+        ("seed", -1, ValueError, "seed: expected 0 to 18446744073709551615, found -1"),
+        ("seed", 2**64, ValueError, "seed: expected 0 to 18446744073709551615"),
+        ("threads", -1, ValueError, "threads: expected 1 to 1024, found -1"),
+        ("threads", 2**64, ValueError, "threads: expected 1 to 1024"),
+        ("window", (-1, 0, 4, 4), ValueError, "window x0: expected 0 to 4294967295, found -1"),
+        ("window", (0, 0, 2**64, 4), ValueError, "window x1: expected 0 to 4294967295"),
+        ("window", (0, 0, 4), ValueError, "window: expected (x0, y0, x1, y1)"),
+        ("window", 5, TypeError, "window: expected (x0, y0, x1, y1)"),
+        ("scale", "big", TypeError, "scale: expected a number"),
+    ],
+)
+def test_every_bad_setting_names_itself_and_its_range(keyword, value, error, says):
+    scene = flatray.Scene(**ROOM_VALUES)
+    with pytest.raises(error) as caught:
+        flatray.render(scene, **{keyword: value})
+    assert says in str(caught.value), str(caught.value)
+    assert not isinstance(caught.value, OverflowError)
+
+
+def test_generate_names_a_bad_count():
+    for keyword, value, says in [
+        ("rooms", -1, "rooms: expected 1 to 10000, found -1"),
+        ("lamps", 2**64, "lamps: expected 0 to 64"),
+        ("seed", -1, "seed: expected 0 to"),
+    ]:
+        with pytest.raises(ValueError) as caught:
+            flatray.generate(**{keyword: value})
+        assert says in str(caught.value), str(caught.value)
+
+
+def test_a_pipe_is_refused_not_waited_on(tmp_path):
+    fifo = tmp_path / "image.exr"
+    os.mkfifo(fifo)
+    scene_fifo = tmp_path / "scene.ron"
+    os.mkfifo(scene_fifo)
+    ticks = []
+    stop = threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(1)
+            stop.wait(0.01)
+
+    # Another Python thread runs while the reads are refused: nothing
+    # holds the GIL, and nothing waits for a writer.
+    ticker = threading.Thread(target=tick)
+    ticker.start()
+    try:
+        with pytest.raises(OSError) as caught:
+            flatray.read_exr(fifo)
+        assert "not a regular file" in str(caught.value)
+        with pytest.raises(flatray.SceneError) as caught:
+            flatray.load(scene_fifo)
+        assert "not a regular file" in str(caught.value)
+    finally:
+        stop.set()
+        ticker.join()
+    assert ticks
+
+
+def test_a_scene_of_values_has_its_text_and_it_loads_back_to_the_same_bits():
+    scene = flatray.Scene(**ROOM_VALUES)
+    text = scene.text
+    assert text.startswith("Scene(\n"), text
+    again = flatray.parse(text)
+    assert again.text == text
+    a = flatray.render(scene, spp=4, scale=0.5, seed=3)
+    b = flatray.render(again, spp=4, scale=0.5, seed=3)
+    assert np.array_equal(a.image, b.image)
+    assert again.settings == scene.settings and again.counts == scene.counts
+    # Every kind the format has, round the same way.
+    every = flatray.Scene(
+        canvas=(120, 80),
+        floor={"Tiles": {"size": 20, "tile": (0.7, 0.7, 0.6)}},
+        walls=[
+            {"a": (10, 10), "b": (60, 10), "through": (35, 20), "material": {"Rough": {"roughness": 0.2}}},
+            {"center": (90, 40), "radius": 10, "material": {"Transparent": {"tint": (0.5, 0.6, 1)}}},
+            {"a": (0, 70), "b": (50, 70), "emit": {"intensity": 2}},
+            {"a": (100, 5), "b": (110, 30), "material": "Mirror"},
+        ],
+        lights=[
+            {"Spot": {"at": (20, 20), "direction": (1, 0.25), "cone": 30, "spectrum": {"Blackbody": 2700}}},
+            {"Line": {"a": (10, 75), "b": (40, 75), "spectrum": {"Table": [(400, 0.1), (550, 1), (700, 0.4)]}}},
+            {"Laser": {"at": (5, 40), "direction": (1, 0.1), "spectrum": {"Lamp": "Sodium"}}},
+        ],
+        glass=[{"points": [(60, 40), (75, 40), (68, 60)], "through": [None, (74, 52), None], "ior": 1.6}],
+        falloff="Flatland",
+        render={"samples": 4, "integrator": "Light", "cache": "Direct"},
+    )
+    back = flatray.parse(every.text)
+    a = flatray.render(every, spp=2, scale=0.5)
+    b = flatray.render(back, spp=2, scale=0.5)
+    assert np.array_equal(a.image, b.image)
+    # A scene read from a file keeps the file's own text.
+    text = "Scene(canvas: (10, 10), floor: Color((1, 1, 1)))  // mine"
+    assert flatray.parse(text).text == text

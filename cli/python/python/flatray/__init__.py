@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import math
+import operator
 import os
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
@@ -73,6 +74,34 @@ def _plain(value: Any) -> Any:
         # ("invalid type: string "nan", expected f64").
         return repr(value)
     return value
+
+
+# The ranges of the whole-number settings, as the command line takes them.
+_MAX_SAMPLES = 1 << 20
+_MAX_BOUNCES = 1000
+_MAX_U64 = (1 << 64) - 1
+_MAX_U32 = (1 << 32) - 1
+
+
+def _whole(name: str, value: Any, lo: int, hi: int) -> int:
+    """``value`` as an int from ``lo`` to ``hi``: a TypeError naming
+    ``name`` when it is not a whole number, a ValueError with the range
+    when it is out of it."""
+    if isinstance(value, bool):
+        raise TypeError(f"{name}: expected a whole number from {lo} to {hi}, found {value!r}")
+    try:
+        n = operator.index(value)
+    except TypeError:
+        raise TypeError(
+            f"{name}: expected a whole number from {lo} to {hi}, found {type(value).__name__} {value!r}"
+        ) from None
+    if not lo <= n <= hi:
+        raise ValueError(f"{name}: expected {lo} to {hi}, found {n}")
+    return n
+
+
+def _maybe_whole(name: str, value: Any, lo: int, hi: int) -> Optional[int]:
+    return None if value is None else _whole(name, value, lo, hi)
 
 
 def _wall(wall: Any) -> Any:
@@ -168,9 +197,17 @@ class Scene:
         ]
 
     @property
-    def text(self) -> Optional[str]:
-        """The scene text, where the scene was read from text."""
-        return self._loaded.text
+    def text(self) -> str:
+        """The scene's text in the scene file's format (RON): the file's
+        own text for a scene read from text, and for one built from values
+        the text of those values, which loads back as the same scene (save
+        it to a ``.ron`` file to edit or render it with the command
+        line)."""
+        kind, payload = self._source[0], self._source[1]
+        if kind == "json":
+            return _flatray.values_text(payload)
+        text = self._loaded.text
+        return payload if text is None else text
 
     @property
     def settings(self) -> Dict[str, Any]:
@@ -241,7 +278,10 @@ def generate(
     rooms with ``lamps`` lamps each, a share ``mirrors`` of them with a
     mirror, the sun through the windows unless ``sun`` is False. The same
     seed gives the same plan on every machine."""
-    text = _flatray.generate(rooms, lamps, mirrors, seed, sun)
+    rooms = _whole("rooms", rooms, 1, 10_000)
+    lamps = _whole("lamps", lamps, 0, 64)
+    seed = _whole("seed", seed, 0, _MAX_U64)
+    text = _flatray.generate(rooms, lamps, float(mirrors), seed, bool(sun))
     return parse(text, name=f"<generated rooms={rooms} lamps={lamps} seed={seed}>")
 
 
@@ -344,9 +384,26 @@ def render(
     (KeyboardInterrupt)."""
     if not isinstance(scene, Scene):
         raise TypeError(f"expected a flatray.Scene, found {type(scene).__name__}")
-    win = None if window is None else tuple(int(v) for v in window)
-    if win is not None and len(win) != 4:
-        raise ValueError(f"window: expected (x0, y0, x1, y1), found {window!r}")
+    spp = _maybe_whole("spp", spp, 1, _MAX_SAMPLES)
+    bounces = _maybe_whole("bounces", bounces, 0, _MAX_BOUNCES)
+    specular = _maybe_whole("specular", specular, 0, _MAX_BOUNCES)
+    seed = _maybe_whole("seed", seed, 0, _MAX_U64)
+    threads = _maybe_whole("threads", threads, 1, 1024)
+    win = None
+    if window is not None:
+        try:
+            given = list(window)
+        except TypeError:
+            raise TypeError(f"window: expected (x0, y0, x1, y1), found {window!r}") from None
+        if len(given) != 4:
+            raise ValueError(f"window: expected (x0, y0, x1, y1), found {window!r}")
+        names = ("x0", "y0", "x1", "y1")
+        win = tuple(_whole(f"window {n}", v, 0, _MAX_U32) for n, v in zip(names, given))
+    for name, value in (("scale", scale), ("exposure", exposure)):
+        if value is not None and (
+            isinstance(value, bool) or not isinstance(value, (int, float, np.number))
+        ):
+            raise TypeError(f"{name}: expected a number, found {type(value).__name__} {value!r}")
     data, width, height, stats, seconds = _flatray.render(
         scene._loaded,
         spp=spp,
@@ -383,6 +440,8 @@ def render(
 
 def read_exr(path: PathLike) -> np.ndarray:
     """A linear EXR image (as ``flatray render -o out.exr`` writes) as a
-    (height, width, 3) float32 array."""
+    (height, width, 3) float32 array. Only a regular file is read (a pipe
+    or a device is refused with OSError, never waited on), and the GIL is
+    released while it is read and decoded."""
     data, width, height = _flatray.read_exr(os.fspath(path))
     return np.frombuffer(data, dtype="<f4").reshape(height, width, 3).astype(np.float32)
