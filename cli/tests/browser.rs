@@ -393,3 +393,162 @@ fn a_change_on_disk_never_replaces_the_pages_edit_and_each_side_can_be_kept() {
     drop(browser);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A sodium lamp, a lens, a spot and the sun, as the page must draw and
+/// edit them.
+const OPTICS: &str = "Scene(
+    canvas: (300, 200),
+    floor: Color((0.6, 0.6, 0.6)),
+    walls: [Wall(a: (20, 20), b: (280, 20))],
+    lights: [
+        Point(at: (60, 100), intensity: 20, spectrum: Lamp(Sodium)),
+        Spot(at: (240, 150), direction: (-1, 0), cone: 30, intensity: 20),
+        Directional(direction: (1, 1), intensity: 0.5),
+    ],
+    glass: [Glass(points: [(150, 50), (150, 190)], through: [(175, 120), (125, 120)], ior: 1.5)],
+    render: (samples: 4),
+)
+";
+
+#[test]
+fn spectra_lenses_spots_and_the_sun_are_drawn_as_they_are_and_can_be_changed() {
+    let dir = std::env::temp_dir().join(format!("flatray-optics-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("optics.ron");
+    std::fs::write(&scene, OPTICS).unwrap();
+    let server = common::serve(&scene);
+    let (browser, tab) = open(&dir, &server.url);
+    tab.wait_for_element("circle[data-light='0']").unwrap();
+    let text = || {
+        ureq::get(&format!("{}/api/scene.ron", server.url))
+            .call()
+            .unwrap()
+            .body_mut()
+            .read_to_string()
+            .unwrap()
+    };
+    // The sodium lamp in its spectrum's orange, not white; the lens with
+    // its two arcs; a handle for the spot's and the sun's directions.
+    let fill = evaluate(
+        &tab,
+        "document.querySelector(\"circle[data-light='0']\").getAttribute('fill')",
+    );
+    let rgb: Vec<u32> = fill
+        .as_str()
+        .unwrap_or_default()
+        .trim_start_matches("rgb(")
+        .trim_end_matches(')')
+        .split(',')
+        .filter_map(|v| v.trim().parse().ok())
+        .collect();
+    assert!(
+        rgb.len() == 3 && rgb[0] == 255 && rgb[1] < 200 && rgb[2] < 60,
+        "{fill}"
+    );
+    let lens = evaluate(
+        &tab,
+        "document.querySelector('#plan path').getAttribute('d')",
+    );
+    assert_eq!(
+        lens.as_str().unwrap_or_default().matches(" A ").count(),
+        2,
+        "{lens}"
+    );
+    tab.wait_for_element("circle[data-direction='1']").unwrap();
+    tab.wait_for_element("circle[data-direction='2']").unwrap();
+    wait_for_render(&tab, 0, 4);
+
+    // The lamp's colour comes from its lines, and the picker opens on
+    // their colour; a blackbody, then a plain colour, replace it.
+    tab.find_element("circle[data-light='0']")
+        .unwrap()
+        .click()
+        .unwrap();
+    tab.wait_for_element("#colour-from").unwrap();
+    assert_eq!(
+        evaluate(&tab, "document.getElementById('colour-from').value"),
+        "Lamp"
+    );
+    assert_eq!(
+        evaluate(&tab, "document.getElementById('lamp').value"),
+        "Sodium"
+    );
+    assert_ne!(
+        evaluate(&tab, "document.getElementById('color').value"),
+        "#ffffff"
+    );
+    evaluate(
+        &tab,
+        "(() => { const s = document.getElementById('colour-from'); s.value = 'Blackbody'; s.dispatchEvent(new Event('change')); return true; })()",
+    );
+    wait_until(
+        &tab,
+        "a blackbody",
+        "items.lights[0].spectrum && items.lights[0].spectrum.kind === 'Blackbody'",
+    );
+    assert!(
+        text().contains("Point(at: (60, 100), intensity: 20, spectrum: Blackbody(2700))"),
+        "{}",
+        text()
+    );
+    tab.find_element("circle[data-light='0']")
+        .unwrap()
+        .click()
+        .unwrap();
+    evaluate(
+        &tab,
+        "(() => { const s = document.getElementById('colour-from'); s.value = 'Colour'; s.dispatchEvent(new Event('change')); return true; })()",
+    );
+    wait_until(&tab, "a plain colour", "items.lights[0].spectrum === null");
+    let now = text();
+    assert!(
+        now.contains("Point(at: (60, 100), intensity: 20, color: ("),
+        "{now}"
+    );
+    assert!(!now.contains("Blackbody"), "{now}");
+    assert!(
+        evaluate(&tab, "document.getElementById('message').textContent")
+            .as_str()
+            .unwrap_or_default()
+            .is_empty()
+    );
+
+    // The sun turned by its handle: from (1, 1) to straight down.
+    let [w, h] = [300.0, 200.0];
+    let centre = (w / 2.0, h / 2.0);
+    let reach = 0.3 * f64::min(w, h);
+    let knob = (
+        centre.0 + reach * std::f64::consts::FRAC_1_SQRT_2,
+        centre.1 + reach * std::f64::consts::FRAC_1_SQRT_2,
+    );
+    drag(&tab, knob, (centre.0, centre.1 + reach));
+    wait_until(
+        &tab,
+        "the sun turned",
+        "Math.abs(items.lights[2].direction[0]) < 0.01 && items.lights[2].direction[1] > 0.99",
+    );
+    // The status line is whole: nothing of it is cut off.
+    wait_for_render(&tab, 0, 4);
+    if let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") {
+        tab.find_element("circle[data-light='0']").unwrap().click().unwrap();
+        let shot = tab
+            .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
+            .unwrap();
+        std::fs::write(Path::new(&folder).join("serve-optics.png"), &shot).unwrap();
+    }
+    let cut = evaluate(
+        &tab,
+        "(() => { const s = document.getElementById('status'); return s.scrollHeight > s.clientHeight || s.scrollWidth > s.clientWidth; })()",
+    );
+    assert_eq!(cut, serde_json::Value::Bool(false));
+    assert!(
+        evaluate(&tab, "document.getElementById('status').textContent")
+            .as_str()
+            .unwrap_or_default()
+            .ends_with(" s"),
+        "the seconds are shown"
+    );
+    drop(browser);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -10,6 +10,7 @@
 
 use std::path::Path;
 
+use flatray_geometry::DVec2;
 use serde::{Deserialize, Serialize};
 
 use crate::format::{LightSpec, MaterialSpec};
@@ -36,11 +37,20 @@ pub enum Edit {
     },
     /// Sets a light's intensity.
     LightIntensity { index: usize, value: f64 },
-    /// Sets a light's colour.
+    /// Sets a light's colour (a light that had a spectrum takes the
+    /// colour in its place).
     LightColor {
         index: usize,
         value: (f64, f64, f64),
     },
+    /// Gives a light a spectrum in place of its colour.
+    LightSpectrum {
+        index: usize,
+        spectrum: SpectrumKind,
+    },
+    /// Turns a spot or the sun: its direction, which need not be of unit
+    /// length.
+    LightDirection { index: usize, to: (f64, f64) },
     /// Sets a wall's material.
     WallMaterial {
         index: usize,
@@ -63,6 +73,15 @@ impl End {
             End::B => "b",
         }
     }
+}
+
+/// The spectra the live view offers.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub enum SpectrumKind {
+    /// Planck's law at a temperature in kelvin.
+    Blackbody(f64),
+    /// A gas-discharge lamp: `Sodium`, `Mercury`, `Neon` or `Hydrogen`.
+    Lamp(crate::format::LampName),
 }
 
 /// The materials a wall can be switched to.
@@ -90,11 +109,21 @@ pub fn apply(
         Edit::MoveLight { index, .. }
         | Edit::MoveLightEnd { index, .. }
         | Edit::LightIntensity { index, .. }
-        | Edit::LightColor { index, .. } => ("lights", index),
+        | Edit::LightColor { index, .. }
+        | Edit::LightSpectrum { index, .. }
+        | Edit::LightDirection { index, .. } => ("lights", index),
         Edit::MoveWallEnd { index, .. } | Edit::WallMaterial { index, .. } => ("walls", index),
     };
     let item = locate::item_range(text, list, index)
         .ok_or_else(|| format!("there is no item {index} in `{list}` (counting from 0)"))?;
+    // A light takes its colour from `color` or from `spectrum`: setting
+    // one drops the other.
+    let (text, item) = match *edit {
+        Edit::LightColor { .. } => without_field(text, item, "spectrum"),
+        Edit::LightSpectrum { .. } => without_field(text, item, "color"),
+        _ => (text.to_string(), item),
+    };
+    let text = text.as_str();
     let (field, value) = match *edit {
         Edit::MoveLight { to, .. } => ("at", point(to)?),
         Edit::MoveLightEnd { end, to, .. } | Edit::MoveWallEnd { end, to, .. } => {
@@ -107,6 +136,14 @@ pub fn apply(
             "color",
             format!("({}, {}, {})", number(r)?, number(g)?, number(b)?),
         ),
+        Edit::LightSpectrum { spectrum, .. } => (
+            "spectrum",
+            match spectrum {
+                SpectrumKind::Blackbody(kelvin) => format!("Blackbody({})", number(kelvin)?),
+                SpectrumKind::Lamp(lamp) => format!("Lamp({lamp:?})"),
+            },
+        ),
+        Edit::LightDirection { to, .. } => ("direction", point(to)?),
         Edit::WallMaterial { material, .. } => (
             "material",
             match material {
@@ -146,6 +183,36 @@ pub fn apply(
     Ok((edited, loaded))
 }
 
+/// `text` without `field` (its name, value and comma) in `item`, and the
+/// item's new range; as it was when the item has no such field.
+fn without_field(text: &str, item: (usize, usize), field: &str) -> (String, (usize, usize)) {
+    let Some((start, end)) = locate::item_field(text, item, field) else {
+        return (text.to_string(), item);
+    };
+    let Some(name) = text[item.0..start].rfind(field).map(|i| item.0 + i) else {
+        return (text.to_string(), item);
+    };
+    let rest = &text[end..item.1];
+    let after = rest.trim_start();
+    let (from, to) = if let Some(tail) = after.strip_prefix(',') {
+        // `field: v, next` -> `next`
+        let skip = rest.len() - tail.trim_start().len();
+        (name, end + skip)
+    } else {
+        // The last field: take the comma before it instead.
+        let before = text[item.0..name].trim_end();
+        let from = match before.strip_suffix(',') {
+            Some(kept) => item.0 + kept.len(),
+            None => name,
+        };
+        (from, end)
+    };
+    let mut out = String::with_capacity(text.len());
+    out.push_str(&text[..from]);
+    out.push_str(&text[to..]);
+    (out, (item.0, item.1 - (to - from)))
+}
+
 /// A number as a scene writes it: at most a thousandth of a unit, no
 /// trailing zeros.
 fn number(v: f64) -> Result<String, String> {
@@ -169,7 +236,24 @@ pub struct Items {
     pub origin: (f64, f64),
     pub walls: Vec<WallItem>,
     pub lights: Vec<LightItem>,
-    pub glass: Vec<Vec<(f64, f64)>>,
+    pub glass: Vec<GlassItem>,
+}
+
+/// A glass body as drawn: its corners, and its outline as SVG path data
+/// in world units, each edge straight or the arc it is.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GlassItem {
+    pub points: Vec<(f64, f64)>,
+    pub path: String,
+}
+
+/// What a light's spectrum is, for the live view to offer.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind")]
+pub enum SpectrumItem {
+    Blackbody { kelvin: f64 },
+    Lamp { lamp: &'static str },
+    Table,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -201,7 +285,10 @@ pub struct LightItem {
     pub radius: Option<f64>,
     pub direction: Option<(f64, f64)>,
     pub intensity: f64,
+    /// Its colour: the `color` given, or for a light with a spectrum the
+    /// spectrum's colour, brightest channel 1 (how the page shows it).
     pub color: (f64, f64, f64),
+    pub spectrum: Option<SpectrumItem>,
 }
 
 /// An arc's or circle's SVG path data, in world units; `None` for a
@@ -225,6 +312,44 @@ fn svg_curve(shape: &flatray_geometry::Shape) -> Option<String> {
         "M {} {} A {r} {r} 0 {large} {sweep} {} {}",
         arc.a.x, arc.a.y, arc.b.x, arc.b.y
     ))
+}
+
+/// A glass body's corners and outline.
+fn glass_item(g: &crate::format::GlassSpec) -> GlassItem {
+    let corners: Vec<DVec2> = g.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
+    let mut path = String::new();
+    if let Some(first) = corners.first() {
+        path = format!("M {} {}", first.x, first.y);
+    }
+    match crate::load::glass_edges(&corners, &g.through) {
+        Ok(edges) => {
+            for edge in &edges {
+                match svg_curve(edge) {
+                    // `M a A ...`: the arc from where the path stands.
+                    Some(curve) => match curve.find(" A ") {
+                        Some(at) if !edge.as_arc().is_some_and(|a| a.is_full()) => {
+                            path.push_str(&curve[at..]);
+                        }
+                        _ => path.push_str(&format!(" {curve}")),
+                    },
+                    None => {
+                        let b = edge.chord().b;
+                        path.push_str(&format!(" L {} {}", b.x, b.y));
+                    }
+                }
+            }
+        }
+        Err(_) => {
+            for c in corners.iter().skip(1) {
+                path.push_str(&format!(" L {} {}", c.x, c.y));
+            }
+        }
+    }
+    path.push_str(" Z");
+    GlassItem {
+        points: g.points.iter().map(|p| (p.0, p.1)).collect(),
+        path,
+    }
 }
 
 /// The items of a scene `text` that loads (`loaded`, its canvas).
@@ -271,6 +396,7 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
                 direction: None,
                 intensity: 0.0,
                 color: (1.0, 1.0, 1.0),
+                spectrum: None,
             };
             let (color, intensity) = match *l {
                 LightSpec::Point {
@@ -357,14 +483,33 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
             };
             item.color = (color.0, color.1, color.2);
             item.intensity = intensity.0;
+            if let Some(spec) = l.spectrum() {
+                use crate::format::{LampName, SpectrumSpec};
+                item.spectrum = Some(match spec {
+                    SpectrumSpec::Blackbody(kelvin) => SpectrumItem::Blackbody { kelvin: *kelvin },
+                    SpectrumSpec::Lamp(lamp) => SpectrumItem::Lamp {
+                        lamp: match lamp {
+                            LampName::Sodium => "Sodium",
+                            LampName::Mercury => "Mercury",
+                            LampName::Neon => "Neon",
+                            LampName::Hydrogen => "Hydrogen",
+                        },
+                    },
+                    SpectrumSpec::Table(_) => SpectrumItem::Table,
+                });
+                if let Ok(Some(spectrum)) = crate::load::light_spectrum(Some(spec), color) {
+                    let rgb = spectrum.sampled().rgb();
+                    let top = rgb[0].max(rgb[1]).max(rgb[2]);
+                    if top > 0.0 && top.is_finite() {
+                        let shown = |v: f64| (v / top).clamp(0.0, 1.0);
+                        item.color = (shown(rgb[0]), shown(rgb[1]), shown(rgb[2]));
+                    }
+                }
+            }
             item
         })
         .collect();
-    let glass = file
-        .glass
-        .iter()
-        .map(|g| g.points.iter().map(|p| (p.0, p.1)).collect())
-        .collect();
+    let glass = file.glass.iter().map(glass_item).collect();
     Ok(Items {
         canvas: (canvas.width, canvas.height),
         origin: (canvas.origin.x, canvas.origin.y),
@@ -528,5 +673,104 @@ Scene(
             Some("M 55 40 A 5 5 0 0 1 45 40 A 5 5 0 0 1 55 40")
         );
         assert!(!items.walls[2].ends);
+    }
+
+    #[test]
+    fn a_spectrum_and_a_colour_replace_each_other() {
+        let text = "Scene(canvas: (100, 80), floor: Color((0.5, 0.5, 0.5)),
+            lights: [
+                Point(at: (50, 40), spectrum: Lamp(Sodium), intensity: 3), // sodium
+                Point(at: (20, 40), color: (1, 0.5, 0.25)),
+                Spot(at: (10, 10), direction: (1, 0), cone: 30, spectrum: Blackbody(2700)),
+            ])";
+        let apply_to = |e: Edit| {
+            apply(text, &e, Path::new("t.ron"), Path::new("."))
+                .map(|(t, loaded)| (t.clone(), items(&t, &loaded).unwrap()))
+        };
+        let loaded = crate::parse(text, Path::new("t.ron"), Path::new(".")).unwrap();
+        let before = items(text, &loaded).unwrap();
+        // A sodium lamp is shown orange-yellow (in linear values, as
+        // `color` is given), not white.
+        let (r, g, b) = before.lights[0].color;
+        assert!(
+            r == 1.0 && g > 0.1 && g < 0.5 && b < 0.05,
+            "{:?}",
+            before.lights[0].color
+        );
+        assert_eq!(
+            before.lights[0].spectrum,
+            Some(SpectrumItem::Lamp { lamp: "Sodium" })
+        );
+        assert_eq!(
+            before.lights[2].spectrum,
+            Some(SpectrumItem::Blackbody { kelvin: 2700.0 })
+        );
+        // A colour for the sodium lamp: its spectrum goes, the rest stays.
+        let (t, i) = apply_to(Edit::LightColor {
+            index: 0,
+            value: (0.2, 0.4, 1.0),
+        })
+        .unwrap();
+        assert!(
+            t.contains("Point(at: (50, 40), intensity: 3, color: (0.2, 0.4, 1)), // sodium"),
+            "{t}"
+        );
+        assert_eq!(i.lights[0].spectrum, None);
+        // A spectrum for the coloured lamp: its colour goes.
+        let (t, i) = apply_to(Edit::LightSpectrum {
+            index: 1,
+            spectrum: SpectrumKind::Blackbody(4000.0),
+        })
+        .unwrap();
+        assert!(
+            t.contains("Point(at: (20, 40), spectrum: Blackbody(4000))"),
+            "{t}"
+        );
+        assert_eq!(
+            i.lights[1].spectrum,
+            Some(SpectrumItem::Blackbody { kelvin: 4000.0 })
+        );
+        // Another spectrum in place of the first, from JSON as the page
+        // sends it.
+        let e: Edit = serde_json::from_str(
+            r#"{"op": "light_spectrum", "index": 2, "spectrum": {"Lamp": "Neon"}}"#,
+        )
+        .unwrap();
+        let (t, _) = apply_to(e).unwrap();
+        assert!(t.contains("cone: 30, spectrum: Lamp(Neon))"), "{t}");
+        // A spot turned.
+        let (t, i) = apply_to(Edit::LightDirection {
+            index: 2,
+            to: (0.0, -2.0),
+        })
+        .unwrap();
+        assert!(t.contains("direction: (0, -2)"), "{t}");
+        assert_eq!(i.lights[2].direction, Some((0.0, -1.0)));
+        assert!(
+            apply_to(Edit::LightDirection {
+                index: 2,
+                to: (0.0, 0.0)
+            })
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn a_lens_is_drawn_with_its_arcs() {
+        let text = "Scene(canvas: (300, 200), floor: Color((0.5, 0.5, 0.5)),
+            lights: [Point(at: (20, 20))],
+            glass: [Glass(points: [(170, 50), (170, 190)], through: [(198.59, 120), (141.41, 120)]),
+                    Glass(points: [(10, 10), (30, 10), (20, 30)])])";
+        let loaded = crate::parse(text, Path::new("t.ron"), Path::new(".")).unwrap();
+        let items = items(text, &loaded).unwrap();
+        let lens = &items.glass[0].path;
+        assert!(lens.starts_with("M 170 50 A "), "{lens}");
+        assert_eq!(lens.matches(" A ").count(), 2, "{lens}");
+        assert!(lens.ends_with(" 170 50 Z"), "{lens}");
+        assert_eq!(items.glass[1].path, "M 10 10 L 30 10 L 20 30 L 10 10 Z");
+        assert_eq!(
+            items.glass[1].points,
+            vec![(10.0, 10.0), (30.0, 10.0), (20.0, 30.0)]
+        );
     }
 }

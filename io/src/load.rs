@@ -829,7 +829,7 @@ pub(crate) fn glass_outline(spec: &crate::format::GlassSpec) -> Vec<DVec2> {
 
 /// A glass outline's edges: from each corner to the next, straight, or an
 /// arc through the edge's `through` point.
-fn glass_edges(
+pub(crate) fn glass_edges(
     corners: &[DVec2],
     through: &[Option<crate::format::Point>],
 ) -> Result<Vec<Shape>, String> {
@@ -992,7 +992,7 @@ fn load_floor_image(path: &Path) -> Result<Floor, String> {
 /// The spectrum a light gives in place of its `color`, checked: a light
 /// takes one or the other, so a colour given beside a spectrum is an
 /// error rather than ignored.
-fn light_spectrum(
+pub(crate) fn light_spectrum(
     spec: Option<&SpectrumSpec>,
     color: Color,
 ) -> Result<Option<flatray_tracer::spectrum::Spectrum>, String> {
