@@ -531,7 +531,10 @@ fn spectra_lenses_spots_and_the_sun_are_drawn_as_they_are_and_can_be_changed() {
     // The status line is whole: nothing of it is cut off.
     wait_for_render(&tab, 0, 4);
     if let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") {
-        tab.find_element("circle[data-light='0']").unwrap().click().unwrap();
+        tab.find_element("circle[data-light='0']")
+            .unwrap()
+            .click()
+            .unwrap();
         let shot = tab
             .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
             .unwrap();

@@ -38,6 +38,19 @@ fn main() {
         .unwrap_or_else(|| panic!("no address in {first:?}"))
         .trim_end_matches('/')
         .to_string();
+    // Changes carry the token the page was served with.
+    let page = ureq::get(&format!("{url}/"))
+        .call()
+        .expect("the page")
+        .into_body()
+        .read_to_string()
+        .expect("the page");
+    let token = page
+        .split("name=\"flatray-token\" content=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .unwrap_or_default()
+        .to_string();
     let (tx, rx) = mpsc::channel::<(Instant, serde_json::Value)>();
     let events = format!("{url}/api/events");
     std::thread::spawn(move || {
@@ -87,6 +100,7 @@ fn main() {
         let sent = Instant::now();
         let reply = ureq::post(&format!("{url}/api/edit"))
             .content_type("application/json")
+            .header("x-flatray-token", &token)
             .send(body)
             .expect("edit")
             .into_body()
