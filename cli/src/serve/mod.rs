@@ -278,6 +278,11 @@ fn watch(shared: &Shared) {
             continue;
         }
         let read = disk::read_text(&shared.path);
+        // Loaded (its floor image read) with no lock held.
+        let parsed = match &read {
+            Ok(Some(text)) => Some(load_text(text, shared)),
+            _ => None,
+        };
         let mut scene = lock(shared);
         scene.stamp = now;
         let text = match read {
@@ -290,12 +295,20 @@ fn watch(shared: &Shared) {
                 continue;
             }
         };
-        take_from_disk(shared, &mut scene, text);
+        if let Some(parsed) = parsed {
+            take_from_disk(shared, &mut scene, text, parsed);
+        }
     }
 }
 
-/// What the watcher does with the file's new `text`.
-fn take_from_disk(shared: &Shared, scene: &mut Scene, text: String) {
+/// What the watcher does with the file's new `text`, which loads as
+/// `parsed`.
+fn take_from_disk(
+    shared: &Shared,
+    scene: &mut Scene,
+    text: String,
+    parsed: Result<Loaded, Refusal>,
+) {
     let unsaved = scene.text != scene.on_disk;
     if text == scene.on_disk {
         // Back to what the page started from: nothing to settle.
@@ -319,7 +332,7 @@ fn take_from_disk(shared: &Shared, scene: &mut Scene, text: String) {
     // A text that does not load is shown as an error, and not taken as
     // what the page follows: the last good scene stays, with no edits of
     // the page's own, and the fixed file is taken when it comes.
-    match load_text(&text, shared) {
+    match parsed {
         Ok(loaded) => {
             scene.on_disk = text.clone();
             let before = std::mem::take(&mut scene.text);
@@ -427,9 +440,11 @@ async fn edit(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> Res
             );
         }
     };
-    let mut scene = lock(&shared);
+    // The edit is made and loaded (its floor image read) with no lock
+    // held, then taken if the scene is still the one it was made on.
+    let before = lock(&shared).text.clone();
     let (edited, loaded) =
-        match flatray_io::edit::apply(&scene.text, &edit, &shared.shown, &shared.base) {
+        match flatray_io::edit::apply(&before, &edit, &shared.shown, &shared.base) {
             Ok(done) => done,
             Err(message) => {
                 return refused(
@@ -438,7 +453,10 @@ async fn edit(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> Res
                 );
             }
         };
-    let before = scene.text.clone();
+    let mut scene = lock(&shared);
+    if scene.text != before {
+        return changed_meanwhile();
+    }
     match adopt(&shared, &mut scene, edited, loaded) {
         Ok(()) => {
             scene.undo.push(before);
@@ -451,17 +469,38 @@ async fn edit(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> Res
     }
 }
 
+/// A change refused because another came first (from a second page, or
+/// the file): the page makes it again on the new scene if it still wants.
+fn changed_meanwhile() -> Response {
+    refused(
+        StatusCode::CONFLICT,
+        serde_json::json!({"message": "the scene changed while this change was made (another page, or the file); look, and make it again"}),
+    )
+}
+
 async fn undo(State(shared): State<Arc<Shared>>) -> Response {
-    let mut scene = lock(&shared);
-    let Some(text) = scene.undo.pop() else {
+    let (before, last) = {
+        let scene = lock(&shared);
+        (scene.text.clone(), scene.undo.last().cloned())
+    };
+    let Some(text) = last else {
         return refused(
             StatusCode::CONFLICT,
             serde_json::json!({"message": "nothing to undo"}),
         );
     };
-    match load_text(&text, &shared) {
+    // Loaded with no lock held; the undo is taken only once it loads.
+    let loaded = load_text(&text, &shared);
+    let mut scene = lock(&shared);
+    if scene.text != before || scene.undo.last() != Some(&text) {
+        return changed_meanwhile();
+    }
+    match loaded {
         Ok(loaded) => match adopt(&shared, &mut scene, text, loaded) {
-            Ok(()) => axum::Json(serde_json::json!({"version": scene.version})).into_response(),
+            Ok(()) => {
+                scene.undo.pop();
+                axum::Json(serde_json::json!({"version": scene.version})).into_response()
+            }
             Err(f) => refused(
                 StatusCode::UNPROCESSABLE_ENTITY,
                 serde_json::json!({"message": f.message}),
@@ -604,13 +643,21 @@ async fn resolve(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> 
             );
         }
     };
-    let mut scene = lock(&shared);
-    let Some(file) = scene.conflict.clone() else {
+    let Some(file) = lock(&shared).conflict.clone() else {
         return refused(
             StatusCode::CONFLICT,
             serde_json::json!({"message": "the file has not changed on disk: there is nothing to choose"}),
         );
     };
+    // The file's text is loaded (when it is to be taken) with no lock held.
+    let loaded = match request.keep {
+        Side::File => Some(load_text(&file, &shared)),
+        Side::Mine => None,
+    };
+    let mut scene = lock(&shared);
+    if scene.conflict.as_ref() != Some(&file) {
+        return changed_meanwhile();
+    }
     match request.keep {
         Side::Mine => {
             scene.on_disk = file;
@@ -618,9 +665,10 @@ async fn resolve(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> 
             announce(&shared, &mut scene);
         }
         Side::File => {
-            let loaded = match load_text(&file, &shared) {
-                Ok(loaded) => loaded,
-                Err(r) => {
+            let loaded = match loaded {
+                Some(Ok(loaded)) => loaded,
+                None => return changed_meanwhile(),
+                Some(Err(r)) => {
                     let mut body = r.json();
                     body["message"] = format!(
                         "the file's text does not load, so it cannot be taken (fix it in your editor, or keep yours): {}",
