@@ -375,180 +375,8 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         }
         walls.push(Wall { shape, material });
     }
-    for (k, light) in file.lights.iter().enumerate() {
-        let spectrum = light_spectrum(light.spectrum(), light.color()).map_err(|message| {
-            let field = if light.spectrum().is_some() {
-                "spectrum"
-            } else {
-                "color"
-            };
-            source.error(
-                Place::LightField(k, light.kind(), field),
-                format!("light {k}: {message}"),
-            )
-        })?;
-        lights.push(match *light {
-            LightSpec::Point {
-                at,
-                color,
-                intensity,
-                falloff: f, ..
-            } => Light {
-                shape: LightShape::Point {
-                    at: DVec2::new(at.0, at.1),
-                },
-                color: rgb(color),
-                intensity: intensity.0,
-                falloff: f.map_or(default_falloff, falloff), spectrum: None,
-            },
-            LightSpec::Spot {
-                at,
-                direction,
-                cone,
-                softness,
-                color,
-                intensity,
-                falloff: f, ..
-            } => {
-                if cone.0 > 180.0 || softness.0 > cone.0 {
-                    let field = if cone.0 > 180.0 { "cone" } else { "softness" };
-                    return Err(source.error(
-                        Place::LightField(k, "Spot", field),
-                        format!(
-                            "expected 0 < cone <= 180 and softness <= cone (degrees), found cone {} and softness {}",
-                            cone.0, softness.0
-                        ),
-                    ));
-                }
-                Light {
-                    shape: LightShape::Spot {
-                        at: DVec2::new(at.0, at.1),
-                        direction: DVec2::new(direction.0, direction.1),
-                        cone: cone.0.to_radians(),
-                        softness: softness.0.to_radians(),
-                    },
-                    color: rgb(color),
-                    intensity: intensity.0,
-                    falloff: f.map_or(default_falloff, falloff), spectrum: None,
-                }
-            }
-            LightSpec::Line {
-                a,
-                b,
-                color,
-                intensity,
-                one_sided,
-                solid,
-                falloff: f, ..
-            } => {
-                if a == b {
-                    return Err(source.error(
-                        Place::LightField(k, "Line", "b"),
-                        format!(
-                            "a line light needs two different endpoints, found ({}, {}) twice; use a Point light",
-                            a.0, a.1
-                        ),
-                    ));
-                }
-                let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
-                let wall = if solid {
-                    walls.push(Wall {
-                        shape: Shape::Segment(segment),
-                        material: Material::Diffuse {
-                            albedo: Some(Rgb::ZERO),
-                        },
-                    });
-                    Some(walls.len() as u32 - 1)
-                } else {
-                    None
-                };
-                Light {
-                    shape: LightShape::Line {
-                        segment,
-                        one_sided,
-                        wall,
-                    },
-                    color: rgb(color),
-                    intensity: intensity.0,
-                    falloff: f.map_or(default_falloff, falloff), spectrum: None,
-                }
-            }
-            LightSpec::Circle {
-                at,
-                radius,
-                color,
-                intensity,
-                falloff: f, ..
-            } => {
-                if radius.0 > MAX_COORDINATE {
-                    return Err(source.error(
-                        Place::LightField(k, "Circle", "radius"),
-                        format!(
-                            "expected a circle light's radius of at most {MAX_COORDINATE:e}, found {}",
-                            radius.0
-                        ),
-                    ));
-                }
-                Light {
-                    shape: LightShape::Circle {
-                        at: DVec2::new(at.0, at.1),
-                        radius: radius.0,
-                    },
-                    color: rgb(color),
-                    intensity: intensity.0,
-                    falloff: f.map_or(default_falloff, falloff), spectrum: None,
-                }
-            }
-            LightSpec::Directional {
-                direction,
-                color,
-                intensity, ..
-            } => Light {
-                shape: LightShape::Directional {
-                    direction: DVec2::new(direction.0, direction.1),
-                },
-                color: rgb(color),
-                intensity: intensity.0,
-                falloff: Falloff::Constant, spectrum: None,
-            },
-            LightSpec::Beam {
-                a,
-                b,
-                direction,
-                color,
-                intensity, ..
-            } => {
-                let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
-                let direction = DVec2::new(direction.0, direction.1);
-                let shape = LightShape::Beam { segment, direction };
-                if let Err(message) = flatray_tracer::scene::checks::light_shape(&shape) {
-                    return Err(source.error(Place::Light(k), format!("light {k}: {message}")));
-                }
-                Light {
-                    shape,
-                    color: rgb(color),
-                    intensity: intensity.0,
-                    falloff: Falloff::Constant, spectrum: None,
-                }
-            }
-            LightSpec::Laser {
-                at,
-                direction,
-                color,
-                intensity, ..
-            } => Light {
-                shape: LightShape::Laser {
-                    at: DVec2::new(at.0, at.1),
-                    direction: DVec2::new(direction.0, direction.1),
-                },
-                color: rgb(color),
-                intensity: intensity.0,
-                falloff: Falloff::Constant, spectrum: None,
-            },
-        });
-        if let Some(last) = lights.last_mut() {
-            last.spectrum = spectrum;
-        }
+    for (k, spec) in file.lights.iter().enumerate() {
+        lights.push(light(k, spec, default_falloff, source, &mut walls)?);
     }
 
     let mut bodies = Vec::with_capacity(file.glass.len());
@@ -666,18 +494,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             source.error(place, invalid.to_string())
         })?;
     let mut warnings = warnings;
-    match *source {
-        Source::Text { text, .. } => warnings.extend(crate::lint::sealed(text, &file, &scene)),
-        Source::Values { .. } => warnings.extend(
-            crate::lint::sealed("", &file, &scene)
-                .into_iter()
-                .map(|w| Warning {
-                    line: 0,
-                    column: 0,
-                    ..w
-                }),
-        ),
-    }
+    warnings.extend(sealed_warnings(source, &file, &scene));
     let mut options = RenderOptions::default();
     options.samples = file.render.samples.0;
     options.bounces = file.render.bounces.0;
@@ -713,6 +530,221 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         },
         warnings,
     })
+}
+
+/// Light `k` of the file, checked; errors stand at the light (or its
+/// field).
+/// A solid line light's black wall is added to `walls`.
+fn light(
+    k: usize,
+    light: &LightSpec,
+    default_falloff: Falloff,
+    source: &Source,
+    walls: &mut Vec<Wall>,
+) -> Result<Light, SceneError> {
+    let spectrum = light_spectrum(light.spectrum(), light.color()).map_err(|message| {
+        let field = if light.spectrum().is_some() {
+            "spectrum"
+        } else {
+            "color"
+        };
+        source.error(
+            Place::LightField(k, light.kind(), field),
+            format!("light {k}: {message}"),
+        )
+    })?;
+    let mut built = match *light {
+        LightSpec::Point {
+            at,
+            color,
+            intensity,
+            falloff: f,
+            ..
+        } => Light {
+            shape: LightShape::Point {
+                at: DVec2::new(at.0, at.1),
+            },
+            color: rgb(color),
+            intensity: intensity.0,
+            falloff: f.map_or(default_falloff, falloff),
+            spectrum: None,
+        },
+        LightSpec::Spot {
+            at,
+            direction,
+            cone,
+            softness,
+            color,
+            intensity,
+            falloff: f,
+            ..
+        } => {
+            if cone.0 > 180.0 || softness.0 > cone.0 {
+                let field = if cone.0 > 180.0 { "cone" } else { "softness" };
+                return Err(source.error(
+                    Place::LightField(k, "Spot", field),
+                    format!(
+                        "expected 0 < cone <= 180 and softness <= cone (degrees), found cone {} and softness {}",
+                        cone.0, softness.0
+                    ),
+                ));
+            }
+            Light {
+                shape: LightShape::Spot {
+                    at: DVec2::new(at.0, at.1),
+                    direction: DVec2::new(direction.0, direction.1),
+                    cone: cone.0.to_radians(),
+                    softness: softness.0.to_radians(),
+                },
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: f.map_or(default_falloff, falloff),
+                spectrum: None,
+            }
+        }
+        LightSpec::Line {
+            a,
+            b,
+            color,
+            intensity,
+            one_sided,
+            solid,
+            falloff: f,
+            ..
+        } => {
+            if a == b {
+                return Err(source.error(
+                    Place::LightField(k, "Line", "b"),
+                    format!(
+                        "a line light needs two different endpoints, found ({}, {}) twice; use a Point light",
+                        a.0, a.1
+                    ),
+                ));
+            }
+            let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
+            let wall = if solid {
+                walls.push(Wall {
+                    shape: Shape::Segment(segment),
+                    material: Material::Diffuse {
+                        albedo: Some(Rgb::ZERO),
+                    },
+                });
+                Some(walls.len() as u32 - 1)
+            } else {
+                None
+            };
+            Light {
+                shape: LightShape::Line {
+                    segment,
+                    one_sided,
+                    wall,
+                },
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: f.map_or(default_falloff, falloff),
+                spectrum: None,
+            }
+        }
+        LightSpec::Circle {
+            at,
+            radius,
+            color,
+            intensity,
+            falloff: f,
+            ..
+        } => {
+            if radius.0 > MAX_COORDINATE {
+                return Err(source.error(
+                    Place::LightField(k, "Circle", "radius"),
+                    format!(
+                        "expected a circle light's radius of at most {MAX_COORDINATE:e}, found {}",
+                        radius.0
+                    ),
+                ));
+            }
+            Light {
+                shape: LightShape::Circle {
+                    at: DVec2::new(at.0, at.1),
+                    radius: radius.0,
+                },
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: f.map_or(default_falloff, falloff),
+                spectrum: None,
+            }
+        }
+        LightSpec::Directional {
+            direction,
+            color,
+            intensity,
+            ..
+        } => Light {
+            shape: LightShape::Directional {
+                direction: DVec2::new(direction.0, direction.1),
+            },
+            color: rgb(color),
+            intensity: intensity.0,
+            falloff: Falloff::Constant,
+            spectrum: None,
+        },
+        LightSpec::Beam {
+            a,
+            b,
+            direction,
+            color,
+            intensity,
+            ..
+        } => {
+            let segment = Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
+            let direction = DVec2::new(direction.0, direction.1);
+            let shape = LightShape::Beam { segment, direction };
+            if let Err(message) = flatray_tracer::scene::checks::light_shape(&shape) {
+                return Err(source.error(Place::Light(k), format!("light {k}: {message}")));
+            }
+            Light {
+                shape,
+                color: rgb(color),
+                intensity: intensity.0,
+                falloff: Falloff::Constant,
+                spectrum: None,
+            }
+        }
+        LightSpec::Laser {
+            at,
+            direction,
+            color,
+            intensity,
+            ..
+        } => Light {
+            shape: LightShape::Laser {
+                at: DVec2::new(at.0, at.1),
+                direction: DVec2::new(direction.0, direction.1),
+            },
+            color: rgb(color),
+            intensity: intensity.0,
+            falloff: Falloff::Constant,
+            spectrum: None,
+        },
+    };
+    built.spectrum = spectrum;
+    Ok(built)
+}
+
+/// The warnings that need the built scene (its walls' hierarchy): lights
+/// sealed in small loops of walls.
+fn sealed_warnings(source: &Source, file: &SceneFile, scene: &Scene) -> Vec<Warning> {
+    match *source {
+        Source::Text { text, .. } => crate::lint::sealed(text, file, scene),
+        // Values have no lines: the messages name the item by its index.
+        Source::Values { .. } => crate::lint::sealed("", file, scene)
+            .into_iter()
+            .map(|w| Warning {
+                line: 0,
+                column: 0,
+                ..w
+            })
+            .collect(),
+    }
 }
 
 /// A warning for each wall of the file (the first `listed` walls) that lies

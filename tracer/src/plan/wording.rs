@@ -116,15 +116,7 @@ impl Plan {
         let mut effects = Vec::new();
         let mut add =
             |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
-        let n = |k: usize, what: &str| {
-            if k == 1 {
-                format!("{k} {what}")
-            } else if let Some(stem) = what.strip_suffix("body") {
-                format!("{k} {stem}bodies")
-            } else {
-                format!("{k} {what}s")
-            }
-        };
+        let n = counted;
         add(
             "direct light: points and spots",
             points + spots > 0,
@@ -680,5 +672,16 @@ impl fmt::Display for PlanText<'_> {
 impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         self.verbose().fmt(f)
+    }
+}
+
+/// `k` things called `what`, in the plural where `k` is not 1.
+fn counted(k: usize, what: &str) -> String {
+    if k == 1 {
+        format!("{k} {what}")
+    } else if let Some(stem) = what.strip_suffix("body") {
+        format!("{k} {stem}bodies")
+    } else {
+        format!("{k} {what}s")
     }
 }
