@@ -177,6 +177,22 @@ fn drag(tab: &Tab, from: (f64, f64), to: (f64, f64)) {
     mouse(tab, Input::DispatchMouseEventTypeOption::MouseReleased, end);
 }
 
+/// With `FLATRAY_SCREENSHOTS` set (a folder), clicks `click` first, then
+/// writes the page as it is to `name` in that folder: how the live view's
+/// pictures in the docs are taken.
+fn screenshot(tab: &Tab, click: Option<&str>, name: &str) {
+    let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") else {
+        return;
+    };
+    if let Some(selector) = click {
+        tab.find_element(selector).unwrap().click().unwrap();
+    }
+    let shot = tab
+        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
+        .unwrap();
+    std::fs::write(Path::new(&folder).join(name), &shot).unwrap();
+}
+
 /// Waits, up to 30 s, for the page's `js` to give `true`.
 fn wait_until(tab: &Tab, what: &str, js: &str) {
     let started = Instant::now();
@@ -233,12 +249,7 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
         "darker where it was: {near_old:?}"
     );
 
-    let shot = tab
-        .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
-        .unwrap();
-    if let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") {
-        std::fs::write(Path::new(&folder).join("serve.png"), &shot).unwrap();
-    }
+    screenshot(&tab, None, "serve.png");
 
     // Save through the page's button: the file holds the lamp's new place,
     // its comments, and a backup of what it was.
@@ -328,16 +339,7 @@ fn a_change_on_disk_never_replaces_the_pages_edit_and_each_side_can_be_kept() {
         evaluate(&tab, "document.getElementById('save').textContent"),
         "Save*"
     );
-    if let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") {
-        tab.find_element("#conflict summary")
-            .unwrap()
-            .click()
-            .unwrap();
-        let shot = tab
-            .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
-            .unwrap();
-        std::fs::write(Path::new(&folder).join("serve-conflict.png"), &shot).unwrap();
-    }
+    screenshot(&tab, Some("#conflict summary"), "serve-conflict.png");
     tab.find_element("#keep-mine").unwrap().click().unwrap();
     wait_until(
         &tab,
@@ -530,16 +532,7 @@ fn spectra_lenses_spots_and_the_sun_are_drawn_as_they_are_and_can_be_changed() {
     );
     // The status line is whole: nothing of it is cut off.
     wait_for_render(&tab, 0, 4);
-    if let Some(folder) = std::env::var_os("FLATRAY_SCREENSHOTS") {
-        tab.find_element("circle[data-light='0']")
-            .unwrap()
-            .click()
-            .unwrap();
-        let shot = tab
-            .capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true)
-            .unwrap();
-        std::fs::write(Path::new(&folder).join("serve-optics.png"), &shot).unwrap();
-    }
+    screenshot(&tab, Some("circle[data-light='0']"), "serve-optics.png");
     let cut = evaluate(
         &tab,
         "(() => { const s = document.getElementById('status'); return s.scrollHeight > s.clientHeight || s.scrollWidth > s.clientWidth; })()",

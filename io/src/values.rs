@@ -56,37 +56,17 @@ fn write(out: &mut String, value: &Value, name: Option<&str>, key: Option<&str>,
         Value::String(s) if key != Some("Image") && is_identifier(s) => out.push_str(s),
         Value::String(s) => out.push_str(&ron::to_string(s).unwrap_or_else(|_| format!("{s:?}"))),
         Value::Array(items) if !items.is_empty() && items.iter().all(Value::is_number) => {
-            out.push('(');
-            for (k, item) in items.iter().enumerate() {
-                if k > 0 {
-                    out.push_str(", ");
-                }
-                write(out, item, None, None, depth);
-            }
-            out.push(')');
+            entries(out, ('(', ')'), items.len(), false, depth, |out, k| {
+                write(out, &items[k], None, None, depth);
+            });
         }
         Value::Array(items) => {
             let item = key.and_then(item_name);
-            // A long list of structs, an item a line; short ones inline.
+            // A list of structs, an item a line; others inline.
             let lines = items.iter().any(Value::is_object);
-            out.push('[');
-            for (k, v) in items.iter().enumerate() {
-                if lines {
-                    out.push('\n');
-                    indent(out, depth + 1);
-                } else if k > 0 {
-                    out.push_str(", ");
-                }
-                write(out, v, item, None, depth + 1);
-                if lines {
-                    out.push(',');
-                }
-            }
-            if lines {
-                out.push('\n');
-                indent(out, depth);
-            }
-            out.push(']');
+            entries(out, ('[', ']'), items.len(), lines, depth, |out, k| {
+                write(out, &items[k], item, None, depth + 1);
+            });
         }
         Value::Object(fields) => {
             // An object of one capitalised key is a variant with its value.
@@ -106,29 +86,48 @@ fn write(out: &mut String, value: &Value, name: Option<&str>, key: Option<&str>,
                 return;
             }
             out.push_str(name.unwrap_or(""));
+            // The scene's own fields a line each; a struct within, inline.
             let top = name == Some("Scene");
-            out.push('(');
-            for (k, (field, v)) in fields.iter().enumerate() {
-                if top {
-                    out.push('\n');
-                    indent(out, depth + 1);
-                } else if k > 0 {
-                    out.push_str(", ");
-                }
+            let fields: Vec<(&String, &Value)> = fields.iter().collect();
+            entries(out, ('(', ')'), fields.len(), top, depth, |out, k| {
+                let (field, v) = fields[k];
                 out.push_str(field);
                 out.push_str(": ");
                 write(out, v, None, Some(field), depth + 1);
-                if top {
-                    out.push(',');
-                }
-            }
-            if top {
-                out.push('\n');
-                indent(out, depth);
-            }
-            out.push(')');
+            });
         }
     }
+}
+
+/// Writes `n` entries between `open` and `close`, each by `entry`: one a
+/// line, indented and followed by a comma, when `lines`; else inline,
+/// separated by commas.
+fn entries(
+    out: &mut String,
+    (open, close): (char, char),
+    n: usize,
+    lines: bool,
+    depth: usize,
+    mut entry: impl FnMut(&mut String, usize),
+) {
+    out.push(open);
+    for k in 0..n {
+        if lines {
+            out.push('\n');
+            indent(out, depth + 1);
+        } else if k > 0 {
+            out.push_str(", ");
+        }
+        entry(out, k);
+        if lines {
+            out.push(',');
+        }
+    }
+    if lines {
+        out.push('\n');
+        indent(out, depth);
+    }
+    out.push(close);
 }
 
 fn is_identifier(s: &str) -> bool {
