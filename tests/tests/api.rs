@@ -170,7 +170,7 @@ fn scene_values_given_as_json_are_checked_with_their_paths() {
     assert!(
         error
             .to_string()
-            .starts_with("values: lights[0]: expected 0 < cone <= 180"),
+            .starts_with("values: lights[0].Spot.softness: expected 0 < cone <= 180"),
         "{error}"
     );
 }
