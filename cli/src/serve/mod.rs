@@ -278,9 +278,17 @@ fn watch(shared: &Shared) {
             continue;
         }
         let read = disk::read_text(&shared.path);
-        // Loaded (its floor image read) with no lock held.
+        // Loaded (its floor image read) with no lock held, and only when
+        // it is to be taken: a new text while the page has no edits.
         let parsed = match &read {
-            Ok(Some(text)) => Some(load_text(text, shared)),
+            Ok(Some(text))
+                if {
+                    let scene = lock(shared);
+                    *text != scene.on_disk && *text != scene.text && scene.text == scene.on_disk
+                } =>
+            {
+                Some(load_text(text, shared))
+            }
             _ => None,
         };
         let mut scene = lock(shared);
@@ -295,19 +303,17 @@ fn watch(shared: &Shared) {
                 continue;
             }
         };
-        if let Some(parsed) = parsed {
-            take_from_disk(shared, &mut scene, text, parsed);
-        }
+        take_from_disk(shared, &mut scene, text, parsed);
     }
 }
 
 /// What the watcher does with the file's new `text`, which loads as
-/// `parsed`.
+/// `parsed` where it was loaded (when it is to be taken).
 fn take_from_disk(
     shared: &Shared,
     scene: &mut Scene,
     text: String,
-    parsed: Result<Loaded, Refusal>,
+    parsed: Option<Result<Loaded, Refusal>>,
 ) {
     let unsaved = scene.text != scene.on_disk;
     if text == scene.on_disk {
@@ -332,6 +338,11 @@ fn take_from_disk(
     // A text that does not load is shown as an error, and not taken as
     // what the page follows: the last good scene stays, with no edits of
     // the page's own, and the fixed file is taken when it comes.
+    let Some(parsed) = parsed else {
+        // The page's state changed between the look and now: look again.
+        scene.stamp = None;
+        return;
+    };
     match parsed {
         Ok(loaded) => {
             scene.on_disk = text.clone();
