@@ -382,85 +382,9 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
     let mut bodies = Vec::with_capacity(file.glass.len());
     let mut polygons: Vec<Vec<DVec2>> = Vec::with_capacity(file.glass.len());
     for (k, spec) in file.glass.iter().enumerate() {
-        let corners: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
-        let located = |message: String| source.error(Place::Glass(k), message);
-        let edges = glass_edges(&corners, &spec.through).map_err(located)?;
-        // Arcs are checked as fine polygons: every test below is of the
-        // outline's shape, not of its rays.
-        let points = flattened(&edges);
-        validate_polygon(&points).map_err(located)?;
-        for (j, other) in polygons.iter().enumerate() {
-            if polygons_cross(&points, other) {
-                return Err(located(format!(
-                    "glass {k} crosses glass {j}: glass bodies must not overlap"
-                )));
-            }
-            // Edges apart, one may still hold the other whole.
-            if inside_polygon(points[0], other) || inside_polygon(other[0], &points) {
-                return Err(located(format!(
-                    "glass {k} and glass {j} lie one inside the other: glass bodies must not overlap"
-                )));
-            }
-        }
-        for (i, shape) in edges.iter().enumerate() {
-            let Shape::Segment(edge) = *shape else {
-                continue;
-            };
-            // Along a wall, by the rule for walls that overlap (rule 8),
-            // which glass edges take no part in.
-            let along = |w: &Wall| {
-                w.as_segment().is_some_and(|s| {
-                    flatray_geometry::overlap::overlap(
-                        &edge,
-                        s,
-                        flatray_geometry::overlap::Tolerance::Rounding,
-                    )
-                })
-            };
-            if let Some(w) = walls.iter().position(along) {
-                return Err(located(format!(
-                    "glass edge {i} lies along wall {w}: glass may touch a wall at a point, not along an edge"
-                )));
-            }
-        }
-        let area: f64 = (0..points.len())
-            .map(|i| flatray_geometry::cross(points[i], points[(i + 1) % points.len()]))
-            .sum();
-        let inside = if area > 0.0 {
-            Side::Positive
-        } else {
-            Side::Negative
-        };
-        for shape in edges {
-            // A segment's `Positive` side is its left; an arc's is away
-            // from its centre, and the glass lies towards the centre where
-            // the outline turns the arc's way.
-            let inside = match shape {
-                Shape::Segment(_) => inside,
-                Shape::Arc(arc) => {
-                    if (inside == Side::Positive) == (arc.turn > 0.0) {
-                        Side::Negative
-                    } else {
-                        Side::Positive
-                    }
-                }
-            };
-            walls.push(Wall {
-                shape,
-                material: Material::Glass {
-                    body: bodies.len() as u32,
-                    inside,
-                },
-            });
-        }
-        bodies.push(GlassBody {
-            ior: spec.ior.0,
-            dispersion: spec.dispersion.0,
-            absorption: spec
-                .absorption
-                .map_or(Rgb::ZERO, |(r, g, b)| Rgb::new(r.0, g.0, b.0)),
-            roughness: spec.roughness.0,
-        });
+        let number = bodies.len() as u32;
+        let (body, points) = glass_body(k, spec, source, &polygons, &mut walls, number)?;
+        bodies.push(body);
         polygons.push(points);
     }
 
@@ -530,6 +454,97 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         },
         warnings,
     })
+}
+
+/// Glass body `k` of the file, checked against the bodies before it
+/// (`polygons`, their outlines) and the walls; its edges are added to
+/// `walls` as the edges of body number `body`. Gives the body and its
+/// outline.
+fn glass_body(
+    k: usize,
+    spec: &crate::format::GlassSpec,
+    source: &Source,
+    polygons: &[Vec<DVec2>],
+    walls: &mut Vec<Wall>,
+    body: u32,
+) -> Result<(GlassBody, Vec<DVec2>), SceneError> {
+    let corners: Vec<DVec2> = spec.points.iter().map(|p| DVec2::new(p.0, p.1)).collect();
+    let located = |message: String| source.error(Place::Glass(k), message);
+    let edges = glass_edges(&corners, &spec.through).map_err(located)?;
+    // Arcs are checked as fine polygons: every test below is of the
+    // outline's shape, not of its rays.
+    let points = flattened(&edges);
+    validate_polygon(&points).map_err(located)?;
+    for (j, other) in polygons.iter().enumerate() {
+        if polygons_cross(&points, other) {
+            return Err(located(format!(
+                "glass {k} crosses glass {j}: glass bodies must not overlap"
+            )));
+        }
+        // Edges apart, one may still hold the other whole.
+        if inside_polygon(points[0], other) || inside_polygon(other[0], &points) {
+            return Err(located(format!(
+                "glass {k} and glass {j} lie one inside the other: glass bodies must not overlap"
+            )));
+        }
+    }
+    for (i, shape) in edges.iter().enumerate() {
+        let Shape::Segment(edge) = *shape else {
+            continue;
+        };
+        // Along a wall, by the rule for walls that overlap (rule 8),
+        // which glass edges take no part in.
+        let along = |w: &Wall| {
+            w.as_segment().is_some_and(|s| {
+                flatray_geometry::overlap::overlap(
+                    &edge,
+                    s,
+                    flatray_geometry::overlap::Tolerance::Rounding,
+                )
+            })
+        };
+        if let Some(w) = walls.iter().position(along) {
+            return Err(located(format!(
+                "glass edge {i} lies along wall {w}: glass may touch a wall at a point, not along an edge"
+            )));
+        }
+    }
+    let area: f64 = (0..points.len())
+        .map(|i| flatray_geometry::cross(points[i], points[(i + 1) % points.len()]))
+        .sum();
+    let inside = if area > 0.0 {
+        Side::Positive
+    } else {
+        Side::Negative
+    };
+    for shape in edges {
+        // A segment's `Positive` side is its left; an arc's is away
+        // from its centre, and the glass lies towards the centre where
+        // the outline turns the arc's way.
+        let inside = match shape {
+            Shape::Segment(_) => inside,
+            Shape::Arc(arc) => {
+                if (inside == Side::Positive) == (arc.turn > 0.0) {
+                    Side::Negative
+                } else {
+                    Side::Positive
+                }
+            }
+        };
+        walls.push(Wall {
+            shape,
+            material: Material::Glass { body, inside },
+        });
+    }
+    let glass = GlassBody {
+        ior: spec.ior.0,
+        dispersion: spec.dispersion.0,
+        absorption: spec
+            .absorption
+            .map_or(Rgb::ZERO, |(r, g, b)| Rgb::new(r.0, g.0, b.0)),
+        roughness: spec.roughness.0,
+    };
+    Ok((glass, points))
 }
 
 /// Light `k` of the file, checked; errors stand at the light (or its
