@@ -10,8 +10,20 @@
 # Then: the workspace's tests in release mode, the Python package's
 # tests, and the geometry and end-to-end tests again with only the code
 # that runs on every processor (no AVX), which must give the same images.
+#
+# With names of the workspace's layers, only their tests (release mode,
+# nothing installed):
+#
+#   scripts/test.sh geometry io
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+if [ "$#" -gt 0 ]; then
+  for layer in "$@"; do
+    cargo test --release -p "flatray-$layer"
+  done
+  exit 0
+fi
 
 if ! command -v chromium >/dev/null 2>&1 && [ -z "${FLATRAY_CHROMIUM:-}" ]; then
   echo "installing Chromium (Debian's package) for the browser test" >&2
@@ -27,7 +39,7 @@ cargo test --release --workspace
 # The Python package, built from source by pip, and its tests (a local
 # two-worker Ray among them).
 python3 -m pip install --quiet --disable-pip-version-check "./cli/python[test]"
-python3 -m pytest -q cli/python/tests
+python3 -m pytest cli/python/tests -q
 # Again with only the code that runs on every processor (no AVX): the same
 # images, plans and statistics are expected. (The docs' pictures, checked
 # above, are left out here for time: the other tests compare the kernels'
