@@ -102,6 +102,11 @@ pub(crate) struct ConvergeArgs {
     /// default 32).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1000))]
     specular: Option<u32>,
+    /// The error the table and the chart give: relmse (the root of
+    /// relMSE, each pixel's error over its own value) or rms (the image's
+    /// RMS error over its RMS value). The CSV has both.
+    #[arg(long, value_enum, default_value_t = crate::ErrorMetricArg::Relmse)]
+    error_metric: crate::ErrorMetricArg,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -181,13 +186,18 @@ pub(crate) fn converge(
             let noise = read_noise(&path.with_extension("noise.txt"));
             let info = ReferenceInfo {
                 description: match noise {
-                    Some(_) => format!("`{}` (given, with its noise)", path.display()),
+                    Some((_, Some(_))) => format!("`{}` (given, with its noise)", path.display()),
+                    Some((_, None)) => format!(
+                        "`{}` (given, with its relative RMSE; its relMSE unknown: taken as 0)",
+                        path.display()
+                    ),
                     None => format!(
                         "`{}` (given, its noise unknown: taken as 0)",
                         path.display()
                     ),
                 },
-                relative_noise: noise.unwrap_or(0.0),
+                relative_noise: noise.map_or(0.0, |n| n.0),
+                relmse_noise: noise.and_then(|n| n.1).unwrap_or(0.0),
             };
             (image, info)
         }
@@ -228,10 +238,9 @@ pub(crate) fn converge(
             };
             // The reference's own noise is independent of the run's error
             // and adds to it in quadrature: take it out.
+            let without = |raw: f64, noise: f64| (raw * raw - noise * noise).max(0.0).sqrt();
             let raw = error.relative_rmse;
-            let relative_rmse = (raw * raw - info.relative_noise * info.relative_noise)
-                .max(0.0)
-                .sqrt();
+            let relative_rmse = without(raw, info.relative_noise);
             rows.push(StudyRow {
                 config: config.name().to_string(),
                 samples,
@@ -243,12 +252,15 @@ pub(crate) fn converge(
                 raw_relative_rmse: raw,
                 relative_rmse,
                 mean_error: error.mean_error,
+                raw_relmse: error.relmse,
+                relmse: without(error.relmse, info.relmse_noise),
             });
         }
     }
     bar.finish_and_clear();
     let scene_name = args.scene.display().to_string();
-    write_study(&dir, &rows, &info, &scene_name).map_err(Failure::other)?;
+    let metric = args.error_metric.metric();
+    write_study(&dir, &rows, &info, &scene_name, metric).map_err(Failure::other)?;
 
     let _ = writeln!(
         out,
@@ -258,20 +270,22 @@ pub(crate) fn converge(
     );
     let _ = writeln!(
         out,
-        "reference: {} (relative noise {:.3} %)",
+        "reference: {} (noise {:.3} % {})",
         info.description,
-        info.relative_noise * 100.0
+        info.noise(metric) * 100.0,
+        metric.name()
     );
     for config in &args.configs {
         let name = config.name();
         let last = rows.iter().rev().find(|r| r.config == name);
-        let fitted = slope(&rows, name).map_or("—".to_string(), |s| format!("{s:.2}"));
+        let fitted = slope(&rows, name, metric).map_or("—".to_string(), |s| format!("{s:.2}"));
         if let Some(last) = last {
             let _ = writeln!(
                 out,
-                "  {name:<10} slope {fitted:>5}   {} spp: {:.3} % in {:.2} s",
+                "  {name:<10} slope {fitted:>5}   {} spp: {:.3} % {} in {:.2} s",
                 last.samples,
-                last.relative_rmse * 100.0,
+                last.error(metric) * 100.0,
+                metric.name(),
                 last.seconds
             );
         }
@@ -305,23 +319,28 @@ fn reference_key(
     Ok(hash)
 }
 
-/// Whether `path` holds an EXR of the given size, and its noise estimate
-/// beside it (written first, so an EXR without one is a reference whose
-/// writing was cut short).
+/// Whether `path` holds an EXR of the given size, and both its noise
+/// estimates beside it (written first, so an EXR without them is a
+/// reference whose writing was cut short, or one from before relMSE).
 fn reference_matches(path: &Path, width: u32, height: u32) -> bool {
     path.exists()
-        && read_noise(&path.with_extension("noise.txt")).is_some()
+        && read_noise(&path.with_extension("noise.txt")).is_some_and(|n| n.1.is_some())
         && flatray_io::read_exr(path).is_ok_and(|i| (i.width, i.height) == (width, height))
 }
 
-/// The relative noise stored beside a reference.
-fn read_noise(path: &Path) -> Option<f64> {
-    std::fs::read_to_string(path)
-        .ok()?
-        .trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v >= 0.0)
+/// The noise stored beside a reference: its relative RMSE on the first
+/// line, its relMSE (the root) on the second where it was written.
+fn read_noise(path: &Path) -> Option<(f64, Option<f64>)> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let number = |line: &str| {
+        line.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v >= 0.0)
+    };
+    let mut lines = text.lines();
+    let relative = number(lines.next()?)?;
+    Some((relative, lines.next().and_then(number)))
 }
 
 /// The reference: two independent half renders, averaged. Half their
@@ -342,7 +361,7 @@ fn reference(
     );
     if !render {
         let image = flatray_io::read_exr(cached).map_err(Failure::other)?;
-        let relative_noise = read_noise(&noise_path).ok_or_else(|| {
+        let (relative_noise, relmse_noise) = read_noise(&noise_path).ok_or_else(|| {
             Failure::other(format!("{}: no noise estimate", noise_path.display()))
         })?;
         return Ok((
@@ -350,6 +369,7 @@ fn reference(
             ReferenceInfo {
                 description,
                 relative_noise,
+                relmse_noise: relmse_noise.unwrap_or(0.0),
             },
         ));
     }
@@ -387,15 +407,34 @@ fn reference(
         Some(difference) if rms_mean > 0.0 => difference.rmse * 0.5 / rms_mean,
         _ => 0.0,
     };
+    // The same for relMSE: each pixel's mean has a quarter of its halves'
+    // squared difference as its squared error, relative to its value.
+    let relmse_noise = {
+        let sum: f64 = a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .zip(&mean.pixels)
+            .flat_map(|((x, y), m)| {
+                (0..3).map(move |c| {
+                    let d = x[c] as f64 - y[c] as f64;
+                    flatray_tracer::metrics::relative_squared(d * d * 0.25, m[c] as f64)
+                })
+            })
+            .sum();
+        (sum / (mean.pixels.len() * 3).max(1) as f64).sqrt()
+    };
     // The noise first, the image last, each atomically: an image on disk
     // always has its noise beside it.
-    flatray_io::write_text(&noise_path, &format!("{relative_noise}\n")).map_err(Failure::other)?;
+    flatray_io::write_text(&noise_path, &format!("{relative_noise}\n{relmse_noise}\n"))
+        .map_err(Failure::other)?;
     flatray_io::write_exr(&mean, cached).map_err(Failure::other)?;
     Ok((
         mean,
         ReferenceInfo {
             description,
             relative_noise,
+            relmse_noise,
         },
     ))
 }

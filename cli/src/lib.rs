@@ -59,7 +59,7 @@ enum Command {
     #[command(after_help = "Examples:
   flatray render scenes/room.ron -o room.png                render with the scene's settings
   flatray render scenes/room.ron --scale 0.25 --spp 8       a quick preview
-  flatray render scenes/room.ron --target-error 1 -o r.exr  until the noise is about 1 %
+  flatray render scenes/room.ron --target-error 1 -o r.exr  until the noise is about 1 % relMSE
   flatray render scenes/room.ron --stats --json             what was done, for a script")]
     Render(RenderArgs),
     /// Validate scene files and warn about what would make a render wrong
@@ -198,6 +198,21 @@ struct ImportArgs {
     force: bool,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ErrorMetricArg {
+    Relmse,
+    Rms,
+}
+
+impl ErrorMetricArg {
+    pub(crate) fn metric(self) -> flatray_tracer::metrics::ErrorMetric {
+        match self {
+            ErrorMetricArg::Relmse => flatray_tracer::metrics::ErrorMetric::RelMse,
+            ErrorMetricArg::Rms => flatray_tracer::metrics::ErrorMetric::Rms,
+        }
+    }
+}
+
 #[derive(Debug, clap::Args)]
 struct GenerateArgs {
     /// The scene file to write.
@@ -277,12 +292,18 @@ struct RenderArgs {
     /// Print counts of rays, paths and seconds per phase.
     #[arg(long)]
     stats: bool,
-    /// Render until the estimated noise (relative RMS error) is at most
-    /// this many percent, in passes that add samples to the image (16
-    /// spp, then doubling). The image is exactly the single render with
-    /// the samples reached.
+    /// Render until the estimated noise (by --error-metric: relMSE, each
+    /// pixel's error relative to its own value) is at most this many
+    /// percent, in passes that add samples to the image (16 spp, then
+    /// doubling). The image is exactly the single render with the
+    /// samples reached.
     #[arg(long, value_name = "PERCENT", allow_negative_numbers = true)]
     target_error: Option<f64>,
+    /// The error --target-error aims at: relmse (the root of relMSE, each
+    /// pixel's error over its own value, dark regions counting as bright
+    /// ones) or rms (the image's RMS error over its RMS value).
+    #[arg(long, value_enum, default_value_t = ErrorMetricArg::Relmse)]
+    error_metric: ErrorMetricArg,
     /// Render with as many samples as fit in this many seconds, in passes
     /// that add samples to the image (with --target-error: stop at
     /// whichever comes first). At least the first pass is taken.
@@ -985,7 +1006,7 @@ fn render_once(args: &RenderArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
             (rendered, options, 1)
         }
         (target, time) => {
-            let stop = Stop::new(target, time, loaded_at)?;
+            let stop = Stop::new(target, time, loaded_at, args.error_metric.metric())?;
             let in_pool = |work: &mut (dyn FnMut() + Send)| match &pool {
                 None => work(),
                 Some(pool) => pool.install(work),
@@ -1186,12 +1207,19 @@ struct Stop {
     target: Option<f64>,
     time: Option<f64>,
     since: Instant,
+    /// The error the target is of.
+    metric: flatray_tracer::metrics::ErrorMetric,
     /// When the last pass started, and the samples then.
     last: std::cell::Cell<(Instant, u32)>,
 }
 
 impl Stop {
-    fn new(target: Option<f64>, time: Option<f64>, since: Instant) -> Result<Stop, Failure> {
+    fn new(
+        target: Option<f64>,
+        time: Option<f64>,
+        since: Instant,
+        metric: flatray_tracer::metrics::ErrorMetric,
+    ) -> Result<Stop, Failure> {
         let target = target.map(|t| t / 100.0);
         if let Some(t) = target
             && !(t.is_finite() && t > 0.0)
@@ -1212,6 +1240,7 @@ impl Stop {
             target,
             time,
             since,
+            metric,
             last: std::cell::Cell::new((Instant::now(), 0)),
         })
     }
@@ -1234,8 +1263,10 @@ impl Stop {
             return Some(next);
         }
         let per_sample = started.elapsed().as_secs_f64() / (done - before).max(1) as f64;
-        if let (Some(t), Some(e)) = (self.target, progressive.rendered().stats.noise.relative())
-            && e <= t
+        if let (Some(t), Some(e)) = (
+            self.target,
+            self.metric.of_noise(&progressive.rendered().stats.noise),
+        ) && e <= t
         {
             return None;
         }

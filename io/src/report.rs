@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
 
-use flatray_tracer::metrics::{log_log_slope, reach};
+use flatray_tracer::metrics::{ErrorMetric, log_log_slope, reach};
 use plotters::prelude::*;
 
 use crate::error::WriteError;
@@ -29,6 +29,20 @@ pub struct StudyRow {
     pub relative_rmse: f64,
     /// Mean of (run - reference): the bias estimate.
     pub mean_error: f64,
+    /// The root of relMSE against the reference, as measured.
+    pub raw_relmse: f64,
+    /// The same with the reference's own relMSE taken out in quadrature.
+    pub relmse: f64,
+}
+
+impl StudyRow {
+    /// The run's error (the reference's noise taken out) by `metric`.
+    pub fn error(&self, metric: ErrorMetric) -> f64 {
+        match metric {
+            ErrorMetric::RelMse => self.relmse,
+            ErrorMetric::Rms => self.relative_rmse,
+        }
+    }
 }
 
 /// What the report says about its reference.
@@ -37,6 +51,18 @@ pub struct ReferenceInfo {
     pub description: String,
     /// The reference's own estimated relative RMSE.
     pub relative_noise: f64,
+    /// The reference's own estimated relMSE (its root).
+    pub relmse_noise: f64,
+}
+
+impl ReferenceInfo {
+    /// The reference's own noise by `metric`.
+    pub fn noise(&self, metric: ErrorMetric) -> f64 {
+        match metric {
+            ErrorMetric::RelMse => self.relmse_noise,
+            ErrorMetric::Rms => self.relative_noise,
+        }
+    }
 }
 
 /// The accuracy targets of the summary table.
@@ -57,12 +83,12 @@ fn rows_of<'a>(rows: &'a [StudyRow], config: &str) -> Vec<&'a StudyRow> {
     rows.iter().filter(|r| r.config == config).collect()
 }
 
-/// The fitted slope of relative RMSE against samples, for one
+/// The fitted slope of the error by `metric` against samples, for one
 /// configuration.
-pub fn slope(rows: &[StudyRow], config: &str) -> Option<f64> {
+pub fn slope(rows: &[StudyRow], config: &str, metric: ErrorMetric) -> Option<f64> {
     let points: Vec<(f64, f64)> = rows_of(rows, config)
         .iter()
-        .map(|r| (r.samples as f64, r.relative_rmse))
+        .map(|r| (r.samples as f64, r.error(metric)))
         .collect();
     log_log_slope(&points)
 }
@@ -70,12 +96,12 @@ pub fn slope(rows: &[StudyRow], config: &str) -> Option<f64> {
 /// The CSV text of `rows`.
 pub fn csv(rows: &[StudyRow]) -> String {
     let mut out = String::from(
-        "config,samples,seconds,rays,rmse,raw_relative_rmse,relative_rmse,mean_error\n",
+        "config,samples,seconds,rays,rmse,raw_relative_rmse,relative_rmse,mean_error,raw_relmse,relmse\n",
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e}",
+            "{},{},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}",
             r.config,
             r.samples,
             r.seconds,
@@ -83,26 +109,54 @@ pub fn csv(rows: &[StudyRow]) -> String {
             r.rmse,
             r.raw_relative_rmse,
             r.relative_rmse,
-            r.mean_error
+            r.mean_error,
+            r.raw_relmse,
+            r.relmse
         );
     }
     out
 }
 
+/// What the report calls the error by `metric`, and its column in the
+/// CSV.
+fn described(metric: ErrorMetric) -> (&'static str, &'static str) {
+    match metric {
+        ErrorMetric::RelMse => (
+            "relMSE (the root of the mean, over pixels and channels, of each error squared over the reference's value squared, floored at 0.03)",
+            "relmse",
+        ),
+        ErrorMetric::Rms => (
+            "relative RMSE (the RMS error over the reference's RMS value)",
+            "relative_rmse",
+        ),
+    }
+}
+
 /// The Markdown summary: the reference, each configuration's fitted slope,
-/// and the seconds and samples it needs to reach each target.
-pub fn markdown(rows: &[StudyRow], reference: &ReferenceInfo, scene: &str) -> String {
+/// and the seconds and samples it needs to reach each target of the error
+/// by `metric`.
+pub fn markdown(
+    rows: &[StudyRow],
+    reference: &ReferenceInfo,
+    scene: &str,
+    metric: ErrorMetric,
+) -> String {
     let mut out = String::new();
+    let (what, column) = described(metric);
     let _ = writeln!(out, "# Convergence of `{scene}`\n");
     let _ = writeln!(
         out,
-        "Reference: {}; its own estimated relative RMSE is {:.3} %. Every error below has that noise taken out in quadrature (`relative_rmse` in the CSV; `raw_relative_rmse` is as measured), so errors well below it are uncertain.\n",
+        "Error: {what}. Reference: {}; its own estimated {} is {:.3} % ({:.3} % relative RMSE, {:.3} % relMSE). Every error below has that noise taken out in quadrature (`{column}` in the CSV; `raw_{column}` is as measured), so errors well below it are uncertain.\n",
         reference.description,
-        reference.relative_noise * 100.0
+        metric.name(),
+        reference.noise(metric) * 100.0,
+        reference.relative_noise * 100.0,
+        reference.relmse_noise * 100.0
     );
     let _ = writeln!(
         out,
-        "Seconds (wall clock) and samples per pixel needed to reach a relative RMSE, by log-log interpolation between measured runs (— where no run reached it).\n"
+        "Seconds (wall clock) and samples per pixel needed to reach a {}, by log-log interpolation between measured runs (— where no run reached it).\n",
+        metric.name()
     );
     let mut header = String::from("| configuration | slope |");
     let mut rule = String::from("|---|---|");
@@ -114,12 +168,12 @@ pub fn markdown(rows: &[StudyRow], reference: &ReferenceInfo, scene: &str) -> St
     for config in configs(rows) {
         let mine = rows_of(rows, &config);
         let by_seconds: Vec<(f64, f64)> =
-            mine.iter().map(|r| (r.seconds, r.relative_rmse)).collect();
+            mine.iter().map(|r| (r.seconds, r.error(metric))).collect();
         let by_samples: Vec<(f64, f64)> = mine
             .iter()
-            .map(|r| (r.samples as f64, r.relative_rmse))
+            .map(|r| (r.samples as f64, r.error(metric)))
             .collect();
-        let slope = slope(rows, &config).map_or("—".to_string(), |s| format!("{s:.2}"));
+        let slope = slope(rows, &config, metric).map_or("—".to_string(), |s| format!("{s:.2}"));
         let _ = write!(out, "| {config} | {slope} |");
         for t in TARGETS {
             let s = reach(&by_seconds, t).map_or("—".to_string(), |v| format!("{v:.3}"));
@@ -130,7 +184,8 @@ pub fn markdown(rows: &[StudyRow], reference: &ReferenceInfo, scene: &str) -> St
     }
     let _ = writeln!(
         out,
-        "\nThe slope is the least-squares slope of log(relative RMSE) against log(samples): -0.5 for an unbiased estimator whose error is all noise; flatter where a bias floor is reached."
+        "\nThe slope is the least-squares slope of log({}) against log(samples): -0.5 for an unbiased estimator whose error is all noise; flatter where a bias floor is reached.",
+        metric.name()
     );
     out
 }
@@ -141,16 +196,17 @@ pub fn write_study(
     rows: &[StudyRow],
     reference: &ReferenceInfo,
     scene: &str,
+    metric: ErrorMetric,
 ) -> Result<(), WriteError> {
     let text = csv(rows);
     write_atomically(&dir.join("convergence.csv"), |w| {
         w.write_all(text.as_bytes()).map_err(|e| e.to_string())
     })?;
-    let text = markdown(rows, reference, scene);
+    let text = markdown(rows, reference, scene, metric);
     write_atomically(&dir.join("convergence.md"), |w| {
         w.write_all(text.as_bytes()).map_err(|e| e.to_string())
     })?;
-    let png = chart_png(rows, reference, scene).map_err(|message| WriteError::Io {
+    let png = chart_png(rows, reference, scene, metric).map_err(|message| WriteError::Io {
         path: dir.join("convergence.png"),
         message,
     })?;
@@ -185,12 +241,13 @@ fn log_label(v: f64, span: f64) -> String {
     format!("{v:.decimals$}")
 }
 
-/// The chart: relative RMSE against seconds, log-log, a line per
+/// The chart: the error by `metric` against seconds, log-log, a line per
 /// configuration, a slope -1/2 guide and the reference's noise level.
 pub fn chart_png(
     rows: &[StudyRow],
     reference: &ReferenceInfo,
     scene: &str,
+    metric: ErrorMetric,
 ) -> Result<Vec<u8>, String> {
     register_font()?;
     let (width, height) = (900u32, 600u32);
@@ -203,8 +260,8 @@ pub fn chart_png(
         .collect();
     let ys: Vec<f64> = rows
         .iter()
-        .map(|r| r.relative_rmse)
-        .chain([reference.relative_noise])
+        .map(|r| r.error(metric))
+        .chain([reference.noise(metric)])
         .filter(|v| positive(*v))
         .collect();
     if xs.is_empty() || ys.is_empty() {
@@ -233,7 +290,7 @@ pub fn chart_png(
         chart
             .configure_mesh()
             .x_desc("seconds (wall clock)")
-            .y_desc("relative RMSE")
+            .y_desc(metric.name())
             .label_style((FONT, 15))
             .axis_desc_style((FONT, 17))
             .x_label_formatter(&|v| log_label(*v, x1 / x0))
@@ -251,7 +308,7 @@ pub fn chart_png(
             let color = palette[k % palette.len()];
             let points: Vec<(f64, f64)> = rows_of(rows, config)
                 .iter()
-                .map(|r| (r.seconds, r.relative_rmse))
+                .map(|r| (r.seconds, r.error(metric)))
                 .filter(|(x, y)| positive(*x) && positive(*y))
                 .collect();
             chart
@@ -268,9 +325,9 @@ pub fn chart_png(
         // A slope -1/2 guide through the first run of the first config.
         if let Some(first) = rows
             .iter()
-            .find(|r| positive(r.seconds) && positive(r.relative_rmse))
+            .find(|r| positive(r.seconds) && positive(r.error(metric)))
         {
-            let guide = |x: f64| first.relative_rmse * (x / first.seconds).powf(-0.5);
+            let guide = |x: f64| first.error(metric) * (x / first.seconds).powf(-0.5);
             chart
                 .draw_series(LineSeries::new(
                     [(x0, guide(x0)), (x1, guide(x1))],
@@ -280,8 +337,8 @@ pub fn chart_png(
                 .label("slope -1/2")
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.4)));
         }
-        if positive(reference.relative_noise) {
-            let level = reference.relative_noise;
+        if positive(reference.noise(metric)) {
+            let level = reference.noise(metric);
             chart
                 .draw_series(LineSeries::new(
                     [(x0, level), (x1, level)],
@@ -321,11 +378,13 @@ pub fn stats_json(stats: &flatray_tracer::Stats) -> serde_json::Value {
     let w = &stats.work;
     serde_json::json!({
         "noise": {
+            "relmse": stats.noise.relmse(),
             "relative": stats.noise.relative(),
             "relative_per_channel": stats.noise.relative_per_channel(),
             "pixels": stats.noise.pixels,
             "error_squared": stats.noise.error_squared,
             "value_squared": stats.noise.value_squared,
+            "relative_squared": stats.noise.relative_squared,
         },
         "physics": {
             "camera_samples": p.camera_samples,

@@ -52,7 +52,8 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
     let chart = image::load_from_memory(&png).unwrap();
     assert_eq!((chart.width(), chart.height()), (900, 600));
 
-    // CSV: one row per configuration and rung of the ladder 1..64.
+    // CSV: one row per configuration and rung of the ladder 1..64; the
+    // table and stdout give relMSE (the last column), the default.
     let rows: Vec<Vec<String>> = csv
         .lines()
         .skip(1)
@@ -63,7 +64,7 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
         let points: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r[0] == config)
-            .map(|r| (r[1].parse().unwrap(), r[6].parse().unwrap()))
+            .map(|r| (r[1].parse().unwrap(), r[9].parse().unwrap()))
             .collect();
         assert_eq!(points.len(), 7);
         let slope = flatray_tracer::metrics::log_log_slope(&points).unwrap();
@@ -127,12 +128,30 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
         "2",
         "--configs",
         "path",
+        "--error-metric",
+        "rms",
         "--quiet",
     ]);
     assert_eq!(again.code, 0, "{again:?}");
     assert_eq!(
         std::fs::metadata(&reference).unwrap().modified().unwrap(),
         before
+    );
+    // With `--error-metric rms` the table is of the relative RMSE (the
+    // CSV's seventh column).
+    let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+    let points: Vec<(f64, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .map(|r| (r[1].parse().unwrap(), r[6].parse().unwrap()))
+        .collect();
+    let slope = flatray_tracer::metrics::log_log_slope(&points).unwrap();
+    let markdown = std::fs::read_to_string(out.join("convergence.md")).unwrap();
+    assert!(markdown.contains("Error: relative RMSE"), "{markdown}");
+    assert!(
+        markdown.contains(&format!("| path | {slope:.2} |")),
+        "{markdown}"
     );
 
     // The same reference given with `--reference` keeps its noise, read
@@ -156,9 +175,10 @@ fn converge_writes_agreeing_files_and_measures_a_half_slope() {
         std::fs::read_to_string(folder.join("convergence.md"))
             .unwrap()
             .lines()
-            .find(|l| l.starts_with("Reference:"))
-            .and_then(|l| l.split("relative RMSE is ").nth(1))
-            .map(|rest| rest.split(' ').next().unwrap_or_default().to_string())
+            .find(|l| l.contains("Reference:"))
+            .and_then(|l| l.split(" % relMSE)").next())
+            .and_then(|head| head.rsplit(' ').next())
+            .map(str::to_string)
             .unwrap()
     };
     assert_eq!(noise_line(&given), noise_line(&out));

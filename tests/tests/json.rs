@@ -155,6 +155,14 @@ fn render_json_has_the_image_the_counts_and_the_seconds() {
     assert!(rays > 0 && rays == parts, "{v}");
     let noise = v["noise"]["relative"].as_f64().unwrap_or_default();
     assert!(noise > 0.0 && noise < 1.0, "{v}");
+    // relMSE's root, from its sum over pixels and channels.
+    let relmse = v["noise"]["relmse"].as_f64().unwrap_or_default();
+    let pixels = v["noise"]["pixels"].as_f64().unwrap_or_default();
+    let sum = v["noise"]["relative_squared"].as_f64().unwrap_or_default();
+    assert!(
+        relmse > 0.0 && (relmse - (sum / (3.0 * pixels)).sqrt()).abs() < 1e-12,
+        "{v}"
+    );
     assert_eq!(
         v["noise"]["relative_per_channel"].as_array().map(Vec::len),
         Some(3)

@@ -141,6 +141,10 @@ pub struct Noise {
     pub error_squared: [f64; 3],
     /// Per channel, the sum over pixels of the squared value.
     pub value_squared: [f64; 3],
+    /// Over pixels and channels, the sum of the estimated squared error
+    /// relative to the square of the pixel's value, floored as relMSE's
+    /// reference value is (`metrics::relative_squared`).
+    pub relative_squared: f64,
 }
 
 impl Noise {
@@ -153,20 +157,10 @@ impl Noise {
         }
         self.pixels += 1;
         for c in 0..3 {
-            self.error_squared[c] += difference[c] * difference[c] * weight;
+            let error_squared = difference[c] * difference[c] * weight;
+            self.error_squared[c] += error_squared;
             self.value_squared[c] += value[c] * value[c];
-        }
-    }
-
-    /// Adds the estimated error of a second, independent part of the
-    /// pixels already added (`difference` and `weight` as for
-    /// [`Noise::add`]): their errors add in squares.
-    pub fn add_error(&mut self, difference: crate::Rgb, weight: f64) {
-        if !difference.is_finite() {
-            return;
-        }
-        for c in 0..3 {
-            self.error_squared[c] += difference[c] * difference[c] * weight;
+            self.relative_squared += crate::metrics::relative_squared(error_squared, value[c]);
         }
     }
 
@@ -176,6 +170,16 @@ impl Noise {
             self.error_squared[c] += other.error_squared[c];
             self.value_squared[c] += other.value_squared[c];
         }
+        self.relative_squared += other.relative_squared;
+    }
+
+    /// The estimated root relMSE (as `flatray converge` measures it
+    /// against a reference: each pixel's error relative to its own value),
+    /// if any pixel had an estimate and the image is not black.
+    pub fn relmse(&self) -> Option<f64> {
+        let value: f64 = self.value_squared.iter().sum();
+        (self.pixels > 0 && value > 0.0)
+            .then(|| (self.relative_squared / (3 * self.pixels) as f64).sqrt())
     }
 
     /// The estimated relative RMS error over every pixel and channel (as
@@ -247,10 +251,15 @@ impl Split {
 
 impl fmt::Display for Noise {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.relative() {
-            Some(r) => write!(f, "about {:.2} % relative RMS error", r * 100.0),
-            None if self.pixels > 0 => write!(f, "none: the image is black"),
-            None => write!(f, "not estimated (it takes at least 2 samples per pixel)"),
+        match (self.relmse(), self.relative()) {
+            (Some(m), Some(r)) => write!(
+                f,
+                "about {:.2} % relMSE, {:.2} % relative RMS error",
+                m * 100.0,
+                r * 100.0
+            ),
+            _ if self.pixels > 0 => write!(f, "none: the image is black"),
+            _ => write!(f, "not estimated (it takes at least 2 samples per pixel)"),
         }
     }
 }
@@ -446,8 +455,13 @@ impl fmt::Display for StatsText<'_> {
 /// The noise estimate, overall and per channel.
 fn write_noise(f: &mut fmt::Formatter<'_>, noise: &Noise) -> fmt::Result {
     writeln!(f, "noise (estimated from two halves of the samples)")?;
-    match (noise.relative(), noise.relative_per_channel()) {
-        (Some(all), Some([r, g, b])) => {
+    match (
+        noise.relative(),
+        noise.relative_per_channel(),
+        noise.relmse(),
+    ) {
+        (Some(all), Some([r, g, b]), Some(relmse)) => {
+            writeln!(f, "  relMSE (root)    {:>13.3}%", relmse * 100.0)?;
             writeln!(f, "  relative RMS     {:>13.3}%", all * 100.0)?;
             writeln!(
                 f,

@@ -752,7 +752,7 @@ async fn export_noise(State(shared): State<Arc<Shared>>) -> Response {
     let frame: Arc<Frame> = shared.worker.frames().borrow().clone();
     let text = match frame.noise {
         Some(n) => format!(
-            "{} spp, about {:.3} % relative RMS error\n",
+            "{} spp, about {:.3} % relMSE (each pixel's error relative to its value)\n",
             frame.spp,
             n * 100.0
         ),

@@ -21,9 +21,10 @@ use tokio::sync::watch;
 /// The quick first frame's longest side, in pixels, and its samples.
 const QUICK_SIDE: u32 = 128;
 const QUICK_SPP: u32 = 2;
-/// Where the worker stops refining: the estimated relative noise, or the
-/// samples per pixel.
-const TARGET_NOISE: f64 = 0.003;
+/// Where the worker stops refining: the estimated noise (the root of
+/// relMSE, each pixel's error relative to its own value), or the samples
+/// per pixel.
+const TARGET_NOISE: f64 = 0.01;
 const MAX_SPP: u32 = 1 << 16;
 
 /// A scene to render, with the version of the page's state it is.
@@ -179,7 +180,7 @@ fn show(
         flatray_tracer::render(&loaded.scene, &quick, progress)
     });
     match rendered {
-        Some(r) => publish(r.image, QUICK_SPP, 0, r.stats.noise.relative(), true),
+        Some(r) => publish(r.image, QUICK_SPP, 0, r.stats.noise.relmse(), true),
         None => return newest(incoming),
     }
     if let Some(newer) = newest(incoming) {
@@ -205,7 +206,7 @@ fn show(
         }
         passes += 1;
         let rendered = progressive.rendered();
-        let noise = rendered.stats.noise.relative();
+        let noise = rendered.stats.noise.relmse();
         publish(rendered.image, progressive.samples(), passes, noise, false);
         if noise.is_some_and(|n| n <= TARGET_NOISE) {
             return None;

@@ -7,7 +7,7 @@ Load a scene, render it, get a NumPy array back::
     scene = flatray.load("scenes/room.ron")
     result = flatray.render(scene, spp=64, bounces=1)
     result.image        # (height, width, 3) float32, linear
-    result.noise        # the render's estimate of its own relative RMS error
+    result.noise        # the render's estimate of its own error (relMSE's root)
     result.write("room.png")
 
 A scene can also be built from plain Python values, named as the RON
@@ -330,9 +330,11 @@ class Rendered:
 
     @property
     def noise(self) -> Optional[float]:
-        """The render's estimate of its own relative RMS error (None below
-        two samples a pixel)."""
-        return self.stats["noise"]["relative"]
+        """The render's estimate of its own error as the root of relMSE:
+        each pixel's error relative to its own value, averaged over pixels
+        and channels (None below two samples a pixel). The relative RMS
+        error is ``stats["noise"]["relative"]``."""
+        return self.stats["noise"]["relmse"]
 
     def write(self, path: PathLike) -> None:
         """Writes the image, whole or not at all: ``.exr`` linear, ``.png``

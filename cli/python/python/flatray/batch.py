@@ -92,7 +92,7 @@ def render_scenes(
                 "name": name,
                 "image": image,
                 "settings": chosen,
-                "noise": stats["noise"]["relative"],
+                "noise": stats["noise"]["relmse"],
                 "seconds": seconds,
                 "stats": stats,
             }
@@ -221,6 +221,11 @@ def _finish_noise(stats: Dict[str, Any]) -> None:
     error = sum(noise["error_squared"])
     value = sum(noise["value_squared"])
     noise["relative"] = (error / value) ** 0.5 if noise["pixels"] > 0 and value > 0 else None
+    noise["relmse"] = (
+        (noise["relative_squared"] / (3 * noise["pixels"])) ** 0.5
+        if noise["pixels"] > 0 and value > 0
+        else None
+    )
     noise["relative_per_channel"] = (
         [(e / v) ** 0.5 if v > 0 else 0.0 for e, v in zip(noise["error_squared"], noise["value_squared"])]
         if noise["pixels"] > 0
