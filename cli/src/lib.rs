@@ -133,11 +133,13 @@ The page: docs/serve.md.")]
   flatray converge scenes/room.ron --reference ref.exr         against a reference of your own")]
     Converge(converge::ConvergeArgs),
     /// Turn a floor plan from another tool (an SVG drawing, a Tiled map in
-    /// TMX or JSON, a wall-mask image) into a commented scene file.
+    /// TMX or JSON, a Universal VTT map, a wall-mask image) into a
+    /// commented scene file.
     #[command(after_help = "Examples:
   flatray import plan.svg -o plan.ron                 an Inkscape drawing (docs/import.md)
   flatray import plan.svg --scale 0.5 -o plan.ron     half size: 2 SVG units to a canvas pixel
   flatray import level.tmx -o level.ron               a Tiled map
+  flatray import tavern.dd2vtt --doors open           a Dungeondraft map, its image the floor
   flatray import walls.png --tolerance 2 -o w.ron     a wall mask, outlines simplified")]
     Import(ImportArgs),
     /// Make up an apartment's floor plan (rooms with doors and windows,
@@ -170,20 +172,34 @@ The page: docs/serve.md.")]
 
 #[derive(Debug, clap::Args)]
 struct ImportArgs {
-    /// The plan: .svg, .tmx, .json/.tmj or a mask image (.png).
+    /// The plan: .svg, .tmx, .json/.tmj, .dd2vtt/.uvtt/.df2vtt or a mask
+    /// image (.png).
     plan: PathBuf,
     /// The scene file to write. Default: the plan's name with .ron, in the
     /// current folder.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Canvas pixels per unit of the plan (an SVG user unit of 1/96 inch,
-    /// a Tiled or mask pixel).
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    scale: f64,
-    /// Curves are flattened, and mask outlines simplified, to within this
-    /// distance in the plan's units (as for --scale).
+    /// Canvas pixels per unit of the plan: an SVG user unit of 1/96 inch,
+    /// a Tiled or mask pixel (default 1), a Universal VTT grid cell
+    /// (default the map's pixels_per_grid).
+    #[arg(long, allow_negative_numbers = true)]
+    scale: Option<f64>,
+    /// Curves are flattened, mask outlines simplified, and windows and
+    /// doors matched to their walls, to within this distance in the plan's
+    /// units (a Universal VTT map's: pixels of its image).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     tolerance: f64,
+    /// A Universal VTT map's doors: as the map draws them, all open, or
+    /// all shut.
+    #[arg(long, value_enum, default_value_t = DoorsArg::AsDrawn)]
+    doors: DoorsArg,
+    /// What a Universal VTT portal that lets light through is (Dungeondraft
+    /// writes its windows so).
+    #[arg(long, value_enum, default_value_t = OpenPortalsArg::Windows)]
+    open_portals: OpenPortalsArg,
+    /// A Universal VTT map's lights: kept as lamps, or none.
+    #[arg(long, value_enum, default_value_t = MapLightsArg::Keep)]
+    lights: MapLightsArg,
     /// The Tiled object layer whose objects become walls.
     #[arg(long, default_value = "walls")]
     walls_layer: String,
@@ -211,6 +227,25 @@ impl ErrorMetricArg {
             ErrorMetricArg::Rms => flatray_tracer::metrics::ErrorMetric::Rms,
         }
     }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum DoorsArg {
+    AsDrawn,
+    Open,
+    Closed,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum OpenPortalsArg {
+    Windows,
+    Doors,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum MapLightsArg {
+    Keep,
+    None,
 }
 
 #[derive(Debug, clap::Args)]
@@ -548,7 +583,7 @@ where
             (&mut out, err),
         ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
-        Command::Serve(args) => serve::serve(args, &mut out),
+        Command::Serve(args) => serve::serve(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
         Command::Generate(args) => generate(args, &mut out),
         Command::Completions { shell } => {
@@ -1161,12 +1196,23 @@ fn generate(args: GenerateArgs, out: &mut dyn Write) -> Result<(), Failure> {
 }
 
 fn import(args: ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), Failure> {
-    let options = flatray_io::import::ImportOptions {
+    use flatray_io::import::{Doors, ImportOptions, OpenPortals};
+    let options = ImportOptions {
         scale: args.scale,
         tolerance: args.tolerance,
         walls_layer: args.walls_layer,
         lights_layer: args.lights_layer,
         floor_image: args.floor_image,
+        doors: match args.doors {
+            DoorsArg::AsDrawn => Doors::AsDrawn,
+            DoorsArg::Open => Doors::Open,
+            DoorsArg::Closed => Doors::Closed,
+        },
+        open_portals: match args.open_portals {
+            OpenPortalsArg::Windows => OpenPortals::Windows,
+            OpenPortalsArg::Doors => OpenPortals::Doors,
+        },
+        lights: args.lights == MapLightsArg::Keep,
     };
     let output = match args.output {
         Some(path) => path,
@@ -1178,26 +1224,40 @@ fn import(args: ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<
             PathBuf::from(format!("{stem}.ron"))
         }
     };
+    let imported = import_to(&args.plan, &options, &output, args.force, err)?;
+    let _ = writeln!(out, "wrote {} ({imported})", output.display());
+    Ok(())
+}
+
+/// Imports `plan` into the scene file `output`, and its floor image
+/// beside it where it has one, replacing neither an existing file
+/// (unless `force`) nor the plan; the notes and warnings go to `err`.
+/// Returns what was imported, for the caller's report.
+pub(crate) fn import_to(
+    plan: &Path,
+    options: &flatray_io::import::ImportOptions,
+    output: &Path,
+    force: bool,
+    err: &mut dyn Write,
+) -> Result<flatray_io::import::Imported, Failure> {
     // A plan that cannot be read or understood is bad input (exit 2).
-    let imported = flatray_io::import::import(&args.plan, &options).map_err(Failure::usage)?;
-    check_output(&output, std::slice::from_ref(&args.plan), "import")?;
-    keep_scene(&output, args.force)?;
-    if let Some((name, bytes)) = &imported.floor_file {
-        let folder = output.parent().unwrap_or(Path::new(""));
-        let floor = folder.join(name);
-        check_output(&floor, std::slice::from_ref(&args.plan), "import")?;
-        keep_scene(&floor, args.force)?;
-        flatray_io::write_bytes(&floor, bytes).map_err(Failure::other)?;
+    let mut imported = flatray_io::import::import(plan, options).map_err(Failure::usage)?;
+    check_output(output, &[plan.to_path_buf()], "import")?;
+    keep_scene(output, force)?;
+    if let Some(floor) = imported.name_floor_for(output) {
+        check_output(&floor, &[plan.to_path_buf()], "import")?;
+        keep_scene(&floor, force)?;
     }
-    flatray_io::write_text(&output, &imported.to_ron()).map_err(Failure::other)?;
-    for note in &imported.notes {
-        let _ = writeln!(err, "note: {note}");
+    imported
+        .write(output, plan, force)
+        .map_err(Failure::other)?;
+    for line in imported.mapping.iter().chain(&imported.notes) {
+        let _ = writeln!(err, "note: {line}");
     }
     for warning in &imported.warnings {
         let _ = writeln!(err, "warning: not imported: {warning}");
     }
-    let _ = writeln!(out, "wrote {} ({imported})", output.display());
-    Ok(())
+    Ok(imported)
 }
 
 /// When `--target-error` and `--time` stop a render taken pass by pass.

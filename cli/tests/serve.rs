@@ -392,15 +392,25 @@ struct Answer {
 }
 
 /// Sends `request` byte for byte, as another site's page, a broken client
-/// or an attacker would, and reads what comes back within `wait`.
+/// or an attacker would, and reads what comes back within `wait`. The
+/// answer is read while the request is still being sent: a server that
+/// refuses a body past its limit answers and closes before the body is
+/// all sent, and the bytes sent after that are met with a reset that
+/// would lose an answer not yet read.
 fn raw(url: &str, request: &[u8], wait: Duration) -> Answer {
     let address = url.trim_start_matches("http://");
     let mut stream = std::net::TcpStream::connect(address).unwrap();
     stream.set_read_timeout(Some(wait)).unwrap();
     let started = Instant::now();
-    stream.write_all(request).unwrap();
+    let mut writer = stream.try_clone().unwrap();
+    let request = request.to_vec();
+    let sending = std::thread::spawn(move || {
+        // Refused midway is an answer too: the write's error is not.
+        let _ = writer.write_all(&request);
+    });
     let mut answer = Vec::new();
     let closed = stream.read_to_end(&mut answer).is_ok();
+    let _ = sending.join();
     let text = String::from_utf8_lossy(&answer).into_owned();
     let status = text
         .split_whitespace()
@@ -932,4 +942,55 @@ fn save_refuses_a_file_changed_since_it_was_loaded_and_a_read_only_one() {
     #[allow(clippy::permissions_set_readonly_false)]
     permissions.set_readonly(false);
     std::fs::set_permissions(&server.scene, permissions).unwrap();
+}
+
+/// The text the server at `url` answers a GET of `path` with.
+fn text_of(url: &str, path: &str) -> String {
+    ureq::get(&format!("{url}{path}"))
+        .call()
+        .unwrap()
+        .body_mut()
+        .read_to_string()
+        .unwrap()
+}
+
+/// `flatray serve MAP.dd2vtt` imports the map into MAP.ron beside it, with
+/// its floor image, and serves that; served again, the scene (with the
+/// user's edits) is served as it is, never imported over.
+#[test]
+fn a_map_is_imported_beside_itself_and_then_served_and_never_imported_over() {
+    let dir = std::env::temp_dir().join(format!("flatray-serve-map-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/maps/tavern.dd2vtt");
+    let map = dir.join("tavern.dd2vtt");
+    std::fs::copy(&root, &map).unwrap();
+    let scene = dir.join("tavern.ron");
+    {
+        let serving = common::serve(&map);
+        let text = std::fs::read_to_string(&scene).unwrap();
+        assert!(
+            text.contains("floor: Image(\"tavern-floor.png\")"),
+            "{text}"
+        );
+        assert!(dir.join("tavern-floor.png").is_file());
+        let body = text_of(&serving.url, "/api/scene.ron");
+        assert_eq!(body, text);
+        let items: serde_json::Value =
+            serde_json::from_str(&text_of(&serving.url, "/api/items")).unwrap();
+        assert_eq!(items["canvas"], serde_json::json!([896, 640]));
+        assert_eq!(items["lights"].as_array().map(Vec::len), Some(3));
+    }
+    // The user's scene, edited since: served as it is.
+    let edited = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("render: (samples: 64", "render: (samples: 8");
+    std::fs::write(&scene, &edited).unwrap();
+    {
+        let serving = common::serve(&map);
+        let body = text_of(&serving.url, "/api/scene.ron");
+        assert_eq!(body, edited);
+    }
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), edited);
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -55,6 +55,15 @@ flatray import tests/fixtures/import/level.tmx -o "$work/level.ron"
 flatray render "$work/level.ron" -o "$out/import-tiled.png"
 flatray import tests/fixtures/import/house-mask.png --scale 4 -o "$work/house.ron"
 flatray render "$work/house.ron" --scale 0.5 -o "$out/import-mask.png"
+flatray import scenes/maps/tavern.dd2vtt -o "$work/tavern.ron"
+flatray render "$work/tavern.ron" --scale 0.5 -o "$out/import-tavern.png"
+flatray import scenes/maps/tavern.dd2vtt --doors open -o "$work/tavern-open.ron"
+flatray render "$work/tavern-open.ron" --scale 0.5 -o "$out/import-tavern-open.png"
+flatray import scenes/maps/corridor.uvtt -o "$work/corridor.ron"
+flatray render "$work/corridor.ron" --scale 0.5 -o "$out/import-corridor.png"
+# The maps' own pictures, as the imports wrote them beside their scenes.
+cp "$work/tavern-floor.png" "$out/import-tavern-map.png"
+cp "$work/corridor-floor.png" "$out/import-corridor-map.png"
 
 # docs/serve.md: screenshots of the live view, by its browser test.
 FLATRAY_SCREENSHOTS="$out" cargo test --quiet --release -p flatray-cli --test browser

@@ -119,10 +119,14 @@ pub fn write_png_with_walls(
 
 /// The PNG file bytes of `image`, for snapshots and in-memory use.
 pub fn png_bytes(image: &Image, tonemap: ToneMap) -> Result<Vec<u8>, String> {
-    let bytes = to_srgb8(image, tonemap);
+    rgb8_png(&to_srgb8(image, tonemap), image.width, image.height)
+}
+
+/// The PNG file bytes of 8-bit RGB rows, `width x height`.
+pub(crate) fn rgb8_png(bytes: &[u8], width: u32, height: u32) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
     PngEncoder::new(&mut out)
-        .write_image(&bytes, image.width, image.height, ExtendedColorType::Rgb8)
+        .write_image(bytes, width, height, ExtendedColorType::Rgb8)
         .map_err(|e| e.to_string())?;
     Ok(out)
 }

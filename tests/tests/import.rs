@@ -457,7 +457,7 @@ fn an_svg_bitmap_becomes_the_floor_when_asked() {
         out.to_str().unwrap_or_default(),
     ]);
     assert_eq!(run.code, 0, "{run:?}");
-    let written = dir.path().join("plan-floor.png");
+    let written = dir.path().join("scene-floor.png");
     assert!(written.exists(), "{run:?}");
     let loaded = flatray_io::load(&out).unwrap_or_else(|e| panic!("{e}"));
     assert!(matches!(

@@ -108,7 +108,19 @@ fn every_picture_in_the_docs_is_what_its_command_makes() {
         "serve-conflict.png",
         "serve-optics.png",
         "python-batch.png",
+        "import-tavern-map.png",
+        "import-corridor-map.png",
     ];
+    // The maps' own pictures are the floor images their imports wrote.
+    for (name, floor) in [
+        ("import-tavern-map.png", "tavern-floor.png"),
+        ("import-corridor-map.png", "corridor-floor.png"),
+    ] {
+        assert!(
+            pixels(&work.join(floor)) == pixels(&root.join("docs/images").join(name)),
+            "docs/images/{name} is not the floor image the import wrote"
+        );
+    }
     for name in taken {
         assert!(
             script.contains(&format!("\"$out/{name}\""))

@@ -220,32 +220,86 @@ fn generate(rooms: u32, lamps: u32, mirrors: f64, seed: u64, sun: bool) -> PyRes
     Ok(plan.to_ron())
 }
 
-/// The scene text of a plan (SVG, Tiled map, wall mask), and the notes
-/// and warnings of what was not imported.
+/// The scene text of a plan (SVG, Tiled map, Universal VTT map, wall
+/// mask), and the notes and warnings of what was not imported. With
+/// `output`, the scene and its floor image are written there as `flatray
+/// import -o` writes them; without, a map's image is not written and the
+/// floor is plain.
 #[pyfunction]
-#[pyo3(signature = (path, scale = None, tolerance = None))]
+#[pyo3(signature = (path, scale = None, tolerance = None, doors = None, open_portals = None, lights = None, output = None, force = false))]
+#[allow(clippy::too_many_arguments)]
 fn import_plan(
     py: Python<'_>,
     path: PathBuf,
     scale: Option<f64>,
     tolerance: Option<f64>,
+    doors: Option<&str>,
+    open_portals: Option<&str>,
+    lights: Option<&str>,
+    output: Option<PathBuf>,
+    force: bool,
 ) -> PyResult<(String, Vec<String>, Vec<String>)> {
-    let mut options = flatray_io::import::ImportOptions::default();
-    if let Some(scale) = scale {
-        options.scale = scale;
-    }
+    use flatray_io::import::{Doors, ImportOptions, ImportedFloor, OpenPortals};
+    let mut options = ImportOptions {
+        scale,
+        ..ImportOptions::default()
+    };
     if let Some(tolerance) = tolerance {
         options.tolerance = tolerance;
     }
-    options.floor_image = false;
-    let imported = py
+    options.doors = match doors.unwrap_or("as-drawn") {
+        "as-drawn" => Doors::AsDrawn,
+        "open" => Doors::Open,
+        "closed" => Doors::Closed,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "doors: expected 'as-drawn', 'open' or 'closed', found {other:?}"
+            )));
+        }
+    };
+    options.open_portals = match open_portals.unwrap_or("windows") {
+        "windows" => OpenPortals::Windows,
+        "doors" => OpenPortals::Doors,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "open_portals: expected 'windows' or 'doors', found {other:?}"
+            )));
+        }
+    };
+    options.lights = match lights.unwrap_or("keep") {
+        "keep" => true,
+        "none" => false,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "lights: expected 'keep' or 'none', found {other:?}"
+            )));
+        }
+    };
+    let mut imported = py
         .detach(|| flatray_io::import::import(&path, &options))
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    Ok((
-        imported.to_ron(),
-        imported.notes.clone(),
-        imported.warnings.clone(),
-    ))
+    let mut notes: Vec<String> = imported
+        .mapping
+        .iter()
+        .chain(&imported.notes)
+        .cloned()
+        .collect();
+    match &output {
+        Some(output) => {
+            py.detach(|| imported.write(output, &path, force))
+                .map_err(PyValueError::new_err)?;
+        }
+        None => {
+            if imported.floor_file.take().is_some() {
+                imported.floor = ImportedFloor::Color([0.5; 3]);
+                notes.push(
+                    "the map's image is not written without output=: the floor is plain grey"
+                        .to_string(),
+                );
+            }
+        }
+    }
+    Ok((imported.to_ron(), notes, imported.warnings.clone()))
 }
 
 /// Why a render stopped midway: Ctrl-C.

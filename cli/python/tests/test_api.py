@@ -341,6 +341,35 @@ def test_import_plan_gives_the_clis_scene(cli, tmp_path):
     assert scene.counts["walls"] > 0
 
 
+def test_import_plan_of_a_map_writes_what_the_cli_writes(cli, repo, tmp_path):
+    tavern = repo / "scenes" / "maps" / "tavern.dd2vtt"
+    (tmp_path / "cli").mkdir()
+    (tmp_path / "py").mkdir()
+    subprocess.run([cli, "import", str(tavern), "--doors", "open", "-o", str(tmp_path / "cli" / "tavern.ron")],
+                   check=True, capture_output=True)
+    scene = flatray.import_plan(tavern, doors="open", output=tmp_path / "py" / "tavern.ron")
+    for name in ["tavern.ron", "tavern-floor.png"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    assert scene.text == (tmp_path / "cli" / "tavern.ron").read_text()
+    assert scene.canvas == (896, 640)
+    assert scene.counts["lights"] == 3
+    assert any("2 doors open" in n for n in scene.import_notes)
+    # The same image rendered from either file.
+    ours = flatray.render(scene, spp=1, scale=0.125)
+    theirs = flatray.render(flatray.load(tmp_path / "cli" / "tavern.ron"), spp=1, scale=0.125)
+    assert np.array_equal(ours.image, theirs.image)
+    assert ours.image.max() > 0
+    # Neither file is replaced without force.
+    with pytest.raises(ValueError, match="the file exists"):
+        flatray.import_plan(tavern, output=tmp_path / "py" / "tavern.ron")
+    # Without output nothing is written and the floor is plain.
+    plain = flatray.import_plan(tavern, lights="none")
+    assert plain.counts["lights"] == 0
+    assert any("not written without output=" in n for n in plain.import_notes)
+    with pytest.raises(ValueError, match="doors: expected"):
+        flatray.import_plan(tavern, doors="ajar")
+
+
 def test_a_window_has_the_whole_renders_bits():
     scene = flatray.Scene(**ROOM_VALUES)
     whole = flatray.render(scene, spp=4)

@@ -53,7 +53,10 @@ const WATCH_EVERY: Duration = Duration::from_millis(250);
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct ServeArgs {
-    /// The scene file (RON): rendered, edited, saved back.
+    /// The scene file (RON): rendered, edited, saved back. Or a Universal
+    /// VTT map (.dd2vtt, .uvtt, .df2vtt): imported first into MAP.ron
+    /// beside it (with its floor image), which is then served; where
+    /// MAP.ron exists, it is served as it is.
     scene: PathBuf,
     /// The port to listen on (0: any free port, printed).
     #[arg(long, default_value_t = 8421)]
@@ -106,8 +109,12 @@ struct Scene {
     version: u64,
 }
 
-pub(crate) fn serve(args: ServeArgs, out: &mut dyn std::io::Write) -> Result<(), Failure> {
-    let shown = args.scene.clone();
+pub(crate) fn serve(
+    args: ServeArgs,
+    out: &mut dyn std::io::Write,
+    err: &mut dyn std::io::Write,
+) -> Result<(), Failure> {
+    let shown = scene_of(&args.scene, out, err)?;
     let base = shown.parent().unwrap_or(Path::new(".")).to_path_buf();
     let path = std::fs::canonicalize(&shown).unwrap_or_else(|_| shown.clone());
     let (text, loaded) = read_scene(&path, &shown).map_err(|e| Failure::usage(e.message))?;
@@ -182,6 +189,45 @@ pub(crate) fn serve(args: ServeArgs, out: &mut dyn std::io::Write) -> Result<(),
         .with_state(shared);
     runtime.block_on(guard::run(listener, app));
     Ok(())
+}
+
+/// The scene file to serve for `given`: the file itself, or for a
+/// Universal VTT map the scene imported from it beside it (imported now
+/// unless it exists, so that edits saved from an earlier session are
+/// never replaced).
+fn scene_of(
+    given: &Path,
+    out: &mut dyn std::io::Write,
+    err: &mut dyn std::io::Write,
+) -> Result<PathBuf, Failure> {
+    let is_map = given
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| ["dd2vtt", "uvtt", "df2vtt"].contains(&e.to_ascii_lowercase().as_str()));
+    if !is_map {
+        return Ok(given.to_path_buf());
+    }
+    let scene = given.with_extension("ron");
+    if std::fs::symlink_metadata(&scene).is_ok() {
+        let _ = writeln!(
+            out,
+            "{} exists: serving it as it is (to import {} again: flatray import {} -o {} --force)",
+            scene.display(),
+            given.display(),
+            given.display(),
+            scene.display()
+        );
+        return Ok(scene);
+    }
+    let options = flatray_io::import::ImportOptions::default();
+    let imported = crate::import_to(given, &options, &scene, false, err)?;
+    let _ = writeln!(
+        out,
+        "imported {} into {} ({imported})",
+        given.display(),
+        scene.display()
+    );
+    Ok(scene)
 }
 
 /// The text of the scene file at `path` (named `shown` in messages) and

@@ -23,10 +23,16 @@ pub fn serve(scene: &Path) -> Serving {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
+    // The line that gives the address (an imported map's report comes
+    // before it).
     let mut first = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut first)
-        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap());
+    while !first.contains(" at http") {
+        first.clear();
+        if lines.read_line(&mut first).unwrap() == 0 {
+            panic!("flatray serve ended before it gave its address");
+        }
+    }
     let url = first
         .split(" at ")
         .nth(1)

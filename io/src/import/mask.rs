@@ -55,7 +55,7 @@ pub(super) fn read(
             && wall[y as usize * w + x as usize]
     };
     let loops = trace(w as i64, h as i64, &is_wall);
-    let scale = options.scale;
+    let scale = options.scale_or(1.0);
     // Simplified in mask pixels.
     let tolerance = options.tolerance;
     let mut walls = Vec::new();
@@ -88,12 +88,15 @@ pub(super) fn read(
             at: centre * scale,
             color: [1.0, 1.0, 1.0],
             intensity: LAMP_INTENSITY,
+            range: None,
             source: format!("yellow blob {k}"),
         })
         .collect();
     Ok(Imported {
         source: String::new(),
         kind: "wall mask",
+        origin: DVec2::ZERO,
+        plan_unit: scale,
         canvas: (
             ((width as f64 * scale).ceil() as u32).max(1),
             ((height as f64 * scale).ceil() as u32).max(1),
@@ -104,6 +107,7 @@ pub(super) fn read(
         glass: Vec::new(),
         warnings: Vec::new(),
         notes: Vec::new(),
+        mapping: Vec::new(),
         floor_file: None,
     })
 }

@@ -1,9 +1,11 @@
 //! Floor plans from other tools, turned into scene files: SVG drawings
-//! (`svg.rs`), Tiled maps in TMX or JSON (`tiled.rs`) and black-and-white
-//! wall masks (`mask.rs`). Each reader fills an [`Imported`] plan of walls,
-//! lights and glass in world units; [`Imported::to_ron`] writes it as a
-//! commented scene file that `render` reads and a user can edit.
-//! `docs/import.md` gives every convention.
+//! (`svg.rs`), Tiled maps in TMX or JSON (`tiled.rs`), black-and-white
+//! wall masks (`mask.rs`) and Universal VTT maps from Dungeondraft,
+//! DungeonFog and Arkenforge (`uvtt.rs`). Each reader fills an
+//! [`Imported`] plan of walls, lights and glass in world units;
+//! [`Imported::to_ron`] writes it as a commented scene file that `render`
+//! reads and a user can edit, and [`Imported::write`] writes it with its
+//! floor image. `docs/import.md` gives every convention.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -13,32 +15,78 @@ use flatray_geometry::DVec2;
 mod mask;
 mod svg;
 mod tiled;
+mod uvtt;
 
 /// How a plan is read.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportOptions {
     /// World units (pixels of the scene's canvas) per unit of the plan:
-    /// an SVG user unit (1/96 inch), a Tiled map pixel, a mask pixel.
-    pub scale: f64,
-    /// Curves are flattened, and traced outlines simplified, to within this
-    /// distance, in the plan's own units (as `scale`).
+    /// an SVG user unit (1/96 inch), a Tiled map pixel, a mask pixel, a
+    /// Universal VTT grid cell. `None`: 1, and for a Universal VTT map its
+    /// `pixels_per_grid` (the map image's own scale).
+    pub scale: Option<f64>,
+    /// Curves are flattened, traced outlines simplified, and windows and
+    /// doors matched to the wall they lie on, to within this distance, in
+    /// the plan's own units (as `scale`; a Universal VTT map's in pixels of
+    /// its image).
     pub tolerance: f64,
     /// The Tiled object layer whose objects are walls.
     pub walls_layer: String,
     /// The Tiled object layer whose objects are lights.
     pub lights_layer: String,
-    /// Use the plan's bitmap (an SVG's first image) as the floor.
+    /// Use the plan's bitmap (an SVG's first image) as the floor. A
+    /// Universal VTT map's image is always the floor.
     pub floor_image: bool,
+    /// The state of a Universal VTT map's doors.
+    pub doors: Doors,
+    /// What a Universal VTT portal that does not block light is.
+    pub open_portals: OpenPortals,
+    /// Whether a Universal VTT map's lights are imported.
+    pub lights: bool,
+}
+
+impl ImportOptions {
+    /// `scale`, or `default` where none is given.
+    pub fn scale_or(&self, default: f64) -> f64 {
+        self.scale.unwrap_or(default)
+    }
+}
+
+/// The state of imported doors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Doors {
+    /// As the map draws each: a portal that blocks light is shut.
+    #[default]
+    AsDrawn,
+    /// Every door open: a gap in its wall.
+    Open,
+    /// Every door shut: an opaque wall.
+    Closed,
+}
+
+/// What a Universal VTT portal whose `closed` is false is: the format
+/// has one kind of portal for both, and Dungeondraft writes its windows
+/// as portals that do not block light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OpenPortals {
+    /// A window: a clear pane in the wall.
+    #[default]
+    Windows,
+    /// A door standing open.
+    Doors,
 }
 
 impl Default for ImportOptions {
     fn default() -> ImportOptions {
         ImportOptions {
-            scale: 1.0,
+            scale: None,
             tolerance: 1.0,
             walls_layer: "walls".to_string(),
             lights_layer: "lights".to_string(),
             floor_image: false,
+            doors: Doors::AsDrawn,
+            open_portals: OpenPortals::Windows,
+            lights: true,
         }
     }
 }
@@ -70,6 +118,14 @@ pub enum WallKind {
     /// A door: drawn on a wall's line, an opening cut in the wall; it
     /// becomes no wall of its own.
     Door,
+    /// A door standing open in a map whose walls already leave a gap for
+    /// it: it cuts the wall it lies on as `Door` does, and where none lies
+    /// under it the gap is there already.
+    OpenDoor,
+    /// A shut door: an opaque wall of the floor's albedo that, lying on a
+    /// wall, is put in the gap it cuts there (as a window is), so that the
+    /// two are never one on top of the other.
+    ShutDoor,
 }
 
 /// One imported wall.
@@ -94,6 +150,9 @@ pub enum ImportedLight {
         at: DVec2,
         color: [f64; 3],
         intensity: f64,
+        /// The reach of a `Window` falloff, where the plan gives the light
+        /// one; else the scene's falloff.
+        range: Option<f64>,
         source: String,
     },
     Line {
@@ -129,9 +188,15 @@ pub enum ImportedFloor {
 pub struct Imported {
     /// What it was read from, for the header comment.
     pub source: String,
-    /// The kind of plan (`SVG`, `Tiled map`, `wall mask`).
+    /// The kind of plan (`SVG drawing`, `Tiled map`, `wall mask`,
+    /// `Universal VTT map`).
     pub kind: &'static str,
     pub canvas: (u32, u32),
+    /// The world position of the canvas's top-left corner.
+    pub origin: DVec2,
+    /// World units per unit of the plan's own (in which `tolerance` is
+    /// given).
+    pub plan_unit: f64,
     pub floor: ImportedFloor,
     pub walls: Vec<ImportedWall>,
     pub lights: Vec<ImportedLight>,
@@ -141,6 +206,10 @@ pub struct Imported {
     /// What the import changed to make the plan mean what its drawer
     /// meant, one line each: walls cut where a window or door lies on them.
     pub notes: Vec<String>,
+    /// What the plan's elements became, where it is not plain: doors and
+    /// windows as walls and panes, lights' reach as falloffs. One line
+    /// each.
+    pub mapping: Vec<String>,
     /// A bitmap to write beside the scene for the floor: its file name
     /// (as `floor` names it) and bytes.
     pub floor_file: Option<(String, Vec<u8>)>,
@@ -161,14 +230,13 @@ pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportEr
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
-    if !(options.scale.is_finite() && options.scale > 0.0 && options.scale <= 1e6) {
+    if let Some(scale) = options.scale
+        && !(scale.is_finite() && scale > 0.0 && scale <= 1e6)
+    {
         return Err(invalid(
             path,
             None,
-            format!(
-                "--scale: expected a number > 0 and at most 1e6, found {}",
-                options.scale
-            ),
+            format!("--scale: expected a number > 0 and at most 1e6, found {scale}"),
         ));
     }
     if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
@@ -189,8 +257,10 @@ pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportEr
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]).to_ascii_lowercase();
     let head = head.trim_start_matches('\u{feff}').trim_start();
     let mut imported = match extension.as_str() {
+        "dd2vtt" | "uvtt" | "df2vtt" => uvtt::read(path, &bytes, options)?,
         "svg" | "svgz" => svg::read(path, &bytes, options)?,
         "tmx" => tiled::read_tmx(path, &bytes, options)?,
+        "json" if uvtt::looks_like(&bytes) => uvtt::read(path, &bytes, options)?,
         "json" | "tmj" => tiled::read_json(path, &bytes, options)?,
         "png" | "bmp" | "gif" | "jpg" | "jpeg" | "tif" | "tiff" | "webp" => {
             mask::read(path, &bytes, options)?
@@ -201,18 +271,22 @@ pub fn import(path: &Path, options: &ImportOptions) -> Result<Imported, ImportEr
         _ if head.starts_with("<map") || (head.starts_with("<?xml") && head.contains("<map")) => {
             tiled::read_tmx(path, &bytes, options)?
         }
+        _ if head.starts_with('{') && uvtt::looks_like(&bytes) => {
+            uvtt::read(path, &bytes, options)?
+        }
         _ if head.starts_with('{') => tiled::read_json(path, &bytes, options)?,
         _ if bytes.starts_with(b"\x89PNG") => mask::read(path, &bytes, options)?,
         _ => {
             return Err(invalid(
                 path,
                 None,
-                "not a plan flatray imports: expected an SVG drawing (.svg), a Tiled map (.tmx, .json, .tmj) or a wall mask image (.png)".to_string(),
+                "not a plan flatray imports: expected an SVG drawing (.svg), a Tiled map (.tmx, .json, .tmj), a Universal VTT map (.dd2vtt, .uvtt, .df2vtt) or a wall mask image (.png)".to_string(),
             ));
         }
     };
     imported.source = path.display().to_string();
-    cut_openings(&mut imported, options.tolerance * options.scale);
+    let tolerance = options.tolerance * imported.plan_unit;
+    cut_openings(&mut imported, tolerance);
     let (w, h) = imported.canvas;
     if w > crate::format::MAX_CANVAS_SIDE
         || h > crate::format::MAX_CANVAS_SIDE
@@ -266,7 +340,11 @@ fn cut_openings(imported: &mut Imported, tolerance: f64) {
     // An arc is neither cut nor an opening: only straight walls lie
     // along each other.
     let is_opening = |w: &ImportedWall| {
-        w.through.is_none() && matches!(w.kind, WallKind::Pane(_) | WallKind::Door)
+        w.through.is_none()
+            && matches!(
+                w.kind,
+                WallKind::Pane(_) | WallKind::Door | WallKind::OpenDoor | WallKind::ShutDoor
+            )
     };
     let openings: Vec<usize> = (0..walls.len())
         .filter(|&i| is_opening(&walls[i]))
@@ -322,10 +400,10 @@ fn cut_openings(imported: &mut Imported, tolerance: f64) {
         }
         for &o in &on_it {
             on_a_wall[o] = true;
-            let (what, gap) = if walls[o].kind == WallKind::Door {
-                ("door", ", an opening")
-            } else {
-                ("window", " and the window put in the gap")
+            let (what, gap) = match walls[o].kind {
+                WallKind::Door | WallKind::OpenDoor => ("door", ", an opening"),
+                WallKind::ShutDoor => ("door", " and the shut door put in the gap"),
+                _ => ("window", " and the window put in the gap"),
             };
             imported.notes.push(format!(
                 "the {what} {} lies on the wall {}: the wall is cut there{gap}",
@@ -337,6 +415,8 @@ fn cut_openings(imported: &mut Imported, tolerance: f64) {
     for (i, (wall, replacement)) in walls.into_iter().zip(cut).enumerate() {
         match replacement {
             Some(pieces) => imported.walls.extend(pieces),
+            // Its gap is in the walls already.
+            None if wall.kind == WallKind::OpenDoor => {}
             None if wall.kind == WallKind::Door => {
                 if !on_a_wall[i] {
                     imported.warnings.push(format!(
@@ -543,6 +623,9 @@ impl Imported {
             crate::counted(self.lights.len(), "light", "lights"),
             crate::counted(self.glass.len(), "glass body", "glass bodies"),
         ));
+        for line in &self.mapping {
+            out.push_str(&format!("// Imported: {}\n", comment(line)));
+        }
         for note in &self.notes {
             out.push_str(&format!("// Cut: {}\n", comment(note)));
         }
@@ -554,6 +637,9 @@ impl Imported {
             "    canvas: ({}, {}),\n",
             self.canvas.0, self.canvas.1
         ));
+        if self.origin != DVec2::ZERO {
+            out.push_str(&format!("    origin: {},\n", point(self.origin)));
+        }
         match &self.floor {
             ImportedFloor::Color(c) => out.push_str(&format!("    floor: Color({}),\n", color(*c))),
             ImportedFloor::Image(name) => {
@@ -563,14 +649,14 @@ impl Imported {
         out.push_str("    walls: [\n");
         for wall in &self.walls {
             let material = match wall.kind {
-                WallKind::Diffuse(None) => String::new(),
+                WallKind::Diffuse(None) | WallKind::ShutDoor => String::new(),
                 WallKind::Diffuse(Some(albedo)) => {
                     format!(", material: Diffuse(albedo: {})", color(albedo))
                 }
                 WallKind::Mirror => ", material: Mirror()".to_string(),
                 WallKind::Pane(tint) => format!(", material: Transparent(tint: {})", color(tint)),
                 // Doors were cut into their walls, and are no walls.
-                WallKind::Door => continue,
+                WallKind::Door | WallKind::OpenDoor => continue,
             };
             let emit = wall.emit.map_or(String::new(), |(c, i)| {
                 format!(", emit: (color: {}, intensity: {})", color(c), number(i))
@@ -592,12 +678,17 @@ impl Imported {
                     at,
                     color: c,
                     intensity,
+                    range,
                     source,
                 } => out.push_str(&format!(
-                    "        Point(at: {}, color: {}, intensity: {}), // {}\n",
+                    "        Point(at: {}, color: {}, intensity: {}{}), // {}\n",
                     point(*at),
                     color(*c),
                     number(*intensity),
+                    range.map_or(String::new(), |r| format!(
+                        ", falloff: Window(range: {})",
+                        number(r)
+                    )),
                     comment(source)
                 )),
                 ImportedLight::Line {
@@ -642,6 +733,76 @@ impl Imported {
         }
         out.push_str("    render: (samples: 64, bounces: 2),\n)\n");
         out
+    }
+}
+
+impl Imported {
+    /// Names the floor image (if the plan has one) after the scene file
+    /// `output`, as `NAME-floor.png` beside `NAME.ron`, so that plans
+    /// imported into one folder never share one; returns its path.
+    pub fn name_floor_for(&mut self, output: &Path) -> Option<PathBuf> {
+        let (name, _) = self.floor_file.as_mut()?;
+        let stem = output
+            .file_stem()
+            .map_or("scene".to_string(), |s| s.to_string_lossy().into_owned());
+        let extension = Path::new(name.as_str())
+            .extension()
+            .map_or("png".to_string(), |e| e.to_string_lossy().into_owned());
+        *name = format!("{stem}-floor.{extension}");
+        self.floor = ImportedFloor::Image(name.clone());
+        let folder = output.parent().unwrap_or(Path::new(""));
+        Some(folder.join(name.as_str()))
+    }
+
+    /// Writes the scene to `output` and its floor image (if any) beside
+    /// it, named for it ([`Imported::name_floor_for`]). No file is
+    /// replaced without `force`, the plan at `plan` never, and every file
+    /// is checked before any is written. Returns the paths written, the
+    /// floor image's first.
+    pub fn write(
+        &mut self,
+        output: &Path,
+        plan: &Path,
+        force: bool,
+    ) -> Result<Vec<PathBuf>, String> {
+        self.name_floor_for(output);
+        let folder = match output.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if !folder.is_dir() {
+            return Err(format!(
+                "{}: cannot write it: the folder {} does not exist",
+                output.display(),
+                folder.display()
+            ));
+        }
+        let mut paths = Vec::new();
+        if let Some((name, _)) = &self.floor_file {
+            paths.push(folder.join(name));
+        }
+        paths.push(output.to_path_buf());
+        let plan = std::fs::canonicalize(plan).ok();
+        for path in &paths {
+            let exists = std::fs::symlink_metadata(path).is_ok();
+            if exists && plan.is_some() && std::fs::canonicalize(path).ok() == plan {
+                return Err(format!(
+                    "{}: the output is the plan being imported; choose another name",
+                    path.display()
+                ));
+            }
+            if exists && !force {
+                return Err(format!(
+                    "{}: the file exists; flatray will not replace it without --force (or choose another name)",
+                    path.display()
+                ));
+            }
+        }
+        if let Some((_, bytes)) = &self.floor_file {
+            crate::write_bytes(&paths[0], bytes).map_err(|e| e.to_string())?;
+        }
+        crate::write_text(output, &self.to_ron()).map_err(|e| e.to_string())?;
+        Ok(paths)
     }
 }
 

@@ -129,8 +129,8 @@ pub(super) fn read(
     let text = String::from_utf8_lossy(bytes);
     let size = tree.size();
     let canvas = (
-        ((size.width() as f64 * options.scale).ceil() as u32).max(1),
-        ((size.height() as f64 * options.scale).ceil() as u32).max(1),
+        ((size.width() as f64 * options.scale_or(1.0)).ceil() as u32).max(1),
+        ((size.height() as f64 * options.scale_or(1.0)).ceil() as u32).max(1),
     );
     let mut reader = Reader {
         options,
@@ -139,12 +139,15 @@ pub(super) fn read(
             source: String::new(),
             kind: "SVG drawing",
             canvas,
+            origin: DVec2::ZERO,
+            plan_unit: options.scale_or(1.0),
             floor: ImportedFloor::Color([0.8, 0.8, 0.8]),
             walls: Vec::new(),
             lights: Vec::new(),
             glass: Vec::new(),
             warnings: unsupported(&text, options.floor_image),
             notes: Vec::new(),
+            mapping: Vec::new(),
             floor_file: None,
         },
         stem: path
@@ -301,7 +304,7 @@ impl Reader<'_> {
     /// segments, each within the tolerance of it.
     fn subpaths(&self, p: &usvg::Path, arcs: bool) -> Vec<Subpath> {
         let transform = p.abs_transform();
-        let scale = self.options.scale;
+        let scale = self.options.scale_or(1.0);
         let tolerance = self.options.tolerance * scale;
         let world = |pt: usvg::tiny_skia_path::Point| {
             let mut q = [pt];
@@ -426,6 +429,7 @@ impl Reader<'_> {
                     at: (low + high) * 0.5,
                     color: fill.or(stroke).unwrap_or([1.0; 3]),
                     intensity: self.number(id, "intensity").unwrap_or(LAMP_INTENSITY),
+                    range: None,
                     source,
                 });
             }

@@ -434,7 +434,7 @@ fn build(
     options: &ImportOptions,
     mut warnings: Vec<String>,
 ) -> Result<Imported, ImportError> {
-    let scale = options.scale;
+    let scale = options.scale_or(1.0);
     let world = |p: DVec2| p * scale;
     let mut walls = Vec::new();
     let mut lights = Vec::new();
@@ -486,6 +486,7 @@ fn build(
                         at: centre,
                         color: colour.unwrap_or([1.0; 3]),
                         intensity: intensity.unwrap_or(LAMP_INTENSITY),
+                        range: None,
                         source: object.label(),
                     });
                 } else {
@@ -569,6 +570,8 @@ fn build(
     Ok(Imported {
         source: String::new(),
         kind: "Tiled map",
+        origin: DVec2::ZERO,
+        plan_unit: scale,
         canvas: (
             ((map.width * scale).ceil() as u32).max(1),
             ((map.height * scale).ceil() as u32).max(1),
@@ -579,6 +582,7 @@ fn build(
         glass,
         warnings,
         notes: Vec::new(),
+        mapping: Vec::new(),
         floor_file: None,
     })
 }

@@ -286,19 +286,37 @@ def generate(
 
 
 def import_plan(
-    path: PathLike, scale: Optional[float] = None, tolerance: Optional[float] = None
+    path: PathLike,
+    scale: Optional[float] = None,
+    tolerance: Optional[float] = None,
+    *,
+    doors: Optional[str] = None,
+    open_portals: Optional[str] = None,
+    lights: Optional[str] = None,
+    output: Optional[PathLike] = None,
+    force: bool = False,
 ) -> Scene:
-    """A scene from a floor plan (an SVG drawing, a Tiled map, a wall mask
-    PNG), as ``flatray import`` makes it. ``scene.text`` is the scene
-    text, to save and edit; what was not imported is in
-    ``scene.import_notes``."""
+    """A scene from a floor plan (an SVG drawing, a Tiled map, a Universal
+    VTT map, a wall mask PNG), as ``flatray import`` makes it, with its
+    options: ``doors`` ("as-drawn", "open", "closed"), ``open_portals``
+    ("windows", "doors") and ``lights`` ("keep", "none") for a Universal
+    VTT map. With ``output``, the scene file and its floor image are
+    written there, as ``flatray import -o output`` writes them (replacing
+    neither without ``force``), and the scene is loaded from it; without,
+    nothing is written and a map's image is not the floor.
+    ``scene.text`` is the scene text, to save and edit; what was not
+    imported is in ``scene.import_notes``."""
     path = os.fspath(path)
-    text, notes, warnings = _flatray.import_plan(path, scale, tolerance)
-    base = os.path.dirname(os.path.abspath(path))
-    scene = parse(text, name=path, base=base)
-    return Scene._of(
-        scene._loaded, scene._source, list(notes) + [f"not imported: {w}" for w in warnings]
+    target = None if output is None else os.fspath(output)
+    text, notes, warnings = _flatray.import_plan(
+        path, scale, tolerance, doors, open_portals, lights, target, bool(force)
     )
+    notes = list(notes) + [f"not imported: {w}" for w in warnings]
+    if target is not None:
+        scene = load(target)
+    else:
+        scene = parse(text, name=path, base=os.path.dirname(os.path.abspath(path)))
+    return Scene._of(scene._loaded, scene._source, notes)
 
 
 class Rendered:

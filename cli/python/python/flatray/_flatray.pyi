@@ -39,7 +39,14 @@ def generate(
     rooms: int = 16, lamps: int = 1, mirrors: float = 0.3, seed: int = 1, sun: bool = True
 ) -> str: ...
 def import_plan(
-    path: str, scale: Optional[float] = None, tolerance: Optional[float] = None
+    path: str,
+    scale: Optional[float] = None,
+    tolerance: Optional[float] = None,
+    doors: Optional[str] = None,
+    open_portals: Optional[str] = None,
+    lights: Optional[str] = None,
+    output: Optional[str] = None,
+    force: bool = False,
 ) -> Tuple[str, List[str], List[str]]: ...
 def render(
     scene: LoadedScene,
