@@ -32,7 +32,8 @@
 use flatray_geometry::{Ray, Segment, Side, Skip, segments_meet};
 
 use crate::film::{Estimator, Film, Part, run};
-use crate::light_tracer::{Deposits, Grid, OneEvent, WallDeposits, follow_photon};
+use crate::ledger::Ledger;
+use crate::light_tracer::{Deposits, Grid, WallDeposits, follow_photon};
 use crate::lights::aimed::Aim;
 use crate::lights::{Aperture, Photon};
 use crate::options::{RenderOptions, image_size};
@@ -440,23 +441,25 @@ struct CausticPass<'a> {
     values: usize,
     /// The seed of the photons: the render pass's.
     seed: u64,
-    /// What line and circle lights' photons leave to closed forms.
-    area: Option<OneEvent>,
+    /// Who counts which path: what line and circle lights' photons leave
+    /// to closed forms, and where photons stop.
+    ledger: Ledger,
 }
 
 /// Runs the caustic pass for a path-traced render of `scene`; `None` when
 /// the scene has no mirror or glass, or no light of one direction per
 /// point (the plan says so).
 ///
-/// With `area` (`Plan::area_photons`), line and circle lights send
-/// photons too, aimed at the mirror and glass edges (`lights::aimed`):
-/// they count after a run of specular events but those `area` says
-/// receivers take in closed form, and path rays leave that light to them.
+/// With `ledger.area_photons` (`Plan::area_photons`), line and circle
+/// lights send photons too, aimed at the mirror and glass edges
+/// (`lights::aimed`): they count after a run of specular events but those
+/// the ledger says receivers take in closed form, and path rays leave that
+/// light to them.
 pub(crate) fn trace_caustics(
     scene: &Scene,
     options: &RenderOptions,
     (limits, pass): (Limits, &Pass),
-    area: Option<OneEvent>,
+    ledger: Ledger,
     stats: &mut Stats,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Option<Caustics> {
@@ -467,7 +470,7 @@ pub(crate) fn trace_caustics(
         })
         .collect();
     // What line and circle lights aim at, where they send photons.
-    let aimed_at = area.map(|_| area_targets(scene));
+    let aimed_at = ledger.area_photons.then(|| area_targets(scene));
     let emitters: Vec<Emitter> = scene
         .lights
         .iter()
@@ -571,7 +574,7 @@ pub(crate) fn trace_caustics(
         bins,
         values,
         seed: pass.seed,
-        area,
+        ledger,
     };
     let outcome = run(&pass, Stats::default(), progress);
     stats.merge(&outcome.stats);
@@ -639,7 +642,7 @@ impl Estimator for CausticPass<'_> {
                     wavelength,
                 };
                 let power = colour * (weight * aimed.factor / aim.measure());
-                (photon, power, self.area)
+                (photon, power, true)
             } else {
                 let aperture = &emitter.apertures[pick(&emitter.cumulative, stream.uniform())];
                 let (origin, dir) = aperture.ray(stream.uniform());
@@ -664,7 +667,7 @@ impl Estimator for CausticPass<'_> {
                     unseen: !light.shape.found_by_paths(),
                     wavelength,
                 };
-                (photon, colour * (weight * window / holding as f64), None)
+                (photon, colour * (weight * window / holding as f64), false)
             };
             if power == Rgb::ZERO {
                 continue;
@@ -673,6 +676,7 @@ impl Estimator for CausticPass<'_> {
                 grid: &self.grid,
                 floor: &mut floor,
                 walls: Some((&self.bins, &mut walls)),
+                ledger: self.ledger,
                 area,
             };
             follow_photon(

@@ -27,6 +27,7 @@ mod accel;
 mod caustics;
 mod direct;
 mod film;
+mod ledger;
 mod light_tracer;
 mod lights;
 mod lines;

@@ -6,6 +6,7 @@
 use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
 use crate::film::PixelSums;
+use crate::ledger::{self, Ledger};
 use crate::film::{Estimator, Film, Part, run};
 use crate::lights::{Photon, PhotonKernel};
 use crate::material::glass::{GlassState, absorption, transmit};
@@ -207,7 +208,8 @@ fn trace_photon(
     }
     let power = colour * weight * photon.scale;
     let mut deposits = Deposits {
-        area: None,
+        ledger: Ledger::default(),
+        area: false,
         grid,
         floor: buffer,
         walls: None,
@@ -238,23 +240,11 @@ pub(crate) struct Deposits<'a> {
     /// its first diffuse wall, its power binned there, if it has been
     /// specular before.
     pub walls: Option<(&'a dyn WallDeposits, &'a mut [Rgb])>,
-    /// For a line or circle light's photon in the caustic pass: which runs
-    /// of exactly one event receivers take in closed form, whose light the
-    /// photon then leaves to them. Such a photon counts only after a
-    /// specular event, and stops at its first non-specular wall (the path
-    /// tracer takes what comes off a rough mirror).
-    pub area: Option<OneEvent>,
-}
-
-/// Runs of exactly one specular event, between a line or circle light and
-/// a receiver, that receivers take in closed form (`Plan::mirror_lights`,
-/// `Plan::glass_lights`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct OneEvent {
-    /// A reflection off a flat mirror.
-    pub mirror: bool,
-    /// A refraction into a smooth glass body.
-    pub glass: bool,
+    /// In the caustic pass: which flights count and where a photon stops
+    /// (`ledger.rs`).
+    pub ledger: Ledger,
+    /// Whether the photon comes from a line or circle light.
+    pub area: bool,
 }
 
 /// Follows `photon`, of `power`, through at most `limits.bounces` diffuse
@@ -283,23 +273,19 @@ pub(crate) fn follow_photon(
     let mut diffuse = 0;
     let mut run = Run::new(power);
     let caustic = deposits.walls.is_some();
-    // In the caustic pass: whether the photon took its one glossy
-    // reflection (off a rough mirror), after which its flights light the
-    // floor until its next non-specular wall.
-    let mut glossy = false;
-    // Whether a specular event came before that reflection: then no path
-    // finds the light it brings to a diffuse wall, which is binned there.
-    let mut specular_then_glossy = false;
+    let ledger = deposits.ledger;
+    // In the caustic pass: its history as the ledger reads it, which says
+    // which of its flights count on the floor and where it stops.
+    let mut history = ledger::Photon {
+        area: deposits.area,
+        // A laser's light no path finds: the caustic pass counts all of it.
+        unseen: photon.unseen,
+        ..ledger::Photon::default()
+    };
     let mut glass = GlassState {
         inside: None,
         wavelength: photon.wavelength,
     };
-    // A laser's light no path finds: the caustic pass counts all of it.
-    let unseen = photon.unseen;
-    let area = deposits.area;
-    // For a line or circle light's photon: whether its run so far is one
-    // event that receivers take in closed form.
-    let mut closed_form_run = false;
     loop {
         stats.work.bounce_rays += 1;
         let hit = scene.segments.closest_hit(&ray, f64::INFINITY, skip);
@@ -318,10 +304,7 @@ pub(crate) fn follow_photon(
             None => glass.inside,
         };
         let absorb = absorption(scene, body);
-        if !caustic
-            || (run.specular() && !closed_form_run)
-            || (area.is_none() && (glossy || unseen))
-        {
+        if !caustic || ledger.photon_lights_floor(&history) {
             deposits.grid.deposit(
                 &ray,
                 t_end,
@@ -355,33 +338,40 @@ pub(crate) fn follow_photon(
         if bsdf.is_straight() {
             stats.physics.transparent_passes += 1;
         }
-        let takes_lobe = bsdf.is_glossy() && !glossy && limits.bounces > 0 && area.is_none();
         if let Some((bins, values)) = &mut deposits.walls
             && !bsdf.is_specular()
-            && !takes_lobe
         {
             // The caustic pass ends at the first non-specular wall but
-            // for one glossy reflection (which it carries on to the
-            // floor: the path tracer leaves a point, spot or sun at a
-            // path's first glossy vertex to it). What arrives at a
-            // diffuse wall after specular events only is binned, for the
-            // path tracer's next-event estimation to read; a glossy
-            // wall's outgoing light depends on where light came from,
-            // which bins of irradiance do not keep.
-            stats.physics.paths_to_walls += 1;
-            if bsdf.lambertian().is_some() {
-                let arriving = power * kernel.factor(travelled, r0);
-                if !glossy && ((run.specular() && !closed_form_run) || unseen) {
-                    bins.add(values, (index, side, h.u), arriving);
-                } else if glossy && specular_then_glossy && limits.bounces >= 2 {
-                    bins.add_late(values, (index, side, h.u), arriving);
+            // where the ledger says the photon goes on: one glossy
+            // reflection (the path tracer leaves a point, spot or sun at
+            // a path's first glossy vertex to it), and every reflection
+            // of light that no path finds. What arrives at a diffuse wall
+            // after specular events only is binned, for the path tracer's
+            // next-event estimation to read; a glossy wall's outgoing
+            // light depends on where light came from, which bins of
+            // irradiance do not keep.
+            let at = match bsdf.lambertian() {
+                Some(_) => ledger::Vertex::Diffuse,
+                None => ledger::Vertex::Glossy,
+            };
+            match ledger.photon_at(&history, at) {
+                ledger::AtWall::Scatter => {
+                    if at == ledger::Vertex::Glossy {
+                        history = ledger.photon_glossy(history);
+                    }
+                }
+                stop => {
+                    stats.physics.paths_to_walls += 1;
+                    if let ledger::AtWall::Bin { level } = stop {
+                        let arriving = power * kernel.factor(travelled, r0);
+                        match level {
+                            0 => bins.add(values, (index, side, h.u), arriving),
+                            _ => bins.add_late(values, (index, side, h.u), arriving),
+                        }
+                    }
+                    return;
                 }
             }
-            return;
-        }
-        if caustic && takes_lobe {
-            glossy = true;
-            specular_then_glossy = run.specular() || unseen;
         }
         if !bsdf.is_specular() {
             if diffuse == limits.bounces {
@@ -406,20 +396,8 @@ pub(crate) fn follow_photon(
         if bsdf.is_specular() {
             power *= scattered.weight;
             if !bsdf.is_straight() {
-                if let Some(one) = area {
-                    // The first event of the run: a flat mirror, or a
-                    // refraction into a body (from its outside, now in it).
-                    closed_form_run = !run.specular()
-                        && ((one.mirror
-                            && matches!(wall.material, crate::scene::Material::Mirror { .. })
-                            && wall.as_segment().is_some())
-                            || (one.glass
-                                && wall
-                                    .material
-                                    .glass()
-                                    .is_some_and(|(_, inside)| inside != side)
-                                && glass.inside.is_some()));
-                }
+                let event = ledger::Event::of(wall, side, glass.inside.is_some());
+                history.run = history.run.with(event);
                 let Some(weight) = run.next(limits.specular, power, stream, stats) else {
                     return;
                 };
@@ -431,6 +409,7 @@ pub(crate) fn follow_photon(
             power *= kernel.factor(travelled, r0) * scattered.weight;
             kernel = PhotonKernel::None;
             run = Run::new(power);
+            history.run = ledger::Run::EMPTY;
         }
         ray = Ray::new(x, scattered.dir);
         if power == Rgb::ZERO {

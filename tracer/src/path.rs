@@ -8,6 +8,7 @@ use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
 
 use crate::caustics::Caustics;
 use crate::direct::{direct_light, direct_light_glossy, glossy_emission_weight};
+use crate::ledger::{self, Ledger};
 use crate::lights::Receiver;
 use crate::lights::choice::LightTable;
 use crate::material::glass::{GlassState, absorption, transmit};
@@ -15,7 +16,7 @@ use crate::material::{Bsdf, Sampling, Transport};
 use crate::memo::Onward;
 use crate::run::Run;
 use crate::sampling::{Stream, arc_point};
-use crate::scene::{Material, Scene};
+use crate::scene::Scene;
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
@@ -205,21 +206,15 @@ pub(crate) fn follow(
     // on only to meet lights with an area after specular events (which
     // no shadow ray finds); its next diffuse wall ends it.
     let mut last_leg = diffuse >= bounces;
-    // After a mirror the path can carry light from a line light that no
-    // shadow ray found, so emission met by the ray then counts.
-    let mut after_mirror = false;
-    // Specular events since the floor or the last diffuse vertex, and
-    // whether the first was a flat mirror, or a refraction out of the
-    // glass body the vertex is in: right after exactly that one event,
-    // lines and circles were taken in closed form at the vertex
-    // (`Trace::mirror_lights`, `Trace::glass_lights`), and a ray that
-    // meets them adds nothing.
-    let mut events = 0u32;
-    let mut first_flat_mirror = false;
-    let mut first_glass_exit = false;
-    // Whether the current run of specular events began at a glossy wall
-    // (not the floor or a diffuse wall).
-    let mut from_glossy = false;
+    // The specular events since the floor or the last non-specular
+    // vertex, and that vertex: the ledger says from them whether a light
+    // the ray meets counts (`Ledger::path_meets`).
+    let ledger = trace.ledger;
+    let mut events = ledger::Run::EMPTY;
+    let mut from = match diffuse {
+        0 => ledger::Vertex::Floor,
+        _ => ledger::Vertex::Diffuse,
+    };
     // Where the ray left a glossy wall, and the density of its direction:
     // light with an area that it meets is weighed against next-event
     // estimation there (multiple importance sampling).
@@ -242,16 +237,14 @@ pub(crate) fn follow(
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
         // Only after the floor or a diffuse wall: a glossy wall's
         // next-event estimation takes no light through mirrors or glass.
-        let taken_at_vertex = !from_glossy
-            && ((events == 1
-                && ((trace.mirror_lights && first_flat_mirror)
-                    || (trace.glass_lights && first_glass_exit)))
-                || (trace.area_photons && events >= 1));
-        if mirror_emission && (after_mirror || force || glossy_from.is_some()) && !taken_at_vertex {
+        // What of a line or circle light that the ray meets counts: the
+        // ledger's answer from the run since the last vertex.
+        let meets = ledger.path_meets(events, from).counts();
+        if mirror_emission && (meets || (force && !events.is_specular())) {
             stats.work.emission_tests += 1;
             let emitted =
                 emission_crossed(scene, &ray, hit_t, unfolded, glossy_from, glass.wavelength);
-            if after_mirror || glossy_from.is_some() {
+            if meets {
                 fluence += throughput * emitted;
             }
         }
@@ -282,8 +275,7 @@ pub(crate) fn follow(
                 h.t,
             );
         }
-        if (after_mirror || glossy_from.is_some())
-            && !taken_at_vertex
+        if meets
             && let Some(light) = scene.light_of_wall(index)
         {
             fluence += throughput
@@ -409,21 +401,9 @@ pub(crate) fn follow(
                 break;
             };
             throughput *= weight;
-            // After a specular event, light met by the ray counts: no
-            // next-event estimation could have found it (but for one
-            // flat mirror, with `mirror_lights`, and one refraction out
-            // of the vertex's glass, with `glass_lights`).
-            after_mirror = true;
-            if events == 0 {
-                first_flat_mirror = matches!(wall.material, Material::Mirror { .. });
-                // Reached from its inside, and out of the glass now.
-                first_glass_exit = wall
-                    .material
-                    .glass()
-                    .is_some_and(|(_, inside)| inside == side)
-                    && glass.inside.is_none();
-            }
-            events = events.saturating_add(1);
+            // The path goes against the light: the event as light takes it.
+            let event = ledger::Event::of(wall, side, glass.inside.is_some());
+            events = events.with(event.reversed());
             line_walls = if bsdf.is_mirror() {
                 trace
                     .mirror_arcs
@@ -436,9 +416,11 @@ pub(crate) fn follow(
             }
         } else {
             run = Run::new(throughput);
-            after_mirror = false;
-            events = 0;
-            from_glossy = bsdf.is_glossy();
+            events = ledger::Run::EMPTY;
+            from = match bsdf.is_glossy() {
+                true => ledger::Vertex::Glossy,
+                false => ledger::Vertex::Diffuse,
+            };
             unfolded = 0.0;
             line_walls = None;
         }
@@ -487,10 +469,9 @@ pub(crate) struct Trace<'a> {
     /// one edge of their body in closed form (`Plan::glass_lights`); path
     /// rays then add nothing for them right after that one refraction.
     pub glass_lights: bool,
-    /// Whether the caustic pass takes line and circle lights after runs
-    /// of specular events (`Plan::area_photons`): path rays then add none
-    /// they meet after such a run from the floor or a diffuse wall.
-    pub area_photons: bool,
+    /// Who counts which light path (`ledger.rs`): what path rays that
+    /// meet a light add, and what a rough mirror leaves to photons.
+    pub ledger: Ledger,
     /// Per wall side, whether a path goes on past its last diffuse bounce
     /// there, to meet such lights after mirrors or glass
     /// (`run::last_leg_sides`); `None`: it never does.
@@ -637,7 +618,7 @@ pub(crate) fn add_caustics(
 ) -> Rgb {
     if let Some(caustics) = trace.caustics {
         irradiance += caustics.wall(index, side, u);
-        if diffuse < trace.bounces && caustics.has_late() {
+        if caustics.has_late() && trace.ledger.reads_bins(1, diffuse) {
             irradiance += caustics.wall_late(index, side, u);
         }
     }
@@ -671,7 +652,7 @@ fn glossy_direct(
         wall: Some(index),
         shadow_walls: None,
     };
-    let aimed_by_photons = trace.caustics.is_some() && diffuse == 1;
+    let aimed_by_photons = trace.ledger.glossy_leaves_aimed(diffuse);
     direct_light_glossy(
         trace.scene,
         x,

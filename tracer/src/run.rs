@@ -65,12 +65,6 @@ impl Run {
         }
     }
 
-    /// Whether the run holds specular events.
-    #[inline]
-    pub fn specular(&self) -> bool {
-        self.events > 0
-    }
-
     /// One more specular event, after which the path's throughput is
     /// `throughput`: the factor its throughput takes if it goes on, or
     /// `None` where it stops (counted in `stats`: the limit, or the

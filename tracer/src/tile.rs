@@ -136,10 +136,7 @@ impl Fills {
                 scene,
                 options,
                 (Limits::of(options), pass),
-                plan.area_photons.then_some(crate::light_tracer::OneEvent {
-                    mirror: plan.mirror_lights,
-                    glass: plan.glass_lights,
-                }),
+                plan.ledger(),
                 stats,
                 &|_| progress(0),
             )
@@ -488,7 +485,10 @@ pub(crate) fn trace_with<'a>(
         mirror_emission: plan.mirror_emission,
         mirror_lights: plan.mirror_lights,
         glass_lights: plan.glass_lights,
-        area_photons: plan.area_photons,
+        ledger: crate::ledger::Ledger {
+            caustics: caustics.is_some(),
+            ..plan.ledger()
+        },
         last_leg_sides: last_leg_sides.filter(|_| plan.last_legs),
         force,
         tables: plan.fast.tables.runs,

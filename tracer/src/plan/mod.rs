@@ -206,6 +206,18 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Who counts which light path in this render (`ledger.rs`), from the
+    /// plan's decisions.
+    pub(crate) fn ledger(&self) -> crate::ledger::Ledger {
+        crate::ledger::Ledger {
+            mirror_lights: self.mirror_lights,
+            glass_lights: self.glass_lights,
+            area_photons: self.area_photons,
+            caustics: self.caustics,
+            bounces: self.bounces,
+        }
+    }
+
     /// The plan for `scene` rendered with `options`. With
     /// `options.reference`, every effect is on wherever it cannot change
     /// the image, and no fast path runs.
