@@ -260,7 +260,8 @@ impl Ledger {
     #[inline]
     pub(crate) fn photon_lights_floor(self, photon: &Photon) -> bool {
         if photon.area {
-            photon.run.is_specular() && !self.closed_form(LightKind::Area, photon.run, Vertex::Floor)
+            photon.run.is_specular()
+                && !self.closed_form(LightKind::Area, photon.run, Vertex::Floor)
         } else {
             photon.run.is_specular() || photon.lobes > 0 || photon.unseen
         }
@@ -277,9 +278,7 @@ impl Ledger {
             (0, Vertex::Glossy) if takes_lobe => AtWall::Scatter,
             (0, Vertex::Diffuse) if self.photon_lights_floor(photon) => AtWall::Bin { level: 0 },
             (1, Vertex::Glossy) if photon.carried => AtWall::Scatter,
-            (1, Vertex::Diffuse) if photon.carried && self.bounces >= 2 => {
-                AtWall::Bin { level: 1 }
-            }
+            (1, Vertex::Diffuse) if photon.carried && self.bounces >= 2 => AtWall::Bin { level: 1 },
             (2.., _) => AtWall::Scatter,
             _ => AtWall::Stop,
         }

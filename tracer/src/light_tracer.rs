@@ -6,8 +6,8 @@
 use flatray_geometry::{DVec2, Ray, Side, Skip, clip_to_box};
 
 use crate::film::PixelSums;
-use crate::ledger::{self, Ledger};
 use crate::film::{Estimator, Film, Part, run};
+use crate::ledger::{self, Ledger};
 use crate::lights::{Photon, PhotonKernel};
 use crate::material::glass::{GlassState, absorption, transmit};
 use crate::material::{Bsdf, Sampling, Transport};

@@ -275,9 +275,7 @@ pub(crate) fn follow(
                 h.t,
             );
         }
-        if meets
-            && let Some(light) = scene.light_of_wall(index)
-        {
+        if meets && let Some(light) = scene.light_of_wall(index) {
             fluence += throughput
                 * wall_emission(
                     scene,

@@ -238,11 +238,7 @@ fn every_path_class_up_to_six_events_is_counted_exactly_once() {
             walked += 1;
             let count = count(ledger, class);
             let within = class.reflections() <= ledger.bounces;
-            let right = if within {
-                count.once()
-            } else {
-                count.zero()
-            };
+            let right = if within { count.once() } else { count.zero() };
             if !right {
                 wrong += 1;
                 if failures.len() < 8 {
@@ -303,8 +299,7 @@ fn without_the_caustic_pass_only_what_photons_take_goes_uncounted() {
             continue;
         }
         let photons_only = class.light == LightKind::Laser
-            || (class.light == LightKind::Aimed
-                && class.vertices()[0].1.is_specular());
+            || (class.light == LightKind::Aimed && class.vertices()[0].1.is_specular());
         assert_eq!(count.once(), !photons_only, "{class:?}: {count:?}");
     }
 }
