@@ -8,10 +8,12 @@
 //! caustic pass's floor deposits and wall bins) each count some of these
 //! paths; every path within the limits must be counted exactly once, or
 //! shared by weights that sum to one (multiple importance sampling at a
-//! rough mirror). The rule that decides it is written here and nowhere
-//! else: the path loop (`path.rs`), the photon loop (`light_tracer.rs`)
-//! and next-event estimation (`direct.rs`, `memo.rs`, `pixel.rs`) ask
-//! the [`Ledger`] the plan built, and hold no switch of their own.
+//! rough mirror). The rule that decides it is written here: the path
+//! loop (`path.rs`), the photon loop (`light_tracer.rs`) and glossy
+//! next-event estimation ask the [`Ledger`] the plan built
+//! (`Plan::ledger`). The receivers' direct-light sums take the closed
+//! forms that [`Ledger::closed_form`] names, by the plan's same two
+//! decisions (`Plan::mirror_lights`, `Plan::glass_lights`).
 //!
 //! The tests walk every class of path up to six events, for every kind of
 //! light and every combination of the plan's decisions, through the same
