@@ -235,8 +235,6 @@ pub(crate) fn follow(
                 .closest_hit_within(&ray, f64::INFINITY, skip, line_walls),
         };
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        // Only after the floor or a diffuse wall: a glossy wall's
-        // next-event estimation takes no light through mirrors or glass.
         // What of a line or circle light that the ray meets counts: the
         // ledger's answer from the run since the last vertex.
         let meets = ledger.path_meets(events, from).counts();
