@@ -13,9 +13,12 @@
 //! every stored value is a pure function of its key, the table is the same
 //! whatever the number of threads that filled it.
 //!
-//! It also marks one read in [`CHECK_RATE`] (by a hash of its position)
-//! for its caller to check against an exact estimate, so that the memo's
-//! bias can be taken out by whoever knows the physics.
+//! It also tells its caller which reads to check against an exact
+//! estimate, so that the memo's bias can be taken out by whoever knows the
+//! physics ([`Check`]): one read in [`CHECK_RATE`] (by a hash of the wall
+//! and the read's position along it), and every read between bins whose
+//! values say that the interpolation may be off by more than a check can
+//! take out without going below zero.
 //!
 //! What it never does: decide physics. It does not know what irradiance
 //! is; the tracer hands it a fill function and reads numbers back. It reads
@@ -43,6 +46,26 @@ pub struct WallMemo {
     /// Per (span, side, bin): the sum over lights, what a lookup reads.
     /// Only the sum is kept, so the memory does not grow with the lights.
     total: Vec<Value>,
+    /// Per (span, side, bin): whether every read interpolated from this
+    /// bin is checked ([`Check::Always`]); empty for a memo that is never
+    /// checked ([`WallMemo::build_like`]).
+    always: Vec<bool>,
+}
+
+/// How the caller takes a read ([`WallMemo::read`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Check {
+    /// The memo's value as it is.
+    No,
+    /// One read in [`CHECK_RATE`]: the caller reads `m + CHECK_RATE (e - m)`
+    /// for the memo's `m` and an exact estimate `e`, which is on average
+    /// the exact value whatever the memo holds, and is not below zero
+    /// wherever `e >= m (1 - 1 / CHECK_RATE)`.
+    Sampled,
+    /// The memo's value may be off by more than a sampled check can take
+    /// out without going below zero (a shadow's edge, a lamp close to the
+    /// wall, a span's end): the caller takes the exact estimate alone.
+    Always,
 }
 
 /// A wall of at most this many spans finds a lookup's span without a
@@ -99,15 +122,27 @@ pub struct Key {
 /// One read in this many is marked for checking ([`checked`]).
 pub const CHECK_RATE: u64 = 16;
 
-/// Whether the read at `u` on wall `wall` is one the caller checks: one in
-/// [`CHECK_RATE`], by a hash of the two (a random number keyed by the
-/// read's own position, so every caller decides alike without a random
-/// stream). A caller that estimates the exact value `e` there and reads
+/// Cells along a wall, as a share of its length, within which [`checked`]
+/// decides alike: far finer than a bin, and far coarser than the rounding
+/// of a position along a wall far from the origin (a scene translated by
+/// 1e9 units moves `u` by about 1e-8 of a wall's length), so that a
+/// translated scene checks the same reads.
+const CHECK_CELLS: f64 = (1u64 << 16) as f64;
+
+/// Whether the read at `u` on wall `wall`, by a path keyed `path`, is one
+/// the caller checks: one in [`CHECK_RATE`], by a hash of the three (a
+/// random number keyed by the path, as its own random stream is, and by
+/// the read's cell along the wall, so that every caller that holds the
+/// path's key decides alike, and a far-off scene decides as one at the
+/// origin). A caller that estimates the exact value `e` there and reads
 /// `m + CHECK_RATE (e - m)` instead of the memo's `m` has, on average, the
 /// exact value, whatever the memo holds.
 #[inline(always)]
-pub fn checked(wall: u32, u: f64) -> bool {
-    let mut z = u.to_bits() ^ ((wall as u64) << 32).rotate_left(17);
+pub fn checked(wall: u32, u: f64, path: u64) -> bool {
+    // NaN and the ends map to cells 0 and CHECK_CELLS, as the cast saturates.
+    let cell = (u * CHECK_CELLS) as u64;
+    let mut z =
+        cell ^ ((wall as u64) << 32).rotate_left(17) ^ path.wrapping_mul(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     (z ^ (z >> 31)).is_multiple_of(CHECK_RATE)
@@ -171,11 +206,35 @@ impl WallMemo {
             walls.push(SpanRange { first, count, ends });
         }
         let total = fill_bins(&walls, &spans, lights, fill);
+        let always = uneven_bins(&spans, &total);
         WallMemo {
             lights,
             walls,
             spans,
             total,
+            always,
+        }
+    }
+
+    /// Marks the reads about `u` on `wall` (both sides) as always checked:
+    /// `u` is a place where the light the memo holds may jump (the edge of
+    /// a shadow that a wall casts), which the bins' values do not show
+    /// where it falls between two centres that see the same light. The
+    /// reads marked are those interpolated from the bins about `u`.
+    pub fn mark_edge(&mut self, wall: u32, u: f64) {
+        if self.always.is_empty() || wall as usize >= self.walls.len() || !u.is_finite() {
+            return;
+        }
+        let span = self.spans[self.span_of(wall, u)];
+        let x = (u - span.u0) * span.scale - 0.5;
+        // The bin a read at `u` starts from, and the one before where `u`
+        // is within rounding of a centre.
+        let i = x.clamp(0.0, span.last) as usize;
+        let before = (x - 1e-6).clamp(0.0, span.last) as usize;
+        for side in 0..2 {
+            let base = span.offset + side * span.bins as usize;
+            self.always[base + i] = true;
+            self.always[base + before] = true;
         }
     }
 
@@ -192,6 +251,7 @@ impl WallMemo {
             walls: self.walls.clone(),
             spans: self.spans.clone(),
             total: fill_bins(&self.walls, &self.spans, terms, fill),
+            always: Vec::new(),
         }
     }
 
@@ -227,6 +287,7 @@ impl WallMemo {
     /// Bytes held by the tables: per bin, not per light.
     pub fn memory_bytes(&self) -> usize {
         self.total.len() * std::mem::size_of::<Value>()
+            + self.always.len()
             + self.spans.len() * std::mem::size_of::<Span>()
             + self.walls.len() * std::mem::size_of::<SpanRange>()
     }
@@ -263,6 +324,30 @@ impl WallMemo {
     /// beyond the span's first and last centre).
     #[inline(always)]
     pub fn lookup(&self, key: Key) -> Value {
+        self.interpolate(key).0
+    }
+
+    /// [`WallMemo::lookup`], and how the caller checks the read ([`Check`])
+    /// for a path keyed `path` ([`checked`]).
+    #[inline(always)]
+    pub fn read(&self, key: Key, path: u64) -> (Value, Check) {
+        let (value, i, beyond) = self.interpolate(key);
+        let check = if self.always.get(i).copied().unwrap_or(false)
+            || (beyond && !self.always.is_empty())
+        {
+            Check::Always
+        } else if checked(key.wall, key.u, path) {
+            Check::Sampled
+        } else {
+            Check::No
+        };
+        (value, check)
+    }
+
+    /// The interpolated value at `key`, and the index of the bin it
+    /// starts from.
+    #[inline(always)]
+    fn interpolate(&self, key: Key) -> (Value, usize, bool) {
         let span = &self.spans[self.span_of(key.wall, key.u)];
         let n = span.bins as usize;
         let base = span.offset + key.side * n;
@@ -270,18 +355,82 @@ impl WallMemo {
         // its bin count for a span of the whole wall, as most are).
         // Conversions through i64 (one instruction each; usize takes a
         // sequence of them on x86-64). x is at most `last`, so is i.
-        let x = ((key.u - span.u0) * span.scale - 0.5).clamp(0.0, span.last);
+        let raw = (key.u - span.u0) * span.scale - 0.5;
+        let x = raw.clamp(0.0, span.last);
         let i = x as i64;
         let j = (i + 1).min(n as i64 - 1);
         let f = (x - i as f64) as f32;
         let (i, j) = (i as usize, j as usize);
         let (a, b) = (self.total[base + i], self.total[base + j]);
-        [
+        let value = [
             a[0] + (b[0] - a[0]) * f,
             a[1] + (b[1] - a[1]) * f,
             a[2] + (b[2] - a[2]) * f,
-        ]
+        ];
+        (value, base + i, raw != x)
     }
+}
+
+/// How far past its own estimate of the interpolation's error a bin is
+/// taken to be off (the estimate is from the bins' second differences,
+/// exact for a parabola).
+const ERROR_MARGIN: f32 = 2.0;
+
+/// Per (span, side, bin): whether the reads interpolated from the bin may
+/// be off by more than `1 / CHECK_RATE` of the smaller of the values they
+/// blend, so that a sampled check could go below zero there. Between
+/// centres `h` apart, where the light is smooth, a linear interpolation is
+/// off by at most `h² |f''| / 8`, `h² f''` estimated by the second
+/// differences of the bins about it; where the light jumps between the two
+/// centres (a shadow's edge), by up to the jump, which shows as second
+/// differences of opposite signs at the two ends, half their difference
+/// the jump. Beyond a span's first and last centre the read is constant,
+/// off by about half the first difference more, and the first interval of
+/// a span can't tell a jump from a slope: its first difference counts
+/// whole. A span of one bin has no estimate, and is always checked.
+fn uneven_bins(spans: &[Span], total: &[Value]) -> Vec<bool> {
+    let mut always = vec![false; total.len()];
+    for span in spans {
+        let n = span.bins as usize;
+        for side in 0..2 {
+            let base = span.offset + side * n;
+            let m = &total[base..base + n];
+            let flags = &mut always[base..base + n];
+            if n == 1 {
+                flags[0] = true;
+                continue;
+            }
+            // Each colour channel is checked on its own.
+            #[allow(clippy::needless_range_loop)]
+            for c in 0..3 {
+                let v = |k: usize| m[k][c];
+                // The second difference about centre k, where it has one.
+                let second =
+                    |k: usize| (k >= 1 && k + 1 < n).then(|| v(k - 1) - 2.0 * v(k) + v(k + 1));
+                for (i, flag) in flags.iter_mut().enumerate() {
+                    let j = (i + 1).min(n - 1);
+                    let k = i.min(n - 2);
+                    let first = (v(k + 1) - v(k)).abs();
+                    let (si, sj) = (second(i), second(j));
+                    let curve = si.unwrap_or(0.0).abs().max(sj.unwrap_or(0.0).abs()) / 8.0;
+                    let jump = match (si, sj) {
+                        (Some(a), Some(b)) if i != j => (a - b).abs() / 2.0,
+                        _ => first,
+                    };
+                    let end = if i == 0 || i == n - 1 {
+                        first / 2.0 + curve
+                    } else {
+                        0.0
+                    };
+                    let error = (ERROR_MARGIN * curve).max(jump).max(ERROR_MARGIN * end);
+                    if error > v(i).min(v(j)) / CHECK_RATE as f32 {
+                        *flag = true;
+                    }
+                }
+            }
+        }
+    }
+    always
 }
 
 /// Every (span, side, bin) value: `fill` at the bin's centre, summed over
@@ -471,10 +620,126 @@ mod tests {
         assert_eq!(small.entries() * 2, lit.entries());
         assert_eq!(small.memory_bytes() * 2, long.memory_bytes());
         assert_eq!(small.memory_bytes(), lit.memory_bytes());
+        // A value and the flag of its reads, and a share of the spans.
         let per_bin = small.memory_bytes() as f64 / (10 * 100 * 2) as f64;
         assert!(
-            per_bin < std::mem::size_of::<Value>() as f64 + 1.0,
+            per_bin < std::mem::size_of::<Value>() as f64 + 2.0,
             "{per_bin}"
         );
+    }
+
+    fn check_at(memo: &WallMemo, side: usize, u: f64) -> Check {
+        memo.read(Key { wall: 0, side, u }, 0).1
+    }
+
+    #[test]
+    fn reads_are_checked_alike_within_a_cell_and_one_in_the_rate() {
+        let mut checked_cells = 0;
+        let cells = 1 << 16;
+        for k in 0..cells {
+            let centre = (k as f64 + 0.5) / CHECK_CELLS;
+            // Anywhere in the cell decides as its centre does: a position
+            // that rounds differently in its last bits checks alike.
+            let near = [
+                centre - 0.4 / CHECK_CELLS,
+                centre * (1.0 + 1e-12),
+                centre + 0.4 / CHECK_CELLS,
+            ];
+            for u in near {
+                assert_eq!(checked(3, u, 7), checked(3, centre, 7), "cell {k}, u {u}");
+            }
+            checked_cells += checked(3, centre, 7) as u32;
+        }
+        // One cell in 16, within 5 standard errors of the binomial count.
+        let expected = cells as f64 / CHECK_RATE as f64;
+        let sd = (expected * (1.0 - 1.0 / CHECK_RATE as f64)).sqrt();
+        assert!(
+            (checked_cells as f64 - expected).abs() < 5.0 * sd,
+            "{checked_cells}"
+        );
+        // Another wall, or another path, checks other cells.
+        for (wall, path) in [(4, 7), (3, 8)] {
+            let other = (0..cells)
+                .filter(|&k| {
+                    let u = (k as f64 + 0.5) / CHECK_CELLS;
+                    checked(3, u, 7) != checked(wall, u, path)
+                })
+                .count();
+            assert!(other > cells / 16, "{other}");
+        }
+    }
+
+    #[test]
+    fn smooth_bins_are_sampled_and_jumps_ends_and_short_spans_always_checked() {
+        // A smooth light along a wall of 20 bins: inside the outer
+        // centres, only sampled checks.
+        let smooth = WallMemo::build(&[20.0], &[], 1.0, 1, |_, _, u, _| {
+            [(1.0 + u + 0.5 * u * u) as f32; 3]
+        });
+        for k in 1..39 {
+            let u = (k as f64 + 0.5) / 40.0;
+            assert_ne!(check_at(&smooth, 0, u), Check::Always, "u {u}");
+        }
+        // Beyond the first and last centre (the read is held constant).
+        assert_eq!(check_at(&smooth, 1, 0.01), Check::Always);
+        assert_eq!(check_at(&smooth, 1, 0.99), Check::Always);
+        // A shadow's edge at u = 0.51, between centres 9 and 10 (at 0.475
+        // and 0.525): the interval between them is always checked (its
+        // neighbours may be, as their second differences show half the
+        // jump), and no other inner one.
+        let step = WallMemo::build(&[20.0], &[], 1.0, 1, |_, _, u, _| {
+            [if u < 0.51 { 2.0 } else { 1.0 }; 3]
+        });
+        for k in 2..38 {
+            let u = (k as f64 + 0.5) / 40.0;
+            let always = check_at(&step, 0, u) == Check::Always;
+            if u > 0.475 && u < 0.525 {
+                assert!(always, "u {u}");
+            } else if !(0.425..=0.575).contains(&u) {
+                assert!(!always, "u {u}");
+            }
+        }
+        // A span of one bin: always.
+        let short = WallMemo::build(&[0.5], &[], 1.0, 1, |_, _, _, _| [1.0; 3]);
+        assert_eq!(check_at(&short, 0, 0.5), Check::Always);
+        // Nothing the onward memo's tables read is checked.
+        let like = smooth.build_like(1, |_, _, _, _| [0.0; 3]);
+        assert_eq!(
+            like.read(
+                Key {
+                    wall: 0,
+                    side: 0,
+                    u: 0.01
+                },
+                0
+            )
+            .1,
+            Check::No
+        );
+    }
+
+    #[test]
+    fn a_marked_edge_checks_the_reads_about_it_on_both_sides() {
+        let mut memo = WallMemo::build(&[20.0], &[], 1.0, 1, |_, _, _, _| [1.0; 3]);
+        let before: Vec<bool> = (1..39)
+            .map(|k| check_at(&memo, 0, (k as f64 + 0.5) / 40.0) == Check::Always)
+            .collect();
+        assert!(before.iter().all(|&a| !a));
+        // A thin shadow at u = 0.3 between centres 5 and 6 (at 0.275 and
+        // 0.325), which the bins' equal values do not show.
+        memo.mark_edge(0, 0.3);
+        for side in 0..2 {
+            for k in 1..39 {
+                let u = (k as f64 + 0.5) / 40.0;
+                let about = u > 0.275 && u < 0.325;
+                assert_eq!(check_at(&memo, side, u) == Check::Always, about, "u {u}");
+            }
+        }
+        // An edge at no wall, or at no place, marks nothing.
+        let always = |memo: &WallMemo| memo.always.iter().filter(|&&a| a).count();
+        let marked = always(&memo);
+        memo.mark_edge(7, 0.5);
+        memo.mark_edge(0, f64::NAN);
+        assert_eq!(always(&memo), marked);
     }
 }

@@ -19,7 +19,7 @@ fn image_and_stats(
 
 /// The floor's looks at walls towards a light: its shadow rays, and the
 /// squares whose points, spots and suns looked at the walls in front of
-/// them (`lights::square`), where a mask could have told a shared
+/// them (`estimators::square`), where a mask could have told a shared
 /// transmittance with one ray.
 fn looks(stats: &Stats) -> u64 {
     stats.work.shadow_rays + stats.work.floor_square_lights

@@ -221,7 +221,7 @@ fn area_left_of(x: u32, y: u32, a: DVec2, b: DVec2) -> f64 {
 
 /// The floor memo's direct light is exact at shadow edges: a point
 /// light's mean over each pixel's square is computed, not sampled
-/// (`lights::square`), so the relative RMS error over the pixels a shadow
+/// (`estimators::square`), so the relative RMS error over the pixels a shadow
 /// edge crosses is the image's rounding at any number of samples, one
 /// included. A point light of constant falloff behind a mirror, its
 /// shadow edge at an odd angle: the image is exactly the lit fraction of

@@ -623,6 +623,39 @@ fn a_scene_translated_a_million_units_gives_the_same_image() {
     );
 }
 
+/// With the memo on, a scene a billion units from the origin checks the
+/// same memo reads as at the origin (the checks are keyed by the read's
+/// cell along its wall, not by the last bits of its position there), so
+/// the images agree pixel by pixel but for rounding at shadow edges.
+#[test]
+fn a_scene_translated_a_billion_units_checks_the_same_memo_reads() {
+    for onward in [true, false] {
+        let options = {
+            let mut options = options(16, 2);
+            options.memo = MemoOptions::default();
+            options.memo.onward = onward;
+            options.floor_lines = false;
+            options
+        };
+        let near = render(&scene(&shifted_scene(0.0)).scene, &options).image;
+        let far = render(&scene(&shifted_scene(1e9)).scene, &options).image;
+        assert!(all_finite(&far));
+        let most = near
+            .pixels
+            .iter()
+            .flatten()
+            .zip(far.pixels.iter().flatten())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        // A read checked in one and not the other moves a pixel by a
+        // tenth or more (its mean is 0.92).
+        assert!(
+            most < 0.01,
+            "onward memo {onward}: a pixel differs by {most}"
+        );
+    }
+}
+
 #[test]
 fn a_scene_scaled_down_gives_the_scaled_image() {
     // The same scene 100 times smaller, rendered at 100 pixels per unit:

@@ -1,4 +1,4 @@
-//! Choosing lights by a table (`lights::choice`): the same expected image
+//! Choosing lights by a table (`estimators::choice`): the same expected image
 //! as a shadow ray to every light, in a non-convex room of many lights of
 //! every kind, with the wall cache on and off; and a cost per point that
 //! does not grow with the lights. Statistical checks state their

@@ -191,55 +191,113 @@ impl WallBins {
         bins
     }
 
-    /// Where the bin of wall `wall` at `u` lies: the wall's first value,
-    /// its bins along it, the bin, and one over the bin's length; `None`
-    /// for a wall without bins.
+    /// Where `u` on wall `wall` falls among the centres of its span's
+    /// bins ([`Found`]); `None` for a wall without bins.
     #[inline]
-    fn locate(&self, wall: u32, u: f64) -> Option<(usize, usize, usize, f64)> {
+    fn locate(&self, wall: u32, u: f64) -> Option<Found> {
         let layout = self.walls.get(wall as usize)?;
         let (first, end) = (layout.spans.0 as usize, layout.spans.1 as usize);
-        match end.checked_sub(first)? {
-            0 => None,
-            1 => {
-                // The whole wall: u in [0, 1], the cast saturates.
-                let bin = ((u * layout.bins as f64) as usize).min(layout.bins - 1);
-                Some((layout.first, layout.bins, bin, layout.per_length))
-            }
+        let (offset, bins, x, per_length) = match end.checked_sub(first)? {
+            0 => return None,
+            // The whole wall, u in [0, 1].
+            1 => (0, layout.bins, u * layout.bins as f64, layout.per_length),
             n => {
                 let spans = self.spans.get(first..end)?;
                 let span = &spans[spans[..n - 1].partition_point(|s| s.u1 <= u)];
-                // u in the span: the cast saturates.
-                let within = ((u - span.u0) * span.scale) as usize;
-                let bin = span.offset + within.min(span.bins - 1);
-                Some((layout.first, layout.bins, bin, span.per_length))
+                let x = (u - span.u0) * span.scale;
+                (span.offset, span.bins, x, span.per_length)
             }
-        }
-    }
-
-    /// The index of the value of side `side` of a bin that
-    /// [`WallBins::locate`] found.
-    #[inline]
-    fn index((first, bins, bin, _): (usize, usize, usize, f64), side: Side) -> usize {
-        first + side.index() * bins + bin
+        };
+        // From the first bin's centre, in bins; NaN takes the first bin.
+        let x = x - 0.5;
+        let last = bins.checked_sub(1)?;
+        let (a, share) = if x.is_nan() || x <= 0.0 {
+            (0, 0.0)
+        } else if x >= last as f64 {
+            (last, 0.0)
+        } else {
+            let a = x as usize;
+            (a, x - a as f64)
+        };
+        let b = (a + 1).min(last);
+        Some(Found {
+            first: layout.first,
+            bins: layout.bins,
+            pair: (offset + a, offset + b),
+            share,
+            per_length,
+        })
     }
 }
 
 impl WallDeposits for WallBins {
-    /// As irradiance over the bin that holds the point.
+    /// Adds `power` arriving on side `side` of diffuse wall `wall` at `u`,
+    /// as irradiance, shared between the two bins about `u` as a read
+    /// there takes them ([`Found`]), so that what a photon leaves on a wall
+    /// is centred where it hit.
     fn add(&self, values: &mut [Rgb], (wall, side, u): (u32, Side, f64), power: Rgb) {
-        if let Some(found) = self.locate(wall, u)
-            && let Some(value) = values.get_mut(Self::index(found, side))
-        {
-            *value += power * found.3;
+        if let Some(found) = self.locate(wall, u) {
+            found.deposit(values, 0, side, power);
         }
     }
 
     /// After the bins' values, where a buffer holds a second set.
     fn add_late(&self, values: &mut [Rgb], (wall, side, u): (u32, Side, f64), power: Rgb) {
-        if let Some(found) = self.locate(wall, u)
-            && let Some(value) = values.get_mut(self.len + Self::index(found, side))
+        if let Some(found) = self.locate(wall, u) {
+            found.deposit(values, self.len, side, power);
+        }
+    }
+}
+
+/// Where a position along a wall falls among its bins: between the
+/// centres of two bins of its span (the same bin twice beyond the span's
+/// outer centres, or in a span of one bin), `share` of the way from the
+/// first to the second. A deposit gives each bin its share of the power
+/// (the second `share`, the first the rest) and a read blends the two by
+/// the same shares: the power is kept, and a photon's light, as the
+/// bins give it back, is centred where it hit (a bin's whole deposit
+/// would be centred on the bin, up to half a bin away).
+#[derive(Clone, Copy, Debug)]
+struct Found {
+    /// The wall's first value and its bins along it.
+    first: usize,
+    bins: usize,
+    pair: (usize, usize),
+    share: f64,
+    /// One over a bin's length.
+    per_length: f64,
+}
+
+impl Found {
+    /// The indices of the two bins' values on side `side`, in a set of
+    /// values from `set`.
+    #[inline]
+    fn indices(&self, set: usize, side: Side) -> (usize, usize) {
+        let base = set + self.first + side.index() * self.bins;
+        (base + self.pair.0, base + self.pair.1)
+    }
+
+    fn deposit(&self, values: &mut [Rgb], set: usize, side: Side, power: Rgb) {
+        let (a, b) = self.indices(set, side);
+        let density = power * self.per_length;
+        if let Some(value) = values.get_mut(a) {
+            *value += density * (1.0 - self.share);
+        }
+        if self.share > 0.0
+            && let Some(value) = values.get_mut(b)
         {
-            *value += power * found.3;
+            *value += density * self.share;
+        }
+    }
+
+    #[inline]
+    fn read(&self, values: &[Rgb], set: usize, side: Side) -> Rgb {
+        let (a, b) = self.indices(set, side);
+        let at = |k: usize| values.get(k).copied().unwrap_or(Rgb::ZERO);
+        if self.share > 0.0 {
+            at(a) * (1.0 - self.share) + at(b) * self.share
+        } else {
+            at(a)
         }
     }
 }
@@ -274,9 +332,7 @@ impl Caustics {
     pub fn wall(&self, wall: u32, side: Side, u: f64) -> Rgb {
         self.bins
             .locate(wall, u)
-            .and_then(|found| self.walls.get(WallBins::index(found, side)))
-            .copied()
-            .unwrap_or(Rgb::ZERO)
+            .map_or(Rgb::ZERO, |found| found.read(&self.walls, 0, side))
     }
 
     /// Whether the pass kept light that took a glossy reflection after a
@@ -290,11 +346,9 @@ impl Caustics {
     /// one reflection more than [`Caustics::wall`]'s, so a path reads it
     /// only where it has a reflection left.
     pub fn wall_late(&self, wall: u32, side: Side, u: f64) -> Rgb {
-        self.bins
-            .locate(wall, u)
-            .and_then(|found| self.walls.get(self.bins.len + WallBins::index(found, side)))
-            .copied()
-            .unwrap_or(Rgb::ZERO)
+        self.bins.locate(wall, u).map_or(Rgb::ZERO, |found| {
+            found.read(&self.walls, self.bins.len, side)
+        })
     }
 }
 
@@ -476,7 +530,7 @@ pub(crate) fn trace_caustics(
         .iter()
         .enumerate()
         .filter_map(|(index, light)| {
-            if crate::lights::is_exact(&light.shape) {
+            if crate::estimators::is_exact(&light.shape) {
                 let aim = Aim::new(light.shape, aimed_at.clone()?)?;
                 return (light.intensity > 0.0).then_some(Emitter {
                     light: index,

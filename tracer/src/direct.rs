@@ -2,8 +2,8 @@
 
 use flatray_geometry::DVec2;
 
-use crate::lights::choice::{LightTable, NUMBERS};
-use crate::lights::{
+use crate::estimators::choice::{LightTable, NUMBERS};
+use crate::estimators::{
     Receiver, Visibility, light_contribution, through_glass, through_mirrors, weighed_contribution,
 };
 use crate::material::{Bsdf, Sampling};
@@ -13,9 +13,9 @@ use crate::{Rgb, Stats};
 
 /// The light that reaches `x` directly from every light: fluence for the
 /// floor, irradiance for a wall side; with `mirror_lights`, and every line
-/// and circle light through one flat mirror (`lights::exact`); with
+/// and circle light through one flat mirror (`estimators::exact`); with
 /// `glass_lights`, and through one edge of the glass body `x` is in
-/// (`lights::refracted`). Without a `table`, one shadow ray
+/// (`estimators::refracted`). Without a `table`, one shadow ray
 /// per light, each light drawing its numbers from `stream`
 /// (`LightShape::numbers`); with one, the lights the table chooses, from
 /// [`NUMBERS`] numbers.
@@ -23,12 +23,12 @@ pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
     receiver: Receiver,
-    (shadows, mirror_lights, glass_lights): (bool, bool, bool),
+    shadows: (bool, bool, bool),
     table: Option<&LightTable>,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
-    let vis = Visibility::of(shadows);
+    let vis = Visibility::of(shadows.0);
     let direct = match table {
         Some(table) => {
             let numbers = std::array::from_fn(|_| stream.uniform());
@@ -36,6 +36,52 @@ pub(crate) fn direct_light(
         }
         None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
     };
+    with_specular(direct, scene, x, receiver, shadows, stats)
+}
+
+/// [`direct_light`] from every light, whatever the `table`, but those it
+/// proves dark at `x` (exactly zero there): for an estimate that no
+/// light's random choice can leave below the light that arrives, as the
+/// wall memo's checks need (`path::wall_irradiance`).
+pub(crate) fn direct_light_every(
+    scene: &Scene,
+    x: DVec2,
+    receiver: Receiver,
+    shadows: (bool, bool, bool),
+    table: Option<&LightTable>,
+    stream: &mut Stream,
+    stats: &mut Stats,
+) -> Rgb {
+    let vis = Visibility::of(shadows.0);
+    let direct = match table {
+        Some(table) => {
+            let cell = table.cell_of(x);
+            let mut sum = Rgb::ZERO;
+            for index in 0..scene.lights.len() {
+                let u = light_number(&scene.lights[index], stream);
+                if !table.dark_at(cell, index, x) {
+                    sum += light_contribution(scene, index, x, receiver, u, vis, stats);
+                }
+            }
+            sum
+        }
+        None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
+    };
+    with_specular(direct, scene, x, receiver, shadows, stats)
+}
+
+/// `direct` and the closed forms of [`direct_light`]: with
+/// `mirror_lights`, every line and circle light through one flat mirror;
+/// with `glass_lights`, through one edge of the glass body `x` is in.
+#[inline(always)]
+fn with_specular(
+    direct: Rgb,
+    scene: &Scene,
+    x: DVec2,
+    receiver: Receiver,
+    (_, mirror_lights, glass_lights): (bool, bool, bool),
+    stats: &mut Stats,
+) -> Rgb {
     let direct = if mirror_lights {
         direct + through_mirrors(scene, &scene.flat_mirrors, x, receiver, stats)
     } else {

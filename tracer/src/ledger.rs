@@ -29,10 +29,10 @@ use flatray_geometry::Side;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Ledger {
     /// Receivers take line and circle lights seen in one flat mirror in
-    /// closed form (`lights::exact::through_mirrors`).
+    /// closed form (`estimators::exact::through_mirrors`).
     pub mirror_lights: bool,
     /// Receivers inside glass take line and circle lights through one edge
-    /// of their body in closed form (`lights::refracted`).
+    /// of their body in closed form (`estimators::refracted`).
     pub glass_lights: bool,
     /// The caustic pass takes line and circle lights after runs of
     /// specular events that no closed form takes (`lights::aimed`).

@@ -8,8 +8,9 @@
 //! number of threads.
 //!
 //! The model, which reads like `docs/model.md`: the lights (`lights/`, a
-//! module per kind), the materials (`material/`), next-event estimation
-//! (`direct.rs`), the path tracer (`path.rs`), the light tracer
+//! module per kind), the materials (`material/`), who counts which light
+//! path (`ledger.rs`), a light's light at a receiver and the closed forms
+//! (`estimators/`), next-event estimation (`direct.rs`), the path tracer (`path.rs`), the light tracer
 //! (`light_tracer.rs`), the caustic pass (`caustics.rs`) and the one
 //! render loop (`film.rs`). Above it, fast paths that compute the same
 //! bits (`accel/`, one file each, `tests/tests/identity.rs`): culled rays,
@@ -26,6 +27,7 @@
 mod accel;
 mod caustics;
 mod direct;
+mod estimators;
 mod film;
 mod ledger;
 mod light_tracer;

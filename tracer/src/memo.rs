@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use flatray_cache::{Value, WallMemo};
 use flatray_geometry::Side;
 
-use crate::lights::{
+use crate::estimators::{
     Receiver, Visibility, light_contribution, through_glass_of, through_mirrors_of,
 };
 use crate::options::MemoOptions;
@@ -31,8 +31,8 @@ pub(crate) fn wall_memo_bytes(
     budget: u64,
 ) -> Option<u64> {
     let bin_length = options.bin_length / scale;
-    // Both sides' sums over the lights.
-    let per_bin = 2 * std::mem::size_of::<Value>() as u64;
+    // Both sides' sums over the lights, and the flags of their reads.
+    let per_bin = 2 * (std::mem::size_of::<Value>() as u64 + 1);
     let mut bytes = 0u64;
     for (index, w) in scene.walls.iter().enumerate() {
         if !w.material.is_diffuse() {
@@ -100,7 +100,7 @@ pub(crate) fn build_wall_memo(
             // Lines and circles in closed form, every light one call; an
             // arc light, sampled, by the midpoint rule along it.
             let samples = if scene.lights[light_index].shape.numbers() > 0
-                && !crate::lights::is_exact(&scene.lights[light_index].shape)
+                && !crate::estimators::is_exact(&scene.lights[light_index].shape)
             {
                 ARC_LIGHT_SAMPLES
             } else {
@@ -134,10 +134,138 @@ pub(crate) fn build_wall_memo(
             to_value(value)
         },
     );
+    let mut memo = memo;
+    let edge_rays = mark_shadow_edges(scene, &mut memo);
     stats.work.memo_entries += memo.entries() as u64;
     stats.work.memo_bytes += memo.memory_bytes() as u64;
-    stats.work.memo_fill_rays += rays.load(Ordering::Relaxed);
+    stats.work.memo_fill_rays += rays.load(Ordering::Relaxed) + edge_rays;
     memo
+}
+
+/// The most rays [`mark_shadow_edges`] casts: past it (many lights times
+/// many walls), the bins' own values alone say where reads are always
+/// checked.
+const EDGE_RAYS: usize = 1 << 21;
+
+/// Where light from a point, or from a direction, casts its shadows'
+/// edges: the ray from the light through each wall's ends (and past the
+/// sides of each arc as the light sees them), to the first wall behind.
+/// The memo marks the reads about each as always checked
+/// ([`WallMemo::mark_edge`]): a shadow narrower than a bin falls between
+/// two centres that both see the light, and only its edges tell that it
+/// is there. Line lights cast their edges from both ends; a circle from
+/// its centre (its shadows' edges are soft). Returns the rays cast.
+fn mark_shadow_edges(scene: &Scene, memo: &mut WallMemo) -> u64 {
+    use flatray_geometry::{DVec2, Ray, Shape};
+    use rayon::prelude::*;
+
+    use crate::scene::LightShape;
+
+    /// Where a shadow's edge starts: from a point, or along a direction.
+    #[derive(Clone, Copy)]
+    enum From {
+        Point(DVec2),
+        Along(DVec2),
+    }
+    let mut sources = Vec::new();
+    for light in &scene.lights {
+        match &light.shape {
+            LightShape::Point { at } | LightShape::Circle { at, .. } => {
+                sources.push(From::Point(*at))
+            }
+            LightShape::Spot { at, .. } => sources.push(From::Point(*at)),
+            LightShape::Line { segment, .. } => {
+                sources.extend([From::Point(segment.a), From::Point(segment.b)]);
+            }
+            LightShape::Directional { direction } | LightShape::Beam { direction, .. } => {
+                sources.extend([From::Along(*direction), From::Along(-*direction)]);
+            }
+            _ => {}
+        }
+    }
+    let mut ends = Vec::new();
+    let mut arcs = Vec::new();
+    for wall in &scene.walls {
+        match &wall.shape {
+            Shape::Segment(s) => ends.extend([s.a, s.b]),
+            Shape::Arc(arc) => {
+                if !arc.is_full() {
+                    ends.extend([arc.a, arc.b]);
+                }
+                arcs.push((arc.center, arc.radius));
+            }
+        }
+    }
+    let rays = sources.len().saturating_mul(ends.len() + 2 * arcs.len());
+    if rays == 0 || rays > EDGE_RAYS {
+        return 0;
+    }
+    let edges: Vec<(u32, f64)> = sources
+        .par_iter()
+        .flat_map_iter(|&source| {
+            // The points a shadow's edge passes: the walls' ends, and
+            // where the light grazes each arc's circle.
+            let grazes = arcs.iter().flat_map(move |&(c, r)| {
+                let side = match source {
+                    From::Point(p) => p - c,
+                    From::Along(d) => d.perp(),
+                };
+                let d = side.length();
+                let angle = match source {
+                    From::Point(_) if d > r => (r / d).acos(),
+                    From::Point(_) => f64::NAN,
+                    From::Along(_) => std::f64::consts::FRAC_PI_2,
+                };
+                let towards = side.y.atan2(side.x);
+                [towards - angle, towards + angle].map(|a| c + r * DVec2::new(a.cos(), a.sin()))
+            });
+            ends.iter().copied().chain(grazes).filter_map(move |v| {
+                let (dir, reach) = match source {
+                    From::Point(p) => ((v - p).normalize(), p.distance(v)),
+                    From::Along(d) => (d.normalize(), f64::INFINITY),
+                };
+                if !(dir.is_finite() && v.is_finite()) {
+                    return None;
+                }
+                // The light must reach the end: nothing opaque between.
+                let margin = 1e-9 * (1.0 + v.abs().max_element());
+                let back = Ray::new(v - dir * margin, -dir);
+                if first_stop(scene, back, reach - 2.0 * margin).is_some() {
+                    return None;
+                }
+                // Just past the end, so that the walls that meet there
+                // are not the ones found.
+                let (index, hit) =
+                    first_stop(scene, Ray::new(v + dir * margin, dir), f64::INFINITY)?;
+                Some((index, hit.u))
+            })
+        })
+        .collect();
+    for (index, u) in edges {
+        memo.mark_edge(index, u);
+    }
+    2 * rays as u64
+}
+
+/// The first wall along `ray` before `t_max` that light does not pass
+/// (a pane lets it through, tinted), among the first few it meets.
+fn first_stop(
+    scene: &Scene,
+    mut ray: flatray_geometry::Ray,
+    mut t_max: f64,
+) -> Option<(u32, flatray_geometry::Hit)> {
+    use flatray_geometry::Skip;
+    let mut skip = Skip::NONE;
+    for _ in 0..8 {
+        let (index, hit) = scene.segments.closest_hit(&ray, t_max, skip)?;
+        if scene.stops_rays(index) {
+            return Some((index, hit));
+        }
+        ray.origin += ray.dir * hit.t;
+        t_max -= hit.t;
+        skip = Skip::one(index);
+    }
+    None
 }
 
 pub(crate) fn to_value(v: Rgb) -> Value {

@@ -301,7 +301,7 @@ pub enum LightChoice {
     /// One shadow ray to every light at every receiver.
     Every,
     /// The lights a table of the plan's cells chooses
-    /// (`lights::choice`): the brightest there always, one of the rest
+    /// (`estimators::choice`): the brightest there always, one of the rest
     /// at random.
     Table,
 }

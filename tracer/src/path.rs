@@ -3,14 +3,16 @@
 
 use std::f64::consts::TAU;
 
-use flatray_cache::{Key, WallMemo};
+use flatray_cache::{Check, Key, WallMemo};
 use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
 
 use crate::caustics::Caustics;
-use crate::direct::{direct_light, direct_light_glossy, glossy_emission_weight};
+use crate::direct::{
+    direct_light, direct_light_every, direct_light_glossy, glossy_emission_weight,
+};
+use crate::estimators::Receiver;
+use crate::estimators::choice::LightTable;
 use crate::ledger::{self, Ledger};
-use crate::lights::Receiver;
-use crate::lights::choice::LightTable;
 use crate::material::glass::{GlassState, absorption, transmit};
 use crate::material::{Bsdf, Sampling, Transport};
 use crate::memo::Onward;
@@ -192,6 +194,9 @@ pub(crate) fn follow(
         force,
         ..
     } = *trace;
+    // The key of the memo's checks: the one-bounce shortcut, which holds
+    // the stream as the loop is entered, decides alike.
+    let path = stream.key();
     let mut fluence = fluence;
     let mut ray = ray;
     let mut first_hit = first_hit;
@@ -309,6 +314,7 @@ pub(crate) fn follow(
                 side,
                 u: h.u,
                 x,
+                path,
             };
             let irradiance = wall_irradiance(trace, at, &normal, diffuse, stream, stats);
             fluence += lambertian_light(throughput, rho, irradiance);
@@ -487,7 +493,7 @@ pub(crate) struct Trace<'a> {
     /// direction (a fast path: `accel/mirror.rs`).
     pub mirror_arcs: Option<&'a dyn MirrorWalls>,
     /// The lights each receiver's next-event estimation takes, where the
-    /// plan chooses them (`lights::choice`); `None`: every light.
+    /// plan chooses them (`estimators::choice`); `None`: every light.
     pub light_table: Option<&'a LightTable>,
     /// The onward memo: what the rest of a path brings from a diffuse
     /// wall, read instead of following it (`onward.rs`).
@@ -503,6 +509,27 @@ pub(crate) fn memo_irradiance(memo: &WallMemo, index: u32, side: Side, u: f64) -
         u,
     });
     Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64)
+}
+
+/// [`memo_irradiance`], and how a path keyed `path` (the key of its
+/// stream where it entered the loop, `Stream::key`) checks it.
+#[inline(always)]
+pub(crate) fn memo_read(
+    memo: &WallMemo,
+    index: u32,
+    side: Side,
+    u: f64,
+    path: u64,
+) -> (Rgb, Check) {
+    let (v, check) = memo.read(
+        Key {
+            wall: index,
+            side: side.index(),
+            u,
+        },
+        path,
+    );
+    (Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64), check)
 }
 
 /// What the lights that are not walls emit towards `ray` where it meets
@@ -542,19 +569,21 @@ fn emission_crossed(
 }
 
 /// A point where a path meets a wall: the wall, the side it arrived on,
-/// the position along it and the point.
+/// the position along it and the point; and the path's key, its stream's
+/// where it entered the loop (the memo's checks, `memo_read`).
 #[derive(Clone, Copy, Debug)]
 struct WallPoint {
     index: u32,
     side: Side,
     u: f64,
     x: DVec2,
+    path: u64,
 }
 
 /// The irradiance that next-event estimation gives a path at diffuse wall
 /// point `at` (unit normal on its side from `normal`), after `diffuse`
-/// reflections: the wall memo's read (one in `CHECK_RATE` checked by
-/// shadow rays), or shadow rays, and the caustic pass's bins.
+/// reflections: the wall memo's read (checked by shadow rays as the memo
+/// says, `flatray_cache::Check`), or shadow rays, and the caustic pass's bins.
 #[inline(always)]
 fn wall_irradiance(
     trace: &Trace,
@@ -571,29 +600,44 @@ fn wall_irradiance(
         light_table,
         ..
     } = *trace;
-    let WallPoint { index, side, u, x } = at;
+    let WallPoint {
+        index, side, u, x, ..
+    } = at;
     let receiver = || Receiver {
         normal: Some(normal()),
         wall: Some(index),
         shadow_walls: None,
     };
+    let shadows = (shadows, trace.mirror_lights, trace.glass_lights);
     let direct = |stream: &mut Stream, stats: &mut Stats| {
-        let shadows = (shadows, trace.mirror_lights, trace.glass_lights);
         direct_light(scene, x, receiver(), shadows, light_table, stream, stats)
+    };
+    // A check's estimate from every light the table does not prove dark:
+    // no light's random choice leaves it below what arrives, so that the
+    // check stays at or above zero where the memo says it would.
+    let every = |stream: &mut Stream, stats: &mut Stats| {
+        direct_light_every(scene, x, receiver(), shadows, light_table, stream, stats)
     };
     let irradiance = match memo {
         Some(memo) => {
             stats.work.memo_lookups += 1;
-            let read = memo_irradiance(memo, index, side, u);
-            if trace.memo_checks && flatray_cache::checked(index, u) {
-                // The memo's error, estimated where a hash of the hit
-                // picks it: unbiased, so the memo's bias (its bins hold
-                // the irradiance at their centres only) falls out.
-                stats.work.memo_checks += 1;
-                let direct = direct(stream, stats);
-                read + (direct - read) * flatray_cache::CHECK_RATE as f64
-            } else {
-                read
+            let (read, check) = memo_read(memo, index, side, u, at.path);
+            match check {
+                Check::Sampled if trace.memo_checks => {
+                    // The memo's error, estimated where a hash of the hit
+                    // picks it: unbiased, so the memo's bias (its bins hold
+                    // the irradiance at their centres only) falls out.
+                    stats.work.memo_checks += 1;
+                    let direct = every(stream, stats);
+                    read + (direct - read) * flatray_cache::CHECK_RATE as f64
+                }
+                Check::Always => {
+                    // Where the bins may be off by more than a sampled
+                    // check takes out without going below zero.
+                    stats.work.memo_checks += 1;
+                    direct(stream, stats)
+                }
+                _ => read,
             }
         }
         None => direct(stream, stats),

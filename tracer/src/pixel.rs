@@ -15,9 +15,9 @@ use crate::accel::culling::{Batch, BlockCulling, Sums};
 use crate::accel::shortcut::memo_bounce;
 use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::direct::{direct_light_chosen, direct_light_points, numbers_per_point};
+use crate::estimators::square::{Square, square_light, takes_square};
+use crate::estimators::{Receiver, Visibility, through_glass, through_mirrors};
 use crate::film::PixelSums;
-use crate::lights::square::{Square, square_light, takes_square};
-use crate::lights::{Receiver, Visibility, through_glass, through_mirrors};
 use crate::lines::Lines;
 use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
@@ -296,7 +296,7 @@ pub(crate) fn render_pixel(
         }
         if trace.mirror_lights {
             // Lines and circles seen in one flat mirror, in closed form
-            // at every point (`lights::exact`).
+            // at every point (`estimators::exact`).
             let floor = &mut batch.floor;
             for (value, &x) in floor.values.iter_mut().zip(&floor.points) {
                 *value += through_mirrors(scene, &scene.flat_mirrors, x, Receiver::FLOOR, stats);
@@ -304,7 +304,7 @@ pub(crate) fn render_pixel(
         }
         if trace.glass_lights {
             // Lines and circles seen through one glass edge, in closed
-            // form (`lights::refracted`): their mean over some of each
+            // form (`estimators::refracted`): their mean over some of each
             // half's points, given to every point of the half.
             let floor = &mut batch.floor;
             for context in contexts {
@@ -379,7 +379,7 @@ pub(crate) fn render_pixel(
 }
 
 /// One floor point in this many takes the light through glass edges
-/// (`lights::refracted`) for its half of the pass's points: the light
+/// (`estimators::refracted`) for its half of the pass's points: the light
 /// inside glass varies gently across a pixel, and each look costs several
 /// path samples (`docs/model.md` has the study that chose 8).
 pub(crate) const GLASS_POINT_SHARE: usize = 8;
@@ -647,7 +647,16 @@ pub(crate) fn finish(
     stats: &mut Stats,
 ) -> Rgb {
     if let (Some(memo), Some((index, h))) = (context.one_bounce_memo, hit)
-        && let Some(value) = memo_bounce(&context.trace, memo, fluence, index, h.u, ray.dir, stats)
+        && let Some(value) = memo_bounce(
+            &context.trace,
+            memo,
+            fluence,
+            index,
+            h.u,
+            ray.dir,
+            stream.key(),
+            stats,
+        )
     {
         return value;
     }
@@ -952,7 +961,19 @@ pub(crate) fn arc_in_lanes<const CHECKED: bool, const N: usize>(
         // which the compiler may leave out of line, and then it is
         // compiled without the AVX2 of the loop around it.
         let shortcut = match context.one_bounce_memo {
-            Some(memo) => memo_bounce(trace, memo, Rgb::ZERO, hits.index[k], hits.u[k], dir, stats),
+            Some(memo) => {
+                let path = stream.key();
+                memo_bounce(
+                    trace,
+                    memo,
+                    Rgb::ZERO,
+                    hits.index[k],
+                    hits.u[k],
+                    dir,
+                    path,
+                    stats,
+                )
+            }
             None => None,
         };
         let value = match shortcut {

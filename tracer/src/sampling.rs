@@ -54,6 +54,14 @@ impl Stream {
         self.0 = self.0.wrapping_add(GOLDEN);
         finalise(self.0)
     }
+
+    /// Where the stream stands, without drawing: a number keyed as its
+    /// draws are, for decisions that several callers holding the stream
+    /// at one point must make alike (the wall memo's checks).
+    #[inline]
+    pub fn key(&self) -> u64 {
+        self.0
+    }
 }
 
 /// The part of a stream's key shared by all samples of one pixel (or light

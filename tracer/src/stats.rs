@@ -102,7 +102,7 @@ pub struct Work {
     pub floor_shared_visibility: u64,
     /// (pixel, light) pairs of the floor memo where a point, spot or sun
     /// looked at the walls in front of the pixel's square, to take its
-    /// mean over the square in closed form (`lights::square`).
+    /// mean over the square in closed form (`estimators::square`).
     pub floor_square_lights: u64,
     /// Diffuse hits whose albedo was read from the floor.
     pub floor_albedo_reads: u64,

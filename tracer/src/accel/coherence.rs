@@ -552,7 +552,7 @@ pub(crate) fn centre_transmittance(
     let shape = &scene.lights[index].shape;
     if let Some(source) = shape.source() {
         let (way, t_max) = source.way_from(centre);
-        return crate::lights::transmittance(
+        return crate::estimators::transmittance(
             scene,
             &Ray::new(centre, way),
             t_max,
@@ -562,7 +562,7 @@ pub(crate) fn centre_transmittance(
         );
     }
     match shape.emitter() {
-        Emitter::Segment { segment, .. } => crate::lights::transmittance(
+        Emitter::Segment { segment, .. } => crate::estimators::transmittance(
             scene,
             &Ray::new(centre, segment.point_at(0.5) - centre),
             1.0,
@@ -571,7 +571,7 @@ pub(crate) fn centre_transmittance(
             stats,
         ),
         // Not drawn (`draws`): no pixel of it is `Same`.
-        Emitter::Disk { at, .. } => crate::lights::transmittance(
+        Emitter::Disk { at, .. } => crate::estimators::transmittance(
             scene,
             &Ray::new(centre, at - centre),
             1.0,

@@ -7,8 +7,8 @@ use flatray_geometry::{ArcCandidates, DVec2, hull_candidates};
 
 use crate::Rgb;
 use crate::direct::Strata;
-use crate::lights::Visibility;
-use crate::lights::choice::LightTable;
+use crate::estimators::Visibility;
+use crate::estimators::choice::LightTable;
 use crate::options::{LONG_LIST, TILE_SHADOW_TESTS};
 use crate::sampling::ARCS;
 use crate::scene::Scene;

@@ -1,4 +1,4 @@
-//! A fast path beside the light table (`lights/choice.rs`): which lights
+//! A fast path beside the light table (`estimators/choice.rs`): which lights
 //! one opaque wall hides from the whole of a table cell. A point that
 //! chooses such a light casts no shadow ray: its contribution is exactly
 //! 0, as the ray would find. The choice and its probabilities stay as the
@@ -10,8 +10,8 @@
 use flatray_geometry::{DVec2, Ray, Segment, Skip, cross};
 use rayon::prelude::*;
 
+use crate::estimators::choice::LightTable;
 use crate::lights::Source;
-use crate::lights::choice::LightTable;
 use crate::scene::Scene;
 
 /// For every cell of `table`, a bit per light (`table.dark_words()`
@@ -148,7 +148,7 @@ mod tests {
     use super::*;
     use crate::Rgb;
     use crate::Stats;
-    use crate::lights::{Receiver, Visibility, light_contribution};
+    use crate::estimators::{Receiver, Visibility, light_contribution};
     use crate::sampling::Stream;
     use crate::scene::LightShape;
 

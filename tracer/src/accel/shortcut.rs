@@ -8,11 +8,11 @@
 
 use std::f64::consts::TAU;
 
-use flatray_cache::WallMemo;
+use flatray_cache::{Check, WallMemo};
 use flatray_geometry::{DVec2, Shape};
 
 use crate::material::diffuse_albedo;
-use crate::path::{Trace, add_caustics, lambertian_light, memo_irradiance};
+use crate::path::{Trace, add_caustics, lambertian_light, memo_read};
 use crate::{Rgb, Stats};
 
 /// The common case of `path::path_finish`, straight: one bounce, the first
@@ -22,8 +22,10 @@ use crate::{Rgb, Stats};
 /// knows of, so its transmittance is exactly 1). The caller takes it only
 /// for one bounce with the memo, not in the reference. `None` where the
 /// path takes the loop: another material, a wall's end, and an `index` of
-/// no wall, and a read the path loop checks (`flatray_cache::checked`).
+/// no wall, and a read the path loop checks (`flatray_cache::Check`, by
+/// `path`, the key of the stream the loop would take: `Stream::key`).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn memo_bounce(
     trace: &Trace,
     memo: &WallMemo,
@@ -31,18 +33,23 @@ pub(crate) fn memo_bounce(
     index: u32,
     u: f64,
     dir: DVec2,
+    path: u64,
     stats: &mut Stats,
 ) -> Option<Rgb> {
     let scene = trace.scene;
     let wall = scene.walls.get(index as usize)?;
     let albedo = wall.material.diffuse_albedo()?;
-    if u == 0.0 || u == 1.0 || (trace.memo_checks && flatray_cache::checked(index, u)) {
+    if u == 0.0 || u == 1.0 {
         return None;
     }
     let side = match &wall.shape {
         Shape::Segment(s) => s.arrival_side(dir)?,
         Shape::Arc(arc) => arc.arrival_side(arc.point_at(u), dir)?,
     };
+    let (read, check) = memo_read(memo, index, side, u, path);
+    if trace.memo_checks && check != Check::No {
+        return None;
+    }
     if trace
         .last_leg_sides
         .is_some_and(|sides| sides.get(2 * index as usize + side.index()) != Some(&false))
@@ -56,12 +63,7 @@ pub(crate) fn memo_bounce(
     let x = wall.shape.point_at(u);
     let rho = diffuse_albedo(scene, albedo, (index, u, x), trace.tables, stats);
     // The path loop's own steps: the memo's read, the caustic bins, f E.
-    let irradiance = add_caustics(
-        trace,
-        memo_irradiance(memo, index, side, u),
-        (index, side, u),
-        1,
-    );
+    let irradiance = add_caustics(trace, read, (index, side, u), 1);
     Some(fluence + lambertian_light(Rgb::splat(TAU), rho, irradiance))
 }
 

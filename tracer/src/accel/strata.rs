@@ -6,9 +6,10 @@
 use flatray_geometry::DVec2;
 
 use crate::direct::{Strata, direct_light_chosen};
+use crate::estimators::choice::{LightTable, NUMBERS};
+use crate::estimators::{Receiver, Visibility, light_contribution};
 use crate::lights::Emitter;
-use crate::lights::choice::{LightTable, NUMBERS};
-use crate::lights::{Receiver, Visibility, arriving, light_contribution, point_incident};
+use crate::lights::{arriving, point_incident};
 use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
 

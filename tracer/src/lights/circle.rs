@@ -86,7 +86,7 @@ pub(super) fn emit(at: DVec2, radius: f64, light: &Light, stream: &mut Stream) -
 /// rim there emits towards the ray. A ray from inside sees only the rim's
 /// back, which emits nothing inward.
 #[inline]
-pub(super) fn met_by(at: DVec2, radius: f64, ray: &Ray, t_max: f64) -> Option<f64> {
+pub(crate) fn met_by(at: DVec2, radius: f64, ray: &Ray, t_max: f64) -> Option<f64> {
     let o = ray.origin - at;
     let a = ray.dir.length_squared();
     let b = o.dot(ray.dir);

@@ -28,32 +28,22 @@
 //! point and line lanes), matching it exhaustively, and fall back to these
 //! functions for every other.
 
+pub(crate) mod aimed;
 mod arc;
 mod beam;
-mod contribution;
-mod exact;
-pub(crate) use exact::{MAX_MIRROR_PAIRS, is_exact, through_mirrors, through_mirrors_of};
-pub(crate) mod aimed;
-mod refracted;
-pub(crate) use refracted::{MAX_GLASS_PAIRS, glass_pairs, through_glass, through_glass_of};
 mod kernel;
-pub(crate) use contribution::{
-    Receiver, Visibility, light_contribution, transmittance, weighed_contribution,
-};
 pub(crate) use kernel::PhotonKernel;
-pub(crate) mod choice;
-mod circle;
+pub(crate) mod circle;
 pub(crate) mod line;
-mod point;
+pub(crate) mod point;
 mod spot;
-pub(crate) mod square;
 mod sun;
 
 use flatray_geometry::{DVec2, Ray, Segment, Shape, Side, Skip};
 
 use crate::sampling::Stream;
 use crate::scene::{Light, LightShape, Scene};
-use sun::sun_line;
+pub(crate) use sun::sun_line;
 
 pub(crate) use point::incident as point_incident;
 

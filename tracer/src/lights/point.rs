@@ -33,7 +33,7 @@ pub(crate) fn incident(at: DVec2, light: &Light, x: DVec2, r0: f64) -> Incident 
 /// intensity, without shadows: its falloff at the box's nearest point
 /// (`LightShape::reach`).
 #[inline(always)]
-pub(super) fn reach(at: DVec2, falloff: Falloff, (lo, hi): (DVec2, DVec2), r0: f64) -> f64 {
+pub(crate) fn reach(at: DVec2, falloff: Falloff, (lo, hi): (DVec2, DVec2), r0: f64) -> f64 {
     falloff.g((at.clamp(lo, hi) - at).length(), r0)
 }
 

@@ -131,14 +131,14 @@ pub struct Plan {
     pub mirror_emission: bool,
     /// Line and circle lights taken in closed form through one flat
     /// mirror at every receiver, and left out of path rays that meet
-    /// them right after that mirror (`lights::exact::through_mirrors`).
+    /// them right after that mirror (`estimators::exact::through_mirrors`).
     pub mirror_lights: bool,
     /// Pairs of a flat mirror and a line or circle light.
     pub mirror_pairs: usize,
     /// Line and circle lights taken in closed form through one edge of
     /// the glass body a receiver is in, and left out of path rays that
     /// meet them right after that one refraction
-    /// (`lights::refracted::through_glass`).
+    /// (`estimators::refracted::through_glass`).
     pub glass_lights: bool,
     /// Pairs of a glass edge and a line or circle light.
     pub glass_pairs: usize,
@@ -171,7 +171,7 @@ pub struct Plan {
     /// shadow edge crosses their pixel (`accel/coherence.rs`).
     pub floor_coherence: bool,
     /// Points, spots and suns give each pixel of the floor memo their
-    /// mean over its square in closed form (`lights::square`), not their
+    /// mean over its square in closed form (`estimators::square`), not their
     /// points' shadow rays: the floor memo without a light table.
     pub floor_squares: bool,
     /// The floor's rays test only the walls that rays from their block of
@@ -201,7 +201,7 @@ pub struct Plan {
     /// The light choice as given.
     pub light_choice: LightChoice,
     /// Next-event estimation takes the lights a table of cells chooses
-    /// (`lights::choice`), not every light.
+    /// (`estimators::choice`), not every light.
     pub light_table: bool,
 }
 
@@ -261,7 +261,7 @@ impl Plan {
             * scene
                 .lights
                 .iter()
-                .filter(|l| crate::lights::is_exact(&l.shape))
+                .filter(|l| crate::estimators::is_exact(&l.shape))
                 .count();
         // The closed form through a mirror takes the walls around it as
         // segments.
@@ -269,17 +269,17 @@ impl Plan {
             && inventory.arcs == 0
             && options.specular > 0
             && mirror_pairs > 0
-            && mirror_pairs <= crate::lights::MAX_MIRROR_PAIRS;
+            && mirror_pairs <= crate::estimators::MAX_MIRROR_PAIRS;
         // Lines and circles seen through one edge of smooth glass, in
         // closed form at each receiver inside glass, up to a budget of
         // (edge, light) pairs; the closed form takes the walls around as
         // segments.
-        let glass_pairs = crate::lights::glass_pairs(scene);
+        let glass_pairs = crate::estimators::glass_pairs(scene);
         let glass_lights = shadows
             && inventory.arcs == 0
             && options.specular > 0
             && glass_pairs > 0
-            && glass_pairs <= crate::lights::MAX_GLASS_PAIRS
+            && glass_pairs <= crate::estimators::MAX_GLASS_PAIRS
             && inventory.dispersive == 0
             && inventory.rough_glass == 0;
         // Lines and circles through glass: what enters a body and leaves
@@ -363,7 +363,7 @@ impl Plan {
             && scene
                 .lights
                 .iter()
-                .any(|l| crate::lights::square::takes_square(&l.shape));
+                .any(|l| crate::estimators::square::takes_square(&l.shape));
         // The floor memo runs where paths reuse it, and where the squares
         // make a pixel's direct light exact at shadow edges. The reference
         // never changes how the floor's direct light is estimated: that

@@ -209,7 +209,7 @@ impl Plan {
                 format!(
                     "{}: at each point, the up to {} brightest there (estimated per cell of the plan), and at most one more drawn at random by what each brings{}",
                     n(lights, "light"),
-                    crate::lights::choice::ALWAYS,
+                    crate::estimators::choice::ALWAYS,
                     if dark {
                         " (no shadow ray to one that a wall hides from the whole cell)"
                     } else {
@@ -307,11 +307,11 @@ impl Plan {
                 "no flat mirror and line or circle light in the scene".into()
             } else if specular_limit == 0 {
                 "specular = 0: no light is reflected".into()
-            } else if mirror_pairs > crate::lights::MAX_MIRROR_PAIRS {
+            } else if mirror_pairs > crate::estimators::MAX_MIRROR_PAIRS {
                 format!(
                     "{}, over {}: path rays find them",
                     n(mirror_pairs, "flat mirror and light pair"),
-                    crate::lights::MAX_MIRROR_PAIRS
+                    crate::estimators::MAX_MIRROR_PAIRS
                 )
             } else {
                 "no shadow rays are cast".into()
@@ -331,11 +331,11 @@ impl Plan {
                 "no glass and line or circle light in the scene".into()
             } else if specular_limit == 0 {
                 "specular = 0: no light is refracted".into()
-            } else if glass_pairs > crate::lights::MAX_GLASS_PAIRS {
+            } else if glass_pairs > crate::estimators::MAX_GLASS_PAIRS {
                 format!(
                     "{}, over {}: path rays find them",
                     n(glass_pairs, "glass edge and light pair"),
-                    crate::lights::MAX_GLASS_PAIRS
+                    crate::estimators::MAX_GLASS_PAIRS
                 )
             } else if dispersive > 0 || rough_glass > 0 {
                 "rough or dispersive glass: path rays find them".into()
@@ -408,7 +408,7 @@ impl Plan {
                 )
             } else {
                 format!(
-                    "{} binned every {} pixel; one read in {} checked by shadow rays, so that the bins' bias falls out",
+                    "{} binned every {} pixel; one read in {} checked by shadow rays, so that the bins' bias falls out, and every read where the bins may be far off (a shadow's edge, a lamp close to a wall, a span's end)",
                     n(diffuse, "diffuse wall"),
                     bin_length,
                     flatray_cache::CHECK_RATE

@@ -41,7 +41,7 @@
 use flatray_geometry::DVec2;
 use rayon::prelude::*;
 
-use crate::lights::{Receiver, Visibility, light_contribution};
+use super::{Receiver, Visibility, light_contribution};
 use crate::sampling::Stream;
 use crate::scene::{LightShape, Scene};
 use crate::{Rgb, Stats};
@@ -459,7 +459,7 @@ impl LightTable {
                     // `r0`: `usable` would change nothing).
                     let falloff = light.falloff;
                     for (w, &x) in column.iter_mut().zip(points) {
-                        *w = s.scale * super::point::reach(at, falloff, (x, x), r0);
+                        *w = s.scale * crate::lights::point::reach(at, falloff, (x, x), r0);
                     }
                 }
                 _ => {

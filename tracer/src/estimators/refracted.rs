@@ -34,7 +34,8 @@
 use flatray_geometry::{DVec2, Ray, Segment, Side, Skip, intersect};
 
 use super::exact::{GAUSS_12, SCRATCH, SLIVER, find_walls, is_exact, kinks, legs};
-use super::{Receiver, circle, line};
+use crate::estimators::Receiver;
+use crate::lights::{circle, line};
 use crate::optics::fresnel;
 use crate::scene::{Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
@@ -760,7 +761,7 @@ mod tests {
     /// Under `Flatland`, and with a wall receiver facing the edge.
     #[test]
     fn light_through_an_edge_matches_the_integral_over_angles() {
-        use crate::lights::exact::closed_forms::{OPAQUE, line, scene, wall};
+        use crate::estimators::exact::closed_forms::{OPAQUE, line, scene, wall};
         let n = 1.5;
         let face = Segment::new(DVec2::new(-1e5, 0.0), DVec2::new(1e5, 0.0));
         let inside = face.side_of(DVec2::new(0.0, -1.0)).unwrap();

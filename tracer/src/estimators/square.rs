@@ -32,7 +32,8 @@ use std::cell::RefCell;
 
 use flatray_geometry::{Arc, DVec2, MAX_HULL_POINTS, Ray, Shape, arc_crossings, convex_hull};
 
-use super::{PhotonKernel, Receiver};
+use crate::estimators::Receiver;
+use crate::lights::{PhotonKernel, sun_line};
 use crate::scene::{Falloff, LightShape, Scene, smooth_window};
 use crate::{Rgb, Stats};
 
@@ -314,7 +315,7 @@ fn reach<'a>(
             5
         }
         Source::Sun(direction) => {
-            let back = direction * super::sun_line(scene, direction).2;
+            let back = direction * sun_line(scene, direction).2;
             for k in 0..4 {
                 points[4 + k] = square[k] - back;
             }
@@ -377,7 +378,7 @@ fn find_walls(
             match source {
                 Source::Point(p) => take(p),
                 Source::Sun(direction) => {
-                    let reach = super::sun_line(scene, direction).2;
+                    let reach = sun_line(scene, direction).2;
                     for &x in square {
                         take(x - direction * reach);
                     }
@@ -706,8 +707,8 @@ fn graded(from: f64, to: f64, h: f64, f: &impl Fn(f64) -> f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lights::exact::closed_forms::{OPAQUE, scene, wall};
-    use crate::lights::{Visibility, light_contribution};
+    use crate::estimators::exact::closed_forms::{OPAQUE, scene, wall};
+    use crate::estimators::{Visibility, light_contribution};
     use crate::scene::{Light, Material};
 
     fn light(shape: LightShape, falloff: Falloff) -> Light {

@@ -33,7 +33,7 @@ use std::cell::RefCell;
 
 use flatray_geometry::{Arc, DVec2, Ray, Segment, Shape, Skip, cross, intersect};
 
-use super::{Receiver, Visibility};
+use crate::estimators::{Receiver, Visibility};
 use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 

@@ -5,7 +5,7 @@
 
 use flatray_geometry::{DVec2, Ray, Skip, Strategy};
 
-use super::{Incident, arriving};
+use crate::lights::{Incident, arriving};
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
@@ -72,7 +72,7 @@ impl Visibility {
 }
 
 /// The light that reaches `x` from one light, coloured. A line or circle
-/// light gives it in closed form (`lights::exact`): every direction it
+/// light gives it in closed form (`estimators::exact`): every direction it
 /// sends `x`, less the walls in front of it. Any other light gives its
 /// [`Incident`] sample, times the receiver's cosine over its pdf, times
 /// the transmittance of one shadow ray. Where `vis` is known (the plan
@@ -97,7 +97,7 @@ pub(crate) fn light_contribution(
         {
             return Rgb::ZERO;
         }
-        let value = super::exact::exact_light(scene, index, x, receiver, vis, stats);
+        let value = crate::estimators::exact::exact_light(scene, index, x, receiver, vis, stats);
         return value.unwrap_or(Rgb::ZERO) * light.color;
     }
     weighed_contribution(scene, index, x, receiver, u, vis, stats, |_, v| {
