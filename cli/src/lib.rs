@@ -132,6 +132,12 @@ The page: docs/serve.md.")]
   flatray converge scenes/room.ron --configs path-cache,light  two of them
   flatray converge scenes/room.ron --reference ref.exr         against a reference of your own")]
     Converge(converge::ConvergeArgs),
+    /// Render a day: a frame every so often, every `Sun` of the scene at
+    /// that frame's time, written as an animated PNG.
+    #[command(after_help = "Examples:
+  flatray day scenes/daylight.ron --from 08:00 --to 16:00 --every 1h -o day.png
+  flatray day plan.ron --date 2026-06-21 --from 05:00 --to 21:00 --every 30m --spp 8 --scale 0.5")]
+    Day(day::DayArgs),
     /// Turn a floor plan from another tool (an SVG drawing, a Tiled map in
     /// TMX or JSON, a Universal VTT map, a wall-mask image) into a
     /// commented scene file.
@@ -583,6 +589,7 @@ where
             (&mut out, err),
         ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
+        Command::Day(args) => day::day(args, &mut out, err),
         Command::Serve(args) => serve::serve(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
         Command::Generate(args) => generate(args, &mut out),
@@ -687,6 +694,7 @@ impl Write for Checked<'_> {
 }
 
 mod converge;
+mod day;
 mod json;
 mod serve;
 

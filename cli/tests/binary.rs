@@ -807,3 +807,96 @@ fn adaptive_renders_write_a_map_of_their_samples() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The frames an animated PNG says it has (its `acTL` chunk), and how
+/// many frame controls (`fcTL`) it holds.
+fn apng_frames(bytes: &[u8]) -> (u32, usize) {
+    let (mut declared, mut controls, mut at) = (0, 0, 8);
+    while at + 8 <= bytes.len() {
+        let length = u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+        let kind = &bytes[at + 4..at + 8];
+        if kind == b"acTL" {
+            declared = u32::from_be_bytes(bytes[at + 8..at + 12].try_into().unwrap());
+        }
+        if kind == b"fcTL" {
+            controls += 1;
+        }
+        at += 12 + length;
+    }
+    (declared, controls)
+}
+
+#[test]
+fn day_writes_a_frame_for_each_time_and_refuses_what_it_cannot_do() {
+    let dir = scratch("day");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let daylight = scenes.join("daylight.ron");
+    let out = dir.join("day.png");
+    let day = |scene: &Path, extra: &[&str], out: &Path| {
+        flatray()
+            .arg("day")
+            .arg(scene)
+            .args(extra)
+            .args(["--scale", "0.1", "--spp", "1", "--quiet", "-o"])
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let output = day(
+        &daylight,
+        &["--from", "08:00", "--to", "10:15", "--every", "45m"],
+        &out,
+    );
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+    let said = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        said.contains("4 frames, 08:00 to 10:15 every 45 min"),
+        "{said}"
+    );
+    let bytes = std::fs::read(&out).unwrap();
+    assert_eq!(apng_frames(&bytes), (4, 4));
+    // The frames differ as the sun moves: the first (08:00, before
+    // sunrise in Paris in December) against the last.
+    use image::AnimationDecoder;
+    let decoder = image::codecs::png::PngDecoder::new(std::io::Cursor::new(&bytes)).unwrap();
+    let frames = decoder
+        .apng()
+        .unwrap()
+        .into_frames()
+        .collect_frames()
+        .unwrap();
+    assert_eq!(frames.len(), 4);
+    assert_eq!(frames[0].buffer().dimensions(), (40, 30));
+    assert_ne!(frames[0].buffer(), frames[3].buffer());
+
+    // A scene with no Sun, an output that is no PNG, times the wrong way
+    // round: exit 2, and nothing written.
+    for (scene, extra, name, expected) in [
+        (
+            scenes.join("room.ron"),
+            vec![],
+            "room.png",
+            "no Sun(date: .., time: .., ..) light",
+        ),
+        (daylight.clone(), vec![], "day.exr", "animated PNG"),
+        (
+            daylight.clone(),
+            vec!["--from", "12:00", "--to", "09:00"],
+            "late.png",
+            "is before --from",
+        ),
+        (
+            daylight.clone(),
+            vec!["--every", "0m"],
+            "none.png",
+            "whole number of minutes",
+        ),
+    ] {
+        let target = dir.join(name);
+        let output = day(&scene, &extra, &target);
+        assert_eq!(output.status.code(), Some(2), "{output:?}");
+        let message = String::from_utf8_lossy(&output.stderr);
+        assert!(message.contains(expected), "{message}");
+        assert!(!target.exists(), "{name} written");
+    }
+}

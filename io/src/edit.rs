@@ -468,6 +468,29 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
                     item.direction = Some((direction.0, direction.1));
                     (color, intensity)
                 }
+                LightSpec::Sun {
+                    north,
+                    color,
+                    intensity,
+                    ..
+                } => {
+                    item.kind = "Sun";
+                    // Drawn as its rays' direction; at night, as none.
+                    item.direction = crate::daylight::place_of(l)
+                        .and_then(Result::ok)
+                        .filter(|p| p.elevation > 0.0)
+                        .map(|p| {
+                            let d = crate::daylight::sun_direction(p.azimuth, north.0);
+                            (d.x, d.y)
+                        });
+                    (color, intensity)
+                }
+                LightSpec::Sky {
+                    color, intensity, ..
+                } => {
+                    item.kind = "Sky";
+                    (color, intensity)
+                }
                 LightSpec::Laser {
                     at,
                     direction,

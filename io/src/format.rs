@@ -18,7 +18,7 @@ pub const MAX_SAMPLES: u32 = 1 << 20;
 pub const MAX_BOUNCES: u32 = 1000;
 
 /// A finite number.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 #[serde(try_from = "f64")]
 pub struct Finite(pub f64);
 
@@ -115,6 +115,160 @@ impl TryFrom<(Finite, Finite)> for Direction {
         } else {
             Err("expected a non-zero direction (x, y)".to_string())
         }
+    }
+}
+
+/// A calendar date, written `"YYYY-MM-DD"`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(try_from = "String")]
+pub struct Date {
+    pub year: i32,
+    pub month: u32,
+    pub day: u32,
+}
+
+impl TryFrom<String> for Date {
+    type Error = String;
+    fn try_from(text: String) -> Result<Date, String> {
+        parse_date(&text)
+    }
+}
+
+/// A time of day, written `"HH:MM"` or `"HH:MM:SS"`, from 00:00 to 23:59:59.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "String")]
+pub struct TimeOfDay {
+    pub hour: u32,
+    pub minute: u32,
+    pub second: u32,
+}
+
+impl TryFrom<String> for TimeOfDay {
+    type Error = String;
+    fn try_from(text: String) -> Result<TimeOfDay, String> {
+        parse_time(&text)
+    }
+}
+
+/// Reads `"YYYY-MM-DD"`: a year from 1 to 9999 and a day its month has.
+fn parse_date(text: &str) -> Result<Date, String> {
+    let bad = || {
+        format!("expected a date as \"YYYY-MM-DD\" (for example \"2026-12-21\"), found {text:?}")
+    };
+    let mut parts = text.split('-');
+    let (Some(y), Some(m), Some(d), None) =
+        (parts.next(), parts.next(), parts.next(), parts.next())
+    else {
+        return Err(bad());
+    };
+    let number = |s: &str, width: usize| {
+        (s.len() == width && s.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| s.parse::<u32>().ok())
+            .flatten()
+    };
+    let (Some(year), Some(month), Some(day)) = (number(y, 4), number(m, 2), number(d, 2)) else {
+        return Err(bad());
+    };
+    if year == 0 || !(1..=12).contains(&month) {
+        return Err(bad());
+    }
+    let leap = year % 4 == 0 && (year % 100 != 0 || year % 400 == 0);
+    let days = match month {
+        2 if leap => 29,
+        2 => 28,
+        4 | 6 | 9 | 11 => 30,
+        _ => 31,
+    };
+    if !(1..=days).contains(&day) {
+        return Err(format!(
+            "expected a day from 1 to {days} in month {month} of {year}, found {text:?}"
+        ));
+    }
+    Ok(Date {
+        year: year as i32,
+        month,
+        day,
+    })
+}
+
+/// Reads `"HH:MM"` or `"HH:MM:SS"`, from 00:00 to 23:59:59.
+fn parse_time(text: &str) -> Result<TimeOfDay, String> {
+    let bad = || {
+        format!(
+            "expected a time of day as \"HH:MM\" or \"HH:MM:SS\" from 00:00 to 23:59:59, found {text:?}"
+        )
+    };
+    let fields: Vec<&str> = text.splitn(4, ':').collect();
+    if !(2..=3).contains(&fields.len()) {
+        return Err(bad());
+    }
+    let mut values = [0u32; 3];
+    for (value, field) in values.iter_mut().zip(&fields) {
+        if field.len() != 2 || !field.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(bad());
+        }
+        *value = field.parse().map_err(|_| bad())?;
+    }
+    let [hour, minute, second] = values;
+    if hour > 23 || minute > 59 || second > 59 {
+        return Err(bad());
+    }
+    Ok(TimeOfDay {
+        hour,
+        minute,
+        second,
+    })
+}
+
+/// `v` when it lies in `[lo, hi]`; otherwise a message that expected `what`.
+fn in_range(v: f64, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("expected {what}, found {v}"))
+    }
+}
+
+/// A latitude in degrees, from -90 (south) to 90 (north).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Latitude(pub f64);
+
+impl TryFrom<f64> for Latitude {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Latitude, String> {
+        in_range(v, -90.0, 90.0, "a latitude from -90 to 90 degrees").map(Latitude)
+    }
+}
+
+/// A longitude in degrees, from -180 (west) to 180 (east).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Longitude(pub f64);
+
+impl TryFrom<f64> for Longitude {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Longitude, String> {
+        in_range(v, -180.0, 180.0, "a longitude from -180 to 180 degrees").map(Longitude)
+    }
+}
+
+/// A time zone as hours ahead of UTC, from -14 to 14 (1 is Paris in
+/// winter, -5 New York in winter).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(try_from = "f64")]
+pub struct Zone(pub f64);
+
+impl TryFrom<f64> for Zone {
+    type Error = String;
+    fn try_from(v: f64) -> Result<Zone, String> {
+        in_range(
+            v,
+            -14.0,
+            14.0,
+            "a time zone from -14 to 14 hours ahead of UTC",
+        )
+        .map(Zone)
     }
 }
 
@@ -443,6 +597,8 @@ impl LightSpec {
             | LightSpec::Directional { spectrum, .. }
             | LightSpec::Beam { spectrum, .. }
             | LightSpec::Laser { spectrum, .. }
+            | LightSpec::Sun { spectrum, .. }
+            | LightSpec::Sky { spectrum, .. }
             | LightSpec::Circle { spectrum, .. } => spectrum.as_ref(),
         }
     }
@@ -457,6 +613,8 @@ impl LightSpec {
             LightSpec::Beam { .. } => "Beam",
             LightSpec::Laser { .. } => "Laser",
             LightSpec::Circle { .. } => "Circle",
+            LightSpec::Sun { .. } => "Sun",
+            LightSpec::Sky { .. } => "Sky",
         }
     }
 
@@ -469,6 +627,8 @@ impl LightSpec {
             | LightSpec::Directional { color, .. }
             | LightSpec::Beam { color, .. }
             | LightSpec::Laser { color, .. }
+            | LightSpec::Sun { color, .. }
+            | LightSpec::Sky { color, .. }
             | LightSpec::Circle { color, .. } => color,
         }
     }
@@ -627,6 +787,44 @@ pub enum LightSpec {
         #[serde(default = "white")]
         color: Color,
         /// The ray's power.
+        #[serde(default = "one")]
+        intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
+    },
+    /// Sunlight from the sun's place in the sky at a date, a local time
+    /// and a place on Earth: a `Directional` light along the sun's
+    /// azimuth, its irradiance on the floor `intensity` times the sine of
+    /// the sun's elevation; nothing at night.
+    Sun {
+        date: Date,
+        /// Local time, in the time zone `zone`.
+        time: TimeOfDay,
+        /// Hours ahead of UTC of `time`.
+        #[serde(default)]
+        zone: Zone,
+        latitude: Latitude,
+        longitude: Longitude,
+        /// The angle of north on the canvas, in degrees clockwise from up.
+        #[serde(default)]
+        north: Finite,
+        #[serde(default = "white")]
+        color: Color,
+        /// Irradiance across the sun's rays (on a surface facing the sun).
+        #[serde(default = "one")]
+        intensity: Intensity,
+        /// What it emits wavelength by wavelength, in place of `color`.
+        #[serde(default)]
+        spectrum: Option<SpectrumSpec>,
+    },
+    /// Light of uniform radiance arriving from beyond the scene in every
+    /// direction that no wall blocks.
+    Sky {
+        #[serde(default = "white")]
+        color: Color,
+        /// The sky's radiance: an unobstructed point receives `2 pi`
+        /// times it.
         #[serde(default = "one")]
         intensity: Intensity,
         /// What it emits wavelength by wavelength, in place of `color`.

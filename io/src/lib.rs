@@ -10,6 +10,7 @@
 //! returns names the file, and for scene text the line and column, and
 //! says what was expected; no input makes it panic.
 
+pub mod daylight;
 pub mod edit;
 mod error;
 mod explain;
@@ -29,10 +30,10 @@ pub mod values;
 pub use error::{SceneError, WriteError};
 pub use format::ToneMap;
 pub use input::{MAX_INPUT_BYTES, read_within};
-pub use load::{Counts, Loaded, Warning, from_json, load, parse};
+pub use load::{Counts, Loaded, SunClock, Warning, from_json, load, parse, parse_at};
 pub use output::{
     Format, decode_exr, exr_bytes, linear_to_srgb, png_bytes, read_exr, remove_pending_files,
-    srgb_to_linear, to_srgb8, tone_map, write_bytes, write_exr, write_image, write_png,
+    srgb_to_linear, to_srgb8, tone_map, write_apng, write_bytes, write_exr, write_image, write_png,
     write_png_with_walls, write_text,
 };
 

@@ -127,7 +127,25 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
                 }
                 continue;
             }
-            LightSpec::Directional { .. } => continue,
+            LightSpec::Sun { date, time, .. } => {
+                let place = crate::daylight::place_of(light).and_then(Result::ok);
+                if let Some(place) = place.filter(|p| p.elevation <= 0.0) {
+                    at(
+                        item(&light_items, k),
+                        format!(
+                            "light {k}: the sun is {:.1}° below the horizon on {:04}-{:02}-{:02} at {:02}:{:02}: it gives no light",
+                            -place.elevation,
+                            date.year,
+                            date.month,
+                            date.day,
+                            time.hour,
+                            time.minute
+                        ),
+                    );
+                }
+                continue;
+            }
+            LightSpec::Directional { .. } | LightSpec::Sky { .. } => continue,
         };
         let offset = item(&light_items, k);
         if outside(centre - DVec2::splat(reach), centre + DVec2::splat(reach)) {
@@ -310,7 +328,9 @@ pub(crate) fn sealed(text: &str, file: &SceneFile, scene: &flatray_tracer::Scene
             LightSpec::Line { a, b, .. } | LightSpec::Beam { a, b, .. } => {
                 DVec2::new(a.0 + b.0, a.1 + b.1) * 0.5
             }
-            LightSpec::Directional { .. } => continue,
+            LightSpec::Directional { .. } | LightSpec::Sun { .. } | LightSpec::Sky { .. } => {
+                continue;
+            }
         };
         if !(p.cmpgt(lo).all() && p.cmplt(lo + DVec2::new(nx as f64, ny as f64) * h).all()) {
             continue;

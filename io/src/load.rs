@@ -52,6 +52,9 @@ pub struct Counts {
     pub emitting_walls: usize,
     pub lights: usize,
     pub glass: usize,
+    /// Of `lights`, the suns of a date and time (`Sun`), which `flatray
+    /// day` sets to each frame's time.
+    pub suns: usize,
 }
 
 /// Reads and validates the scene file at `path`. Relative paths inside it
@@ -147,9 +150,46 @@ pub(crate) fn scene_file(text: &str) -> Result<SceneFile, ron::error::SpannedErr
 /// # Ok::<(), flatray_io::SceneError>(())
 /// ```
 pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError> {
+    parse_with(text, path, base, |_| {})
+}
+
+/// The time every `Sun` of a scene is set to by [`parse_at`]: a local time
+/// of day, and the date where given (otherwise each sun keeps its own).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SunClock {
+    pub date: Option<crate::format::Date>,
+    pub time: crate::format::TimeOfDay,
+}
+
+/// [`parse`], with every `Sun` of the scene at `clock`'s time (and date),
+/// as `flatray day` renders a day's frames.
+pub fn parse_at(
+    text: &str,
+    path: &Path,
+    base: &Path,
+    clock: SunClock,
+) -> Result<Loaded, SceneError> {
+    parse_with(text, path, base, |file| {
+        for light in &mut file.lights {
+            if let LightSpec::Sun { date, time, .. } = light {
+                *time = clock.time;
+                if let Some(d) = clock.date {
+                    *date = d;
+                }
+            }
+        }
+    })
+}
+
+fn parse_with(
+    text: &str,
+    path: &Path,
+    base: &Path,
+    adjust: impl FnOnce(&mut SceneFile),
+) -> Result<Loaded, SceneError> {
     // A UTF-8 byte-order mark is no part of the scene.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let file = scene_file(text).map_err(|e| {
+    let mut file = scene_file(text).map_err(|e| {
         let (at, message) = crate::explain::explain(&e, text);
         let (line, column) = locate::position(text, at);
         SceneError::Invalid {
@@ -159,6 +199,7 @@ pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError>
             message,
         }
     })?;
+    adjust(&mut file);
     build(file, &Source::Text { text, path }, base)
 }
 
@@ -376,7 +417,10 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         walls.push(Wall { shape, material });
     }
     for (k, spec) in file.lights.iter().enumerate() {
-        lights.push(light(k, spec, default_falloff, source, &mut walls)?);
+        // A sky's frame encloses every wall: it is built once they are.
+        if !matches!(spec, LightSpec::Sky { .. }) {
+            lights.push(light(k, spec, default_falloff, source, &mut walls)?);
+        }
     }
 
     let mut bodies = Vec::with_capacity(file.glass.len());
@@ -387,6 +431,8 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         bodies.push(body);
         polygons.push(points);
     }
+
+    lights.extend(sky_lights(&file, source, &canvas, &walls)?);
 
     let warnings = match *source {
         Source::Text { text, .. } => {
@@ -419,28 +465,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         })?;
     let mut warnings = warnings;
     warnings.extend(sealed_warnings(source, &file, &scene));
-    let mut options = RenderOptions::default();
-    options.samples = file.render.samples.0;
-    options.bounces = file.render.bounces.0;
-    options.specular = file.render.specular.0;
-    options.seed = file.render.seed;
-    options.exposure = file.render.exposure.0;
-    options.scale = 1.0;
-    options.integrator = match file.render.integrator {
-        IntegratorSpec::Path => Integrator::Path,
-        IntegratorSpec::Original => Integrator::Original,
-        IntegratorSpec::Light => Integrator::Light,
-    };
-    options.memo.enabled = file.render.cache.memo().0;
-    options.memo.onward = file.render.cache.memo().1;
-    options.memo.bin_length = file.render.cache_bin.0;
-    options.memo.floor_samples = file.render.cache_floor_samples.0;
-    options.caustics = file.render.caustics;
-    options.light_choice = match file.render.lights {
-        LightsSpec::Auto => LightChoice::Auto,
-        LightsSpec::Every => LightChoice::Every,
-        LightsSpec::Table => LightChoice::Table,
-    };
+    let options = render_options(&file.render);
     Ok(Loaded {
         scene,
         options,
@@ -451,6 +476,11 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
             emitting_walls: file.walls.iter().filter(|w| w.emit.is_some()).count(),
             lights: file.lights.len(),
             glass: file.glass.len(),
+            suns: file
+                .lights
+                .iter()
+                .filter(|l| matches!(l, LightSpec::Sun { .. }))
+                .count(),
         },
         warnings,
     })
@@ -724,6 +754,8 @@ fn light(
                 spectrum: None,
             }
         }
+        // A sky is built with the walls' frame, in `build` (`sky_lights`).
+        LightSpec::Sun { .. } | LightSpec::Sky { .. } => sun(k, light, source)?,
         LightSpec::Laser {
             at,
             direction,
@@ -743,6 +775,104 @@ fn light(
     };
     built.spectrum = spectrum;
     Ok(built)
+}
+
+/// The render settings a scene's `render: (...)` asks for.
+fn render_options(spec: &crate::format::RenderSpec) -> RenderOptions {
+    let mut options = RenderOptions::default();
+    options.samples = spec.samples.0;
+    options.bounces = spec.bounces.0;
+    options.specular = spec.specular.0;
+    options.seed = spec.seed;
+    options.exposure = spec.exposure.0;
+    options.scale = 1.0;
+    options.integrator = match spec.integrator {
+        IntegratorSpec::Path => Integrator::Path,
+        IntegratorSpec::Original => Integrator::Original,
+        IntegratorSpec::Light => Integrator::Light,
+    };
+    options.memo.enabled = spec.cache.memo().0;
+    options.memo.onward = spec.cache.memo().1;
+    options.memo.bin_length = spec.cache_bin.0;
+    options.memo.floor_samples = spec.cache_floor_samples.0;
+    options.caustics = spec.caustics;
+    options.light_choice = match spec.lights {
+        LightsSpec::Auto => LightChoice::Auto,
+        LightsSpec::Every => LightChoice::Every,
+        LightsSpec::Table => LightChoice::Table,
+    };
+    options
+}
+
+/// The line lights of the file's skies, on a frame around `canvas` and
+/// every one of `walls` (`crate::daylight::sky_frame`).
+fn sky_lights(
+    file: &SceneFile,
+    source: &Source,
+    canvas: &Canvas,
+    walls: &[Wall],
+) -> Result<Vec<Light>, SceneError> {
+    let mut lights = Vec::new();
+    for (k, spec) in file.lights.iter().enumerate() {
+        if let LightSpec::Sky {
+            color, intensity, ..
+        } = *spec
+        {
+            let spectrum = light_spectrum(spec.spectrum(), color).map_err(|message| {
+                source.error(Place::Light(k), format!("light {k}: {message}"))
+            })?;
+            for segment in crate::daylight::sky_frame(canvas, walls) {
+                lights.push(Light {
+                    shape: LightShape::Line {
+                        segment,
+                        one_sided: true,
+                        wall: None,
+                    },
+                    color: rgb(color),
+                    intensity: intensity.0,
+                    // Radiance: each radian of sky brings `intensity`.
+                    falloff: Falloff::Flatland,
+                    spectrum,
+                });
+            }
+        }
+    }
+    Ok(lights)
+}
+
+/// The directional light that sun `light` (light `k` of the file) stands
+/// for: along the sun's azimuth, its irradiance on the floor the rays'
+/// times the sine of the sun's elevation; below the horizon, nothing.
+fn sun(k: usize, light: &LightSpec, source: &Source) -> Result<Light, SceneError> {
+    let LightSpec::Sun {
+        date,
+        time,
+        zone,
+        latitude,
+        longitude,
+        north,
+        color,
+        intensity,
+        ..
+    } = *light
+    else {
+        return Err(source.error(
+            Place::Light(k),
+            format!("light {k}: a sky has no place of its own: it is built around the walls"),
+        ));
+    };
+    let place = crate::daylight::sun_place(date, time, zone.0, latitude.0, longitude.0)
+        .map_err(|message| source.error(Place::Light(k), format!("light {k}: {message}")))?;
+    let elevation = place.elevation.to_radians();
+    Ok(Light {
+        shape: LightShape::Directional {
+            direction: crate::daylight::sun_direction(place.azimuth, north.0),
+        },
+        color: rgb(color),
+        intensity: intensity.0 * elevation.sin().max(0.0),
+        falloff: Falloff::Constant,
+        spectrum: None,
+    })
 }
 
 /// The warnings that need the built scene (its walls' hierarchy): lights

@@ -348,6 +348,32 @@ fn remove_stale_files(folder: &Path) {
     }
 }
 
+/// Writes 8-bit sRGB frames (`width x height` RGB rows each) as an
+/// animated PNG that shows each for `delay_ms` and loops: what `flatray
+/// day` writes. A viewer without APNG support shows the first frame.
+pub fn write_apng(
+    frames: &[Vec<u8>],
+    width: u32,
+    height: u32,
+    delay_ms: u16,
+    path: &Path,
+) -> Result<(), WriteError> {
+    write_atomically(path, |w| {
+        let failed = |e: png::EncodingError| e.to_string();
+        let count = u32::try_from(frames.len()).map_err(|e| e.to_string())?;
+        let mut encoder = png::Encoder::new(w, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_animated(count.max(1), 0).map_err(failed)?;
+        encoder.set_frame_delay(delay_ms, 1000).map_err(failed)?;
+        let mut writer = encoder.write_header().map_err(failed)?;
+        for frame in frames {
+            writer.write_image_data(frame).map_err(failed)?;
+        }
+        writer.finish().map_err(failed)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

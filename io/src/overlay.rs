@@ -182,6 +182,64 @@ fn blend(bytes: &mut [u8], k: usize, colour: [f64; 3], (half, distance, opacity)
     }
 }
 
+/// The glyphs [`draw_label`] writes, 3 wide and 5 high, a row per entry
+/// (bit 2 is the left column).
+const GLYPHS: [(char, [u8; 5]); 14] = [
+    ('0', [7, 5, 5, 5, 7]),
+    ('1', [2, 6, 2, 2, 7]),
+    ('2', [7, 1, 7, 4, 7]),
+    ('3', [7, 1, 7, 1, 7]),
+    ('4', [5, 5, 7, 1, 1]),
+    ('5', [7, 4, 7, 1, 7]),
+    ('6', [7, 4, 7, 5, 7]),
+    ('7', [7, 1, 1, 1, 1]),
+    ('8', [7, 5, 7, 5, 7]),
+    ('9', [7, 5, 7, 1, 7]),
+    (':', [0, 2, 0, 2, 0]),
+    ('-', [0, 0, 7, 0, 0]),
+    ('.', [0, 0, 0, 0, 2]),
+    (' ', [0, 0, 0, 0, 0]),
+];
+
+/// Writes `text` (digits, `:`, `-`, `.` and spaces; other characters are
+/// left out) in white on a black box at the top-left corner of 8-bit RGB
+/// rows `bytes` of `size`, each glyph cell `scale` pixels: a frame's time
+/// stamp. Whatever falls outside the image is not drawn.
+pub fn draw_label(bytes: &mut [u8], size: (u32, u32), text: &str, scale: u32) {
+    let (width, height) = (size.0 as usize, size.1 as usize);
+    let scale = scale.max(1) as usize;
+    let glyphs: Vec<&[u8; 5]> = text
+        .chars()
+        .filter_map(|c| GLYPHS.iter().find(|(g, _)| *g == c).map(|(_, rows)| rows))
+        .collect();
+    // One cell of margin about the text, one between glyphs.
+    let cells_x = 4 * glyphs.len() + 1;
+    let mut set = |x: usize, y: usize, v: u8| {
+        if x < width && y < height {
+            let k = 3 * (y * width + x);
+            if let Some(p) = bytes.get_mut(k..k + 3) {
+                p.fill(v);
+            }
+        }
+    };
+    for cy in 0..7 {
+        for cx in 0..cells_x {
+            let on = (1..6).contains(&cy)
+                && cx >= 1
+                && (cx - 1) % 4 < 3
+                && glyphs
+                    .get((cx - 1) / 4)
+                    .is_some_and(|rows| rows[cy - 1] >> (2 - (cx - 1) % 4) & 1 == 1);
+            let v = if on { 255 } else { 0 };
+            for y in cy * scale..(cy + 1) * scale {
+                for x in cx * scale..(cx + 1) * scale {
+                    set(x, y, v);
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -224,5 +282,38 @@ mod tests {
         // Far from both walls, untouched.
         assert_eq!(at(2, 8), &[0, 0, 0]);
         assert_eq!(at(18, 0), &[0, 0, 0]);
+    }
+}
+
+#[cfg(test)]
+mod label_tests {
+    use super::*;
+
+    /// "1" at scale 1: its column of bits where the glyph has them, a
+    /// black box about it, and the image beyond untouched.
+    #[test]
+    fn a_label_draws_its_glyphs_in_a_black_box() {
+        let (w, h) = (10u32, 9u32);
+        let mut bytes = vec![100u8; (3 * w * h) as usize];
+        draw_label(&mut bytes, (w, h), "1", 1);
+        let at = |x: u32, y: u32| bytes[(3 * (y * w + x)) as usize];
+        // The glyph's rows sit at y 1 to 5, its columns at x 1 to 3.
+        let rows = [2u8, 6, 2, 2, 7];
+        for (j, row) in rows.iter().enumerate() {
+            for i in 0..3 {
+                let on = row >> (2 - i) & 1 == 1;
+                assert_eq!(
+                    at(1 + i, 1 + j as u32),
+                    if on { 255 } else { 0 },
+                    "({i}, {j})"
+                );
+            }
+        }
+        assert_eq!(at(0, 0), 0);
+        assert_eq!(at(4, 6), 0);
+        assert_eq!(at(5, 0), 100, "beyond the box");
+        assert_eq!(at(0, 7), 100, "beyond the box");
+        // Larger than the image: drawn where it falls inside, no panic.
+        draw_label(&mut bytes, (w, h), "12:30 - 2026", 4);
     }
 }

@@ -20,6 +20,8 @@ const VALID: &str = r#"Scene(
         Spot(at: (25, 25), direction: (1, 0), cone: 40, softness: 10),
         Line(a: (20, 3), b: (30, 3), intensity: 0.2, one_sided: true, solid: true),
         Directional(direction: (1, 2), intensity: 0.1),
+        Sun(date: "2026-06-21", time: "09:30", zone: 2, latitude: 48.85, longitude: 2.35, north: 15),
+        Sky(color: (0.7, 0.8, 1), intensity: 0.05),
     ],
     glass: [
         Glass(points: [(20, 15), (28, 15), (24, 22)], ior: 1.5, absorption: (0.1, 0, 0), dispersion: 0.01),
