@@ -138,6 +138,16 @@ The page: docs/serve.md.")]
   flatray day scenes/daylight.ron --from 08:00 --to 16:00 --every 1h -o day.png
   flatray day plan.ron --date 2026-06-21 --from 05:00 --to 21:00 --every 30m --spp 8 --scale 0.5")]
     Day(day::DayArgs),
+    /// Measure each room's illuminance: E_min, E_avg, E_max and U0 on the
+    /// EN 12464-1 grid, the daylight factor under a sky, each with its
+    /// standard error.
+    #[command(after_help = "Examples:
+  flatray measure scenes/flat.ron                            a table of the rooms' figures
+  flatray measure plan.ron --map map.png --csv grid.csv      the false-colour map and the grid
+  flatray measure plan.ron --json --spp 256 --batches 16     for scripts, more samples
+
+The figures and how to read them: docs/daylight.md.")]
+    Measure(measure::MeasureArgs),
     /// Turn a floor plan from another tool (an SVG drawing, a Tiled map in
     /// TMX or JSON, a Universal VTT map, a wall-mask image) into a
     /// commented scene file.
@@ -590,6 +600,7 @@ where
         ),
         Command::Converge(args) => converge::converge(args, &mut out, err),
         Command::Day(args) => day::day(args, &mut out, err),
+        Command::Measure(args) => measure::measure(args, &mut out, err),
         Command::Serve(args) => serve::serve(args, &mut out, err),
         Command::Import(args) => import(args, &mut out, err),
         Command::Generate(args) => generate(args, &mut out),
@@ -696,6 +707,7 @@ impl Write for Checked<'_> {
 mod converge;
 mod day;
 mod json;
+mod measure;
 mod serve;
 
 /// A failure with its exit code.

@@ -41,6 +41,7 @@ flatray render scenes/optics.ron --draw-walls -o "$out/optics.png"
 # docs/daylight.md
 flatray render scenes/daylight.ron -o "$out/daylight.png"
 flatray day scenes/daylight.ron --from 09:00 --to 16:00 --every 1h --spp 16 --scale 0.5 -o "$out/daylight-day.png"
+flatray measure scenes/daylight.ron --quiet --map "$out/daylight-map.png"
 flatray render scenes/lens.ron --integrator light -o "$out/lens.png"
 flatray render scenes/lens-polygon.ron --integrator light -o "$out/lens-polygon.png"
 flatray render scenes/rough-lens.ron --draw-walls -o "$out/rough-lens.png"

@@ -338,6 +338,27 @@ pub struct SceneFile {
     pub glass: Vec<GlassSpec>,
     #[serde(default)]
     pub render: RenderSpec,
+    /// Rooms named by a point inside each, for `flatray measure`.
+    #[serde(default)]
+    pub rooms: Vec<RoomSpec>,
+    /// What one world unit measures, for `flatray measure`'s grid.
+    #[serde(default)]
+    pub units: Option<Units>,
+}
+
+/// A room: the region of the floor the walls enclose about `at`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Room")]
+pub struct RoomSpec {
+    pub name: String,
+    pub at: Point,
+}
+
+/// What one world unit measures.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Units")]
+pub struct Units {
+    pub metres_per_unit: Positive,
 }
 
 /// A glass body: a closed polygon (the last point joins the first).

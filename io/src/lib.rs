@@ -22,15 +22,19 @@ mod input;
 mod lint;
 mod load;
 mod locate;
+pub mod measure;
 mod output;
 pub mod overlay;
 pub mod report;
+pub mod rooms;
 pub mod values;
 
 pub use error::{SceneError, WriteError};
 pub use format::ToneMap;
 pub use input::{MAX_INPUT_BYTES, read_within};
-pub use load::{Counts, Loaded, SunClock, Warning, from_json, load, parse, parse_at};
+pub use load::{
+    Counts, Loaded, SunClock, Warning, from_json, load, parse, parse_at, parse_sun_off,
+};
 pub use output::{
     Format, decode_exr, exr_bytes, linear_to_srgb, png_bytes, read_exr, remove_pending_files,
     srgb_to_linear, to_srgb8, tone_map, write_apng, write_bytes, write_exr, write_image, write_png,

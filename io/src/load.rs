@@ -32,6 +32,14 @@ pub struct Loaded {
     /// What makes the scene render otherwise than it reads, without being
     /// an error, each with its location.
     pub warnings: Vec<Warning>,
+    /// The rooms the file names, each by a point inside it.
+    pub rooms: Vec<crate::rooms::NamedRoom>,
+    /// What one world unit measures in metres, when the file says.
+    pub metres_per_unit: Option<f64>,
+    /// The illuminance of the file's skies at a point that sees all of
+    /// them (`2 pi` times their radiance, in luminance), where they are
+    /// the file's only lights: the daylight factor's denominator.
+    pub sky: Option<f64>,
 }
 
 /// A warning about a scene that loads: where, and what.
@@ -181,6 +189,18 @@ pub fn parse_at(
     })
 }
 
+/// [`parse`], with every `Sun` of the scene off (of intensity 0), as
+/// `flatray measure --sun-off` reads a scene for its daylight factor.
+pub fn parse_sun_off(text: &str, path: &Path, base: &Path) -> Result<Loaded, SceneError> {
+    parse_with(text, path, base, |file| {
+        for light in &mut file.lights {
+            if let LightSpec::Sun { intensity, .. } = light {
+                *intensity = crate::format::Intensity(0.0);
+            }
+        }
+    })
+}
+
 fn parse_with(
     text: &str,
     path: &Path,
@@ -246,6 +266,7 @@ enum Place {
     /// A field of a light: its index, its kind's name, the field.
     LightField(usize, &'static str, &'static str),
     Glass(usize),
+    Room(usize),
     Top,
 }
 
@@ -273,6 +294,7 @@ impl Source<'_> {
                         })
                         .or_else(|| item("lights", k)),
                     Place::Glass(k) => item("glass", k),
+                    Place::Room(k) => item("rooms", k),
                     Place::Top => None,
                 };
                 let (line, column) = locate::position(text, offset.unwrap_or(0));
@@ -292,6 +314,7 @@ impl Source<'_> {
                     Place::Light(k) => format!("lights[{k}]"),
                     Place::LightField(k, kind, field) => format!("lights[{k}].{kind}.{field}"),
                     Place::Glass(k) => format!("glass[{k}]"),
+                    Place::Room(k) => format!("rooms[{k}]"),
                     Place::Top => String::new(),
                 },
                 message,
@@ -466,6 +489,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
     let mut warnings = warnings;
     warnings.extend(sealed_warnings(source, &file, &scene));
     let options = render_options(&file.render);
+    let rooms = named_rooms(&file.rooms, &canvas, source)?;
     Ok(Loaded {
         scene,
         options,
@@ -483,7 +507,97 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                 .count(),
         },
         warnings,
+        rooms,
+        metres_per_unit: file.units.map(|u| u.metres_per_unit.0),
+        sky: unobstructed_sky(&file),
     })
+}
+
+/// `2 pi` times the luminance of the file's skies' radiance, where every
+/// light of the file is a sky or a sun that is off (of intensity 0, or
+/// below the horizon) and no wall emits.
+fn unobstructed_sky(file: &SceneFile) -> Option<f64> {
+    let off = |l: &LightSpec| match *l {
+        LightSpec::Sky { .. } => true,
+        LightSpec::Sun { intensity, .. } => {
+            intensity.0 == 0.0
+                || crate::daylight::place_of(l)
+                    .and_then(Result::ok)
+                    .is_some_and(|p| p.elevation <= 0.0)
+        }
+        _ => false,
+    };
+    let only_skies = file
+        .lights
+        .iter()
+        .any(|l| matches!(l, LightSpec::Sky { .. }))
+        && file.walls.iter().all(|w| w.emit.is_none())
+        && file.lights.iter().all(off);
+    only_skies.then(|| {
+        file.lights
+            .iter()
+            .map(|l| match *l {
+                LightSpec::Sky {
+                    color, intensity, ..
+                } => {
+                    std::f64::consts::TAU
+                        * intensity.0
+                        * (0.2126 * color.0 + 0.7152 * color.1 + 0.0722 * color.2)
+                }
+                _ => 0.0,
+            })
+            .sum()
+    })
+}
+
+/// The file's rooms, each checked: a name of 1 to
+/// [`MAX_ROOM_NAME`](crate::rooms::MAX_ROOM_NAME) characters, a point on
+/// the canvas, at most [`MAX_ROOMS`](crate::rooms::MAX_ROOMS) of them.
+fn named_rooms(
+    specs: &[crate::format::RoomSpec],
+    canvas: &Canvas,
+    source: &Source,
+) -> Result<Vec<crate::rooms::NamedRoom>, SceneError> {
+    use crate::rooms::{MAX_ROOM_NAME, MAX_ROOMS, NamedRoom};
+    if specs.len() > MAX_ROOMS {
+        return Err(source.error(
+            Place::Room(MAX_ROOMS),
+            format!("{} rooms: at most {MAX_ROOMS}", specs.len()),
+        ));
+    }
+    let mut rooms = Vec::with_capacity(specs.len());
+    for (k, spec) in specs.iter().enumerate() {
+        let chars = spec.name.chars().count();
+        if chars == 0 || chars > MAX_ROOM_NAME {
+            return Err(source.error(
+                Place::Room(k),
+                format!(
+                    "room {k}: expected a name of 1 to {MAX_ROOM_NAME} characters, found {chars}"
+                ),
+            ));
+        }
+        let at = DVec2::new(spec.at.0, spec.at.1);
+        if !canvas.contains(at) {
+            return Err(source.error(
+                Place::Room(k),
+                format!(
+                    "room {k} ({:?}): its point ({}, {}) lies off the canvas",
+                    spec.name, at.x, at.y
+                ),
+            ));
+        }
+        if let Some(j) = specs[..k].iter().position(|r| r.name == spec.name) {
+            return Err(source.error(
+                Place::Room(k),
+                format!("room {k}: the name {:?} is room {j}'s already", spec.name),
+            ));
+        }
+        rooms.push(NamedRoom {
+            name: spec.name.clone(),
+            at,
+        });
+    }
+    Ok(rooms)
 }
 
 /// Glass body `k` of the file, checked against the bodies before it

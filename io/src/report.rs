@@ -215,9 +215,9 @@ pub fn write_study(
     })
 }
 
-const FONT: &str = "flatray-sans";
+pub(crate) const FONT: &str = "flatray-sans";
 
-fn register_font() -> Result<(), String> {
+pub(crate) fn register_font() -> Result<(), String> {
     plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular())
         .map_err(|_| "the embedded DejaVu font did not load".to_string())
 }
@@ -360,14 +360,8 @@ pub fn chart_png(
             .map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())?;
     }
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&buffer, width, height, image::ExtendedColorType::Rgb8)
-        .map_err(|e| e.to_string())?;
-    Ok(png)
+    crate::output::rgb8_png(&buffer, width, height)
 }
-
-use image::ImageEncoder as _;
 
 /// A render's counts: what was simulated (`physics`), the work it took
 /// (`work`), and the estimated noise with the sums it is made of (so

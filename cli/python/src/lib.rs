@@ -592,6 +592,58 @@ fn work_total(loaded: &Loaded, options: &RenderOptions) -> u64 {
     (pixels * options.samples as u64).max(1)
 }
 
+/// Measures `scene`'s rooms (`flatray measure`): the figures as JSON, and
+/// the grid as little-endian f64 rows of (x, y, room, E, se) with their
+/// count. The GIL is released during each batch's render; Ctrl-C is
+/// heard between batches.
+#[pyfunction]
+#[pyo3(signature = (scene, *, spp = None, batches = 8, scale = 1.0, door_width = None))]
+fn measure<'py>(
+    py: Python<'py>,
+    scene: &Bound<'py, LoadedScene>,
+    spp: Option<u32>,
+    batches: u32,
+    scale: f64,
+    door_width: Option<f64>,
+) -> PyResult<(String, Bound<'py, PyBytes>, usize)> {
+    let loaded = &scene.get().loaded;
+    let request = flatray_io::measure::Request {
+        spp,
+        batches,
+        scale,
+        door_width,
+    };
+    let mut interrupt: Option<PyErr> = None;
+    let result = flatray_io::measure::run(loaded, &request, |options| {
+        if interrupt.is_none()
+            && let Err(e) = py.check_signals()
+        {
+            interrupt = Some(e);
+        }
+        if interrupt.is_some() {
+            // A blank batch: the measurement is thrown away below.
+            let (w, h) = image_size(&loaded.scene, options.scale);
+            return flatray_tracer::Image::new(w, h);
+        }
+        py.detach(|| flatray_tracer::render(&loaded.scene, options, &|_| {}).image)
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    let (_, measured) = result.map_err(PyValueError::new_err)?;
+    let mut grid = Vec::with_capacity(measured.points.len() * 5 * 8);
+    for p in &measured.points {
+        for v in [p.at.x, p.at.y, p.room as f64, p.e.value, p.e.se] {
+            grid.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    Ok((
+        flatray_io::measure::json(&measured).to_string(),
+        PyBytes::new(py, &grid),
+        measured.points.len(),
+    ))
+}
+
 /// The scene text of scene values given as JSON (as `from_json` takes
 /// them): it loads back as the same scene.
 #[pyfunction]
@@ -656,6 +708,7 @@ fn _flatray(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(generate, m)?)?;
     m.add_function(wrap_pyfunction!(import_plan, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(measure, m)?)?;
     m.add_function(wrap_pyfunction!(read_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_image, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -1,5 +1,6 @@
 """The Python binding against the CLI and against bad input."""
 
+import json
 import os
 import pathlib
 import subprocess
@@ -513,3 +514,27 @@ def test_a_scene_of_values_has_its_text_and_it_loads_back_to_the_same_bits():
     # A scene read from a file keeps the file's own text.
     text = "Scene(canvas: (10, 10), floor: Color((1, 1, 1)))  // mine"
     assert flatray.parse(text).text == text
+
+
+def test_measure_gives_the_clis_figures_and_the_grid_as_an_array(cli, repo, tmp_path):
+    scene_path = repo / "scenes" / "daylight.ron"
+    csv = tmp_path / "grid.csv"
+    out = subprocess.run(
+        [cli, "measure", str(scene_path), "--spp", "8", "--scale", "0.5",
+         "--json", "--quiet", "--csv", str(csv)],
+        check=True, capture_output=True, text=True,
+    ).stdout
+    expected = json.loads(out)
+    got = flatray.measure(flatray.load(scene_path), spp=8, scale=0.5)
+    grid = got.pop("grid")
+    assert got == expected
+    rows = np.loadtxt(csv, delimiter=",", skiprows=1, usecols=(0, 1, 3, 4))
+    assert grid.shape == (len(rows), 5)
+    assert np.array_equal(grid[:, [0, 1, 3, 4]], rows)
+    names = [r["name"] for r in got["rooms"]]
+    assert names == ["living", "bedroom"]
+    # Each room's E_avg is its grid points' mean.
+    for k, room in enumerate(got["rooms"]):
+        assert np.isclose(grid[grid[:, 2] == k, 3].mean(), room["e_avg"]["value"], rtol=1e-12)
+    with pytest.raises(ValueError, match="batches"):
+        flatray.measure(flatray.load(scene_path), batches=1)

@@ -47,6 +47,7 @@ __all__ = [
     "generate",
     "import_plan",
     "load",
+    "measure",
     "parse",
     "read_exr",
     "render",
@@ -456,6 +457,46 @@ def render(
     settings.update({k: v for k, v in given.items() if v is not None})
     settings["scale"] = scale
     return Rendered(image, json.loads(stats), seconds, settings, win, scene._loaded.white)
+
+
+def measure(
+    scene: Scene,
+    *,
+    spp: Optional[int] = None,
+    batches: int = 8,
+    scale: float = 1.0,
+    door_width: Optional[float] = None,
+) -> Dict[str, Any]:
+    """Measures each room of ``scene`` as ``flatray measure`` does: E_min,
+    E_avg, E_max and U0 on the EN 12464-1 grid, and the daylight factor
+    where the scene's only light is a sky, each as ``{"value", "se"}``
+    (``se`` the standard error over ``batches`` independent renders of
+    ``spp`` samples per pixel in all).
+
+    Returns a dict: ``"rooms"`` (a list of each room's figures, with its
+    ``"name"``, ``"area"``, ``"spacing"`` and ``"points"``), ``"batches"``,
+    ``"metres_per_unit"``, and ``"grid"``: a NumPy array of one row per
+    grid point, columns x, y, room (its index in ``"rooms"``), E and its
+    standard error. Ctrl-C stops it between batches."""
+    if not isinstance(scene, Scene):
+        raise TypeError(f"expected a flatray.Scene, found {type(scene).__name__}")
+    spp = _maybe_whole("spp", spp, 1, _MAX_SAMPLES)
+    batches = _whole("batches", batches, 2, 64)
+    for name, value in (("scale", scale), ("door_width", door_width)):
+        if value is not None and (
+            isinstance(value, bool) or not isinstance(value, (int, float, np.number))
+        ):
+            raise TypeError(f"{name}: expected a number, found {type(value).__name__} {value!r}")
+    text, data, rows = _flatray.measure(
+        scene._loaded,
+        spp=spp,
+        batches=batches,
+        scale=float(scale),
+        door_width=None if door_width is None else float(door_width),
+    )
+    result: Dict[str, Any] = json.loads(text)
+    result["grid"] = np.frombuffer(data, dtype="<f8").reshape(rows, 5).copy()
+    return result
 
 
 def read_exr(path: PathLike) -> np.ndarray:

@@ -65,6 +65,14 @@ def render(
     threads: Optional[int] = None,
     progress: Optional[Callable[[int, int], Any]] = None,
 ) -> Tuple[bytes, int, int, str, float]: ...
+def measure(
+    scene: LoadedScene,
+    *,
+    spp: Optional[int] = None,
+    batches: int = 8,
+    scale: float = 1.0,
+    door_width: Optional[float] = None,
+) -> Tuple[str, bytes, int]: ...
 def read_exr(path: str) -> Tuple[bytes, int, int]: ...
 def write_image(
     path: str, data: bytes, width: int, height: int, white: Optional[float] = 4.0
