@@ -338,12 +338,49 @@ pub struct SceneFile {
     pub glass: Vec<GlassSpec>,
     #[serde(default)]
     pub render: RenderSpec,
+    /// Doors: openings in walls, open or closed, and bounds between rooms.
+    #[serde(default)]
+    pub doors: Vec<DoorSpec>,
+    /// Windows: panes in walls, each with a shutter over part of it.
+    #[serde(default)]
+    pub windows: Vec<WindowSpec>,
     /// Rooms named by a point inside each, for `flatray measure`.
     #[serde(default)]
     pub rooms: Vec<RoomSpec>,
     /// What one world unit measures, for `flatray measure`'s grid.
     #[serde(default)]
     pub units: Option<Units>,
+}
+
+/// A door from `a` to `b`: closed, a wall of the floor's albedo; open,
+/// nothing that stops light. Either way a bound between rooms.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Door")]
+pub struct DoorSpec {
+    pub a: Point,
+    pub b: Point,
+    #[serde(default)]
+    pub open: bool,
+}
+
+/// A window from `a` to `b`: a pane of `tint`, its first `shutter` share
+/// (from `a`) shut by an opaque wall in its place.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Window")]
+pub struct WindowSpec {
+    pub a: Point,
+    pub b: Point,
+    #[serde(default = "window_tint")]
+    pub tint: Color,
+    #[serde(default = "no_shutter")]
+    pub shutter: Fraction,
+}
+
+fn window_tint() -> Color {
+    Color(0.9, 0.95, 1.0)
+}
+fn no_shutter() -> Fraction {
+    Fraction(0.0)
 }
 
 /// A room: the region of the floor the walls enclose about `at`.

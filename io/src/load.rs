@@ -32,6 +32,8 @@ pub struct Loaded {
     /// What makes the scene render otherwise than it reads, without being
     /// an error, each with its location.
     pub warnings: Vec<Warning>,
+    /// The file's doors, open or closed: bounds between rooms.
+    pub doors: Vec<Segment>,
     /// The rooms the file names, each by a point inside it.
     pub rooms: Vec<crate::rooms::NamedRoom>,
     /// What one world unit measures in metres, when the file says.
@@ -267,6 +269,8 @@ enum Place {
     LightField(usize, &'static str, &'static str),
     Glass(usize),
     Room(usize),
+    Door(usize),
+    Window(usize),
     Top,
 }
 
@@ -295,6 +299,8 @@ impl Source<'_> {
                         .or_else(|| item("lights", k)),
                     Place::Glass(k) => item("glass", k),
                     Place::Room(k) => item("rooms", k),
+                    Place::Door(k) => item("doors", k),
+                    Place::Window(k) => item("windows", k),
                     Place::Top => None,
                 };
                 let (line, column) = locate::position(text, offset.unwrap_or(0));
@@ -315,6 +321,8 @@ impl Source<'_> {
                     Place::LightField(k, kind, field) => format!("lights[{k}].{kind}.{field}"),
                     Place::Glass(k) => format!("glass[{k}]"),
                     Place::Room(k) => format!("rooms[{k}]"),
+                    Place::Door(k) => format!("doors[{k}]"),
+                    Place::Window(k) => format!("windows[{k}]"),
                     Place::Top => String::new(),
                 },
                 message,
@@ -439,6 +447,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         }
         walls.push(Wall { shape, material });
     }
+    let doors = doors_and_windows(&file, source, &mut walls)?;
     for (k, spec) in file.lights.iter().enumerate() {
         // A sky's frame encloses every wall: it is built once they are.
         if !matches!(spec, LightSpec::Sky { .. }) {
@@ -508,9 +517,56 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         },
         warnings,
         rooms,
+        doors,
         metres_per_unit: file.units.map(|u| u.metres_per_unit.0),
         sky: unobstructed_sky(&file),
     })
+}
+
+/// The walls the file's doors and windows stand for, added to `walls`: a
+/// closed door is a wall of the floor's albedo, an open one none; a
+/// window a pane, its shutter an opaque wall over its first share in
+/// place of the pane (the two meet end to end, so no light passes
+/// between them). Gives the doors' lines, bounds between rooms.
+fn doors_and_windows(
+    file: &SceneFile,
+    source: &Source,
+    walls: &mut Vec<Wall>,
+) -> Result<Vec<Segment>, SceneError> {
+    let ends = |a: crate::format::Point, b: crate::format::Point, place: Place, what: &str| {
+        let (a, b) = (DVec2::new(a.0, a.1), DVec2::new(b.0, b.1));
+        if a == b {
+            Err(source.error(place, format!("{what}: its ends a and b must differ")))
+        } else {
+            Ok((a, b))
+        }
+    };
+    let mut doors = Vec::with_capacity(file.doors.len());
+    for (k, door) in file.doors.iter().enumerate() {
+        let (a, b) = ends(door.a, door.b, Place::Door(k), &format!("door {k}"))?;
+        if !door.open {
+            walls.push(Wall::segment(a, b, Material::Diffuse { albedo: None }));
+        }
+        doors.push(Segment::new(a, b));
+    }
+    for (k, window) in file.windows.iter().enumerate() {
+        let (a, b) = ends(window.a, window.b, Place::Window(k), &format!("window {k}"))?;
+        let share = window.shutter.0;
+        let cut = a + (b - a) * share;
+        if share > 0.0 && cut != a {
+            walls.push(Wall::segment(a, cut, Material::Diffuse { albedo: None }));
+        }
+        if share < 1.0 && cut != b {
+            walls.push(Wall::segment(
+                cut,
+                b,
+                Material::Transparent {
+                    tint: rgb(window.tint),
+                },
+            ));
+        }
+    }
+    Ok(doors)
 }
 
 /// `2 pi` times the luminance of the file's skies' radiance, where every

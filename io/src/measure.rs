@@ -340,8 +340,14 @@ pub fn run(
             .metres_per_unit
             .map_or(0.0, |m| DOOR_WIDTH_METRES / m)
     });
-    let found = crate::rooms::find(&loaded.scene, size, &loaded.rooms, door_width)
-        .map_err(|e| e.to_string())?;
+    let found = crate::rooms::find(
+        &loaded.scene,
+        size,
+        &loaded.rooms,
+        &loaded.doors,
+        door_width,
+    )
+    .map_err(|e| e.to_string())?;
     if found.rooms.is_empty() {
         return Err("no room: name one with `rooms: [Room(name: \"..\", at: (x, y))]`".to_string());
     }

@@ -79,18 +79,21 @@ const LEAST_ROOM_SHARE: f64 = 0.002;
 /// each of `named`, or, when `named` is empty, every region of at least
 /// a 0.2 % share of the image, named "room 1", "room 2", ... in reading
 /// order of their first pixel (those open to the canvas's edge "outside",
-/// "outside 2", ...). `door_width` is in world units (0: no gap closes).
+/// "outside 2", ...). `doors` are the scene's doors, open or closed:
+/// bounds between rooms. `door_width` is in world units (0: no other
+/// gap closes).
 pub fn find(
     scene: &Scene,
     size: (u32, u32),
     named: &[NamedRoom],
+    doors: &[Segment],
     door_width: f64,
 ) -> Result<Rooms, RoomError> {
     let (w, h) = (size.0 as usize, size.1 as usize);
     let step = scene.canvas().pixel_step(size);
     let origin = scene.canvas().origin;
     let centre = |x: usize, y: usize| origin + (DVec2::new(x as f64, y as f64) + 0.5) * step;
-    let doors = door_lines(scene, door_width);
+    let doors = door_lines(scene, doors, door_width);
     let crosses = |a: DVec2, b: DVec2| {
         let d = b - a;
         let len = d.length();
@@ -223,13 +226,15 @@ const DOOR_LINE_SINE: f64 = 0.17;
 /// Most door lines per wall: a budget on the pairs of close ends.
 const DOORS_PER_WALL: usize = 4;
 
-/// The lines that close door gaps: between the ends of two different
+/// The lines that bound rooms across doors: the scene's `doors`, and
+/// those that close door gaps, between the ends of two different
 /// walls closer than `door_width` (and apart), both walls along the gap, found on a grid of cells
 /// of that size; at most [`DOORS_PER_WALL`] per wall.
-fn door_lines(scene: &Scene, door_width: f64) -> SegmentSet {
+fn door_lines(scene: &Scene, doors: &[Segment], door_width: f64) -> SegmentSet {
     let walls = scene.walls();
+    let mut lines = doors.to_vec();
     if !(door_width > 0.0 && door_width.is_finite()) || walls.is_empty() {
-        return SegmentSet::new(Vec::new());
+        return SegmentSet::new(lines);
     }
     let ends: Vec<(usize, DVec2)> = walls
         .iter()
@@ -248,8 +253,7 @@ fn door_lines(scene: &Scene, door_width: f64) -> SegmentSet {
         grid.entry(cell(p)).or_default().push(k);
     }
     let apart = 1e-9 * door_width;
-    let budget = DOORS_PER_WALL * walls.len();
-    let mut lines = Vec::new();
+    let budget = doors.len() + DOORS_PER_WALL * walls.len();
     for (k, &(i, p)) in ends.iter().enumerate() {
         let (cx, cy) = cell(p);
         for dx in -1..=1 {
@@ -330,28 +334,28 @@ mod tests {
     #[test]
     fn a_wall_parts_two_rooms_and_a_door_gap_keeps_them_apart() {
         for turn in [0.0, 0.3] {
-            let shut = find(&two_rooms(0.0, turn), (40, 20), &named(), 0.0).expect("rooms");
+            let shut = find(&two_rooms(0.0, turn), (40, 20), &named(), &[], 0.0).expect("rooms");
             assert_eq!(shut.rooms.len(), 2);
             let total: usize = shut.rooms.iter().map(|r| r.pixels).sum();
             assert_eq!(total, 800, "every pixel in one room");
             // About half each, give or take the tilted wall's pixels.
             assert!((shut.rooms[0].pixels as f64 - 400.0).abs() < 80.0);
             // A 3-unit opening is one region without a door width...
-            let open = find(&two_rooms(3.0, turn), (40, 20), &named(), 0.0);
+            let open = find(&two_rooms(3.0, turn), (40, 20), &named(), &[], 0.0);
             assert!(matches!(open, Err(RoomError::Same { .. })), "{open:?}");
             // ...and two rooms with a door width of 4.
-            let door = find(&two_rooms(3.0, turn), (40, 20), &named(), 4.0).expect("rooms");
+            let door = find(&two_rooms(3.0, turn), (40, 20), &named(), &[], 4.0).expect("rooms");
             assert_eq!(door.rooms.len(), 2);
             assert!((door.rooms[0].pixels as f64 - 400.0).abs() < 80.0);
             // A 10-unit opening is wider than that door: one region.
-            let wide = find(&two_rooms(10.0, turn), (40, 20), &named(), 4.0);
+            let wide = find(&two_rooms(10.0, turn), (40, 20), &named(), &[], 4.0);
             assert!(matches!(wide, Err(RoomError::Same { .. })), "{wide:?}");
         }
     }
 
     #[test]
     fn unnamed_regions_are_found_and_named_in_reading_order() {
-        let rooms = find(&two_rooms(0.0, 0.0), (40, 20), &[], 0.0).expect("rooms");
+        let rooms = find(&two_rooms(0.0, 0.0), (40, 20), &[], &[], 0.0).expect("rooms");
         let names: Vec<&str> = rooms.rooms.iter().map(|r| r.name.as_str()).collect();
         assert_eq!(names, ["outside", "outside 2"]);
         assert_eq!(rooms.rooms[0].lo, DVec2::ZERO);

@@ -1,0 +1,131 @@
+//! Doors and windows: a closed door and a shut window let no light
+//! through in turned rooms, under every integrator and bounce count; an
+//! open door and an open window do; a door is a bound between rooms
+//! whether open or shut.
+
+use flatray_geometry::DVec2;
+use flatray_tests::{options, render, scene};
+use flatray_tracer::Integrator;
+
+/// Two rooms turned by `degrees` about (60, 40): west (x 10..60) with a
+/// lamp, east (x 60..110), a partition at x = 60 with a door from
+/// y = 30 to 50, and a window in the east room's east wall from y = 25
+/// to 55 under a sky. Gives the text and a point deep in the east room.
+fn plan(degrees: f64, door_open: bool, shutter: f64) -> (String, DVec2) {
+    let (s, c) = degrees.to_radians().sin_cos();
+    let at = |x: f64, y: f64| {
+        let (x, y) = (x - 60.0, y - 40.0);
+        DVec2::new(60.0 + c * x - s * y, 40.0 + s * x + c * y)
+    };
+    let p = |x: f64, y: f64| {
+        let q = at(x, y);
+        format!("({:.6}, {:.6})", q.x, q.y)
+    };
+    let wall =
+        |a: (f64, f64), b: (f64, f64)| format!("Wall(a: {}, b: {}),", p(a.0, a.1), p(b.0, b.1));
+    let walls = [
+        wall((10.0, 10.0), (110.0, 10.0)),
+        wall((110.0, 10.0), (110.0, 25.0)),
+        wall((110.0, 55.0), (110.0, 70.0)),
+        wall((110.0, 70.0), (10.0, 70.0)),
+        wall((10.0, 70.0), (10.0, 10.0)),
+        wall((60.0, 10.0), (60.0, 30.0)),
+        wall((60.0, 50.0), (60.0, 70.0)),
+    ]
+    .join("\n        ");
+    let text = format!(
+        r#"Scene(
+    canvas: (120, 80),
+    floor: Color((0.8, 0.8, 0.8)),
+    walls: [{walls}],
+    doors: [Door(a: {}, b: {}, open: {door_open})],
+    windows: [Window(a: {}, b: {}, shutter: {shutter})],
+    lights: [
+        Point(at: {}, intensity: 4),
+        Sky(intensity: 0.05),
+    ],
+    rooms: [Room(name: "west", at: {}), Room(name: "east", at: {})],
+)"#,
+        p(60.0, 30.0),
+        p(60.0, 50.0),
+        p(110.0, 25.0),
+        p(110.0, 55.0),
+        p(30.0, 40.0),
+        p(30.0, 40.0),
+        p(90.0, 40.0),
+    );
+    (text, at(90.0, 40.0))
+}
+
+/// The largest value over the 5 x 5 pixels about `centre`.
+fn brightest_about(image: &flatray_tracer::Image, centre: DVec2) -> f32 {
+    let mut most = 0.0f32;
+    for dy in -2..=2 {
+        for dx in -2..=2 {
+            let (x, y) = (centre.x as i64 + dx, centre.y as i64 + dy);
+            let v = image.get(x as u32, y as u32);
+            most = most.max(v[0].max(v[1]).max(v[2]));
+        }
+    }
+    most
+}
+
+#[test]
+fn a_closed_door_and_a_shut_window_let_no_light_through() {
+    for degrees in [0.0, 17.0, 90.0] {
+        let (text, east) = plan(degrees, false, 1.0);
+        let loaded = scene(&text);
+        for integrator in [Integrator::Path, Integrator::Original, Integrator::Light] {
+            for bounces in 0..=3 {
+                let mut o = options(8, bounces, 1);
+                o.integrator = integrator;
+                let image = render(&loaded.scene, &o).image;
+                assert_eq!(
+                    brightest_about(&image, east),
+                    0.0,
+                    "{degrees}°, {integrator:?}, {bounces} bounces"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn an_open_door_or_an_open_window_lets_light_in() {
+    for degrees in [0.0, 17.0] {
+        for (door_open, shutter) in [(true, 1.0), (false, 0.5), (false, 0.0)] {
+            let (text, east) = plan(degrees, door_open, shutter);
+            let loaded = scene(&text);
+            let image = render(&loaded.scene, &options(8, 2, 1)).image;
+            assert!(
+                brightest_about(&image, east) > 0.0,
+                "{degrees}°, door open {door_open}, shutter {shutter}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_door_bounds_two_rooms_open_or_shut() {
+    for door_open in [true, false] {
+        let (text, _) = plan(17.0, door_open, 0.0);
+        let loaded = scene(&text);
+        assert_eq!(loaded.doors.len(), 1);
+        let rooms =
+            flatray_io::rooms::find(&loaded.scene, (120, 80), &loaded.rooms, &loaded.doors, 0.0)
+                .expect("two rooms");
+        let areas: Vec<f64> = rooms.rooms.iter().map(|r| r.area).collect();
+        // 50 x 60 each, give or take the turned walls' pixels.
+        for area in areas {
+            assert!(
+                (area / 3000.0 - 1.0).abs() < 0.05,
+                "door open {door_open}: {area}"
+            );
+        }
+        // Without the door's line an open door joins them.
+        if door_open {
+            let joined = flatray_io::rooms::find(&loaded.scene, (120, 80), &loaded.rooms, &[], 0.0);
+            assert!(joined.is_err());
+        }
+    }
+}
