@@ -4,7 +4,9 @@
 //! What it is for: turning a scene file into the plain in-memory
 //! `flatray_tracer::Scene` (with the render settings the file asks for),
 //! a rendered `flatray_tracer::Image` into a file, atomically, and a floor
-//! plan from another tool (SVG, Tiled, a wall mask) into scene text.
+//! plan from another tool (SVG, Tiled, a wall mask) into scene text;
+//! the rooms of a plan and their illuminance figures from rendered images
+//! (`rooms`, `measure`: the images are rendered by the caller).
 //!
 //! What it never does: render, sample, or decide physics. Every error it
 //! returns names the file, and for scene text the line and column, and

@@ -28,8 +28,8 @@ const LEAST_ALBEDO: f64 = 0.02;
 /// EN 12464-1 caps the grid spacing at 10 m.
 const MOST_SPACING_METRES: f64 = 10.0;
 
-/// Most grid points over all rooms.
-pub const MAX_POINTS: usize = 1 << 20;
+/// Most grid points over all rooms (each holds a mean per batch).
+pub const MAX_POINTS: usize = 1 << 18;
 
 /// The illuminance at each pixel of `image` (row by row), rendered of
 /// `scene` at `exposure`: the value over exposure and the pixel's mean

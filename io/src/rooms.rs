@@ -223,6 +223,9 @@ pub fn find(
 /// The sine of the most a door's gap may turn off its walls' line.
 const DOOR_LINE_SINE: f64 = 0.17;
 
+/// Most ends of one cell that each end is paired with.
+const ENDS_PER_CELL: usize = 64;
+
 /// Most door lines per wall: a budget on the pairs of close ends.
 const DOORS_PER_WALL: usize = 4;
 
@@ -258,7 +261,10 @@ fn door_lines(scene: &Scene, doors: &[Segment], door_width: f64) -> SegmentSet {
         let (cx, cy) = cell(p);
         for dx in -1..=1 {
             for dy in -1..=1 {
-                for &j in grid.get(&(cx + dx, cy + dy)).into_iter().flatten() {
+                // At most a few ends of each cell: walls that all meet at
+                // one point must not cost their number squared.
+                let near = grid.get(&(cx + dx, cy + dy)).into_iter().flatten();
+                for &j in near.take(ENDS_PER_CELL) {
                     let (other, q) = ends[j];
                     let d = p.distance(q);
                     let along = |wall: usize| {
