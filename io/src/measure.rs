@@ -97,8 +97,8 @@ pub struct RoomFigures {
     /// E_avg over the unobstructed sky's, in per cent, where the scene's
     /// only light is a sky.
     pub daylight_factor: Option<Figure>,
-    /// The grid's cells, where they lie on the image: the first pixel and
-    /// the cell's size in pixels, for the map.
+    /// The grid's cells as ranges of the image's pixels (the points'
+    /// order), for the map.
     cells: Vec<Cell>,
 }
 

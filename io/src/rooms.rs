@@ -4,7 +4,8 @@
 //! Two neighbouring pixels (left and right, or up and down) are in one
 //! room when the straight step between their centres crosses no wall of
 //! any material (a pane or a glass edge bounds a room as a diffuse wall
-//! does). A door's gap is an opening in a wall: the ends of two walls
+//! does), and the scene's doors, open or shut, bound rooms too. A door's
+//! gap drawn without a door is an opening in a wall: the ends of two walls
 //! that lie on one line (within 10 degrees), facing each other across a
 //! gap narrower than the door width. It is closed by the line between the
 //! two ends, so that the rooms on its two sides stay apart. A wider
