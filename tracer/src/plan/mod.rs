@@ -255,33 +255,8 @@ impl Plan {
         let glossy_paths = options.bounces > 0 && rough_mirrors > 0;
         let mirror_emission =
             indirect && (force || ((specular_paths || glossy_paths) && areas > 0));
-        // Lines and circles seen in one flat mirror, in closed form at
-        // each receiver, up to a budget of (mirror, light) pairs.
-        let mirror_pairs = scene.flat_mirrors.len()
-            * scene
-                .lights
-                .iter()
-                .filter(|l| crate::estimators::is_exact(&l.shape))
-                .count();
-        // The closed form through a mirror takes the walls around it as
-        // segments.
-        let mirror_lights = shadows
-            && inventory.arcs == 0
-            && options.specular > 0
-            && mirror_pairs > 0
-            && mirror_pairs <= crate::estimators::MAX_MIRROR_PAIRS;
-        // Lines and circles seen through one edge of smooth glass, in
-        // closed form at each receiver inside glass, up to a budget of
-        // (edge, light) pairs; the closed form takes the walls around as
-        // segments.
-        let glass_pairs = crate::estimators::glass_pairs(scene);
-        let glass_lights = shadows
-            && inventory.arcs == 0
-            && options.specular > 0
-            && glass_pairs > 0
-            && glass_pairs <= crate::estimators::MAX_GLASS_PAIRS
-            && inventory.dispersive == 0
-            && inventory.rough_glass == 0;
+        let (mirror_pairs, mirror_lights, glass_pairs, glass_lights) =
+            closed_form_decisions(scene, options, &inventory, shadows);
         // Lines and circles through glass: what enters a body and leaves
         // it, or reflects inside it first, photons take far better than
         // paths, which meet a small light by chance. Not with arc lights,
@@ -315,36 +290,18 @@ impl Plan {
             && !tracing_light
             && !no_lights
             && (((specular_paths || glossy_paths) && aimed > 0) || lasers > 0 || area_photons);
-        let wall_memo_wanted = !tracing_light
-            && indirect
-            && options.bounces > 0
-            && options.memo.enabled
-            && (force || (diffuse > 0 && reflectors > 0));
-        // Counted before anything is allocated; over its budget the memo
-        // is off (the same image, estimated by shadow rays).
-        let wall_memo_bytes = wall_memo_wanted
-            .then(|| {
-                crate::memo::wall_memo_bytes(
-                    scene,
-                    &options.memo,
-                    options.scale,
-                    crate::memo::WALL_MEMO_BUDGET,
-                )
-            })
-            .flatten();
-        let wall_memo_fits = !wall_memo_wanted || wall_memo_bytes.is_some();
-        let wall_memo = wall_memo_wanted && wall_memo_fits;
-        // The rest of a path read at its first diffuse wall: where paths
-        // take more than one reflection, through no glass body (whose
-        // inside a wall's bins cannot tell), within its budget.
-        let onward = wall_memo
-            && options.memo.onward
-            && options.integrator == Integrator::Path
-            && options.bounces >= 2
-            && glass_edges == 0
-            && wall_memo_bytes.is_some_and(|bytes| {
-                crate::onward::onward_bytes(bytes, options.bounces) <= crate::onward::ONWARD_BUDGET
-            });
+        let (wall_memo_fits, wall_memo, onward) = memo_decisions(
+            scene,
+            options,
+            MemoFacts {
+                tracing_light,
+                indirect,
+                force,
+                diffuse,
+                reflectors,
+                glass_edges,
+            },
+        );
         let pairs = scene.walls.len() * scene.lights.len();
         let (width, height) = crate::options::image_size(scene, options.scale);
         let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
@@ -457,4 +414,97 @@ impl Plan {
             floor_ray_culling,
         }
     }
+}
+
+/// The closed forms through one flat mirror and through one glass edge:
+/// their (mirror, light) and (edge, light) pairs, and whether each runs.
+fn closed_form_decisions(
+    scene: &Scene,
+    options: &RenderOptions,
+    inventory: &Inventory,
+    shadows: bool,
+) -> (usize, bool, usize, bool) {
+    // Lines and circles seen in one flat mirror, in closed form at
+    // each receiver, up to a budget of (mirror, light) pairs.
+    let mirror_pairs = scene.flat_mirrors.len()
+        * scene
+            .lights
+            .iter()
+            .filter(|l| crate::estimators::is_exact(&l.shape))
+            .count();
+    // The closed form through a mirror takes the walls around it as
+    // segments.
+    let mirror_lights = shadows
+        && inventory.arcs == 0
+        && options.specular > 0
+        && mirror_pairs > 0
+        && mirror_pairs <= crate::estimators::MAX_MIRROR_PAIRS;
+    // Lines and circles seen through one edge of smooth glass, in
+    // closed form at each receiver inside glass, up to a budget of
+    // (edge, light) pairs; the closed form takes the walls around as
+    // segments.
+    let glass_pairs = crate::estimators::glass_pairs(scene);
+    let glass_lights = shadows
+        && inventory.arcs == 0
+        && options.specular > 0
+        && glass_pairs > 0
+        && glass_pairs <= crate::estimators::MAX_GLASS_PAIRS
+        && inventory.dispersive == 0
+        && inventory.rough_glass == 0;
+    (mirror_pairs, mirror_lights, glass_pairs, glass_lights)
+}
+
+/// What [`memo_decisions`] reads of the scene and of the plan's earlier
+/// decisions.
+struct MemoFacts {
+    tracing_light: bool,
+    indirect: bool,
+    force: bool,
+    diffuse: usize,
+    reflectors: usize,
+    glass_edges: usize,
+}
+
+/// Whether the wall memo fits its budget, whether it runs, and whether
+/// the onward memo does.
+fn memo_decisions(scene: &Scene, options: &RenderOptions, facts: MemoFacts) -> (bool, bool, bool) {
+    let MemoFacts {
+        tracing_light,
+        indirect,
+        force,
+        diffuse,
+        reflectors,
+        glass_edges,
+    } = facts;
+    let wall_memo_wanted = !tracing_light
+        && indirect
+        && options.bounces > 0
+        && options.memo.enabled
+        && (force || (diffuse > 0 && reflectors > 0));
+    // Counted before anything is allocated; over its budget the memo
+    // is off (the same image, estimated by shadow rays).
+    let wall_memo_bytes = wall_memo_wanted
+        .then(|| {
+            crate::memo::wall_memo_bytes(
+                scene,
+                &options.memo,
+                options.scale,
+                crate::memo::WALL_MEMO_BUDGET,
+            )
+        })
+        .flatten();
+    let wall_memo_fits = !wall_memo_wanted || wall_memo_bytes.is_some();
+    let wall_memo = wall_memo_wanted && wall_memo_fits;
+    // The rest of a path read at its first diffuse wall: where paths
+    // take more than one reflection, through no glass body (whose
+    // inside a wall's bins cannot tell), within its budget.
+    let onward = wall_memo
+        && options.memo.onward
+        && options.integrator == Integrator::Path
+        && options.bounces >= 2
+        && glass_edges == 0
+        && wall_memo_bytes.is_some_and(|bytes| {
+            crate::onward::onward_bytes(bytes, options.bounces) <= crate::onward::ONWARD_BUDGET
+        });
+    (wall_memo_fits, wall_memo, onward)
 }
