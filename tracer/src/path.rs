@@ -2,6 +2,7 @@
 //! iterative loop so that no scene can grow the stack.
 
 use std::f64::consts::TAU;
+use std::ops::ControlFlow;
 
 use flatray_cache::{Check, Key, WallMemo};
 use flatray_geometry::{DVec2, Hit, Ray, Side, Skip};
@@ -18,7 +19,7 @@ use crate::material::{Bsdf, Sampling, Transport};
 use crate::memo::Onward;
 use crate::run::Run;
 use crate::sampling::{Stream, arc_point};
-use crate::scene::Scene;
+use crate::scene::{Scene, Wall};
 use crate::{Integrator, Rgb, Stats};
 
 /// One sample of the fluence at floor point `p`, with at most `bounces`
@@ -171,6 +172,12 @@ pub(crate) struct Leg {
 /// `onward[m - 1]` for `m` reflections left), the path ends at its first
 /// diffuse wall that leaves it a reflection, reading there what the rest
 /// of the path would bring on average.
+///
+/// Each turn of the loop follows one ray: the lights it meets on the way
+/// and the wall it arrives at ([`PathState::arrive`]), the light that
+/// wall's vertex gathers by next-event estimation
+/// ([`PathState::gather`]), and the ray that leaves it
+/// ([`PathState::leave`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn follow(
@@ -184,148 +191,254 @@ pub(crate) fn follow(
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
-    let Trace {
-        scene,
-        bounces,
-        specular,
-        integrator,
-        mirror_emission,
-        last_leg_sides,
-        force,
-        ..
-    } = *trace;
     // The key of the memo's checks: the one-bounce shortcut, which holds
     // the stream as the loop is entered, decides alike.
     let path = stream.key();
-    let mut fluence = fluence;
-    let mut ray = ray;
     let mut first_hit = first_hit;
-    let Leg {
-        mut throughput,
-        mut skip,
-        bounce: mut diffuse,
-    } = leg;
-    // The specular events since the floor or the last diffuse wall.
-    let mut run = Run::new(throughput);
-    // After the last diffuse reflection the model allows, the path goes
-    // on only to meet lights with an area after specular events (which
-    // no shadow ray finds); its next diffuse wall ends it.
-    let mut last_leg = diffuse >= bounces;
-    // The specular events since the floor or the last non-specular
-    // vertex, and that vertex: the ledger says from them whether a light
-    // the ray meets counts (`Ledger::path_meets`).
-    let ledger = trace.ledger;
-    let mut events = ledger::Run::EMPTY;
-    let mut from = match diffuse {
-        0 => ledger::Vertex::Floor,
-        _ => ledger::Vertex::Diffuse,
-    };
-    // Where the ray left a glossy wall, and the density of its direction:
-    // light with an area that it meets is weighed against next-event
-    // estimation there (multiple importance sampling).
-    let mut glossy_from: Option<GlossyStart> = None;
-    // Distance travelled since the receiver or the last diffuse vertex:
-    // a light seen through mirrors is that far away.
-    let mut unfolded = 0.0;
-    let mut glass = GlassState::default();
-    // The walls the current ray's line can meet, while it is known.
-    let mut line_walls = line_walls;
-
+    let mut state = PathState::new(trace, fluence, ray, line_walls, leg);
     loop {
         stats.work.bounce_rays += 1;
         let hit = match first_hit.take() {
             Some(hit) => hit,
-            None => scene
-                .segments
-                .closest_hit_within(&ray, f64::INFINITY, skip, line_walls),
+            None => trace.scene.segments.closest_hit_within(
+                &state.ray,
+                f64::INFINITY,
+                state.skip,
+                state.line_walls,
+            ),
         };
+        let Some(at) = state.arrive(trace, hit, stats) else {
+            break;
+        };
+        let bsdf = Bsdf::at(
+            trace.scene,
+            at.wall.material,
+            (at.index, at.h.u, at.x),
+            trace.tables,
+            stats,
+        );
+        if state
+            .gather(trace, &at, &bsdf, (path, onward), stream, stats)
+            .is_break()
+        {
+            break;
+        }
+        if state.leave(trace, &at, &bsdf, stream, stats).is_break() {
+            break;
+        }
+    }
+    state.fluence
+}
+
+/// What the path loop carries from one ray to the next.
+struct PathState<'a> {
+    fluence: Rgb,
+    ray: Ray,
+    throughput: Rgb,
+    /// The wall the ray leaves.
+    skip: Skip,
+    /// The diffuse reflections so far.
+    diffuse: u32,
+    /// The specular events since the floor or the last diffuse wall.
+    run: Run,
+    /// After the last diffuse reflection the model allows, the path goes
+    /// on only to meet lights with an area after specular events (which
+    /// no shadow ray finds); its next diffuse wall ends it.
+    last_leg: bool,
+    /// The specular events since the floor or the last non-specular
+    /// vertex, and that vertex: the ledger says from them whether a light
+    /// the ray meets counts (`Ledger::path_meets`).
+    events: ledger::Run,
+    from: ledger::Vertex,
+    /// Where the ray left a glossy wall, and the density of its
+    /// direction: light with an area that it meets is weighed against
+    /// next-event estimation there (multiple importance sampling).
+    glossy_from: Option<GlossyStart>,
+    /// Distance travelled since the receiver or the last diffuse vertex:
+    /// a light seen through mirrors is that far away.
+    unfolded: f64,
+    glass: GlassState,
+    /// The walls the current ray's line can meet, while it is known.
+    line_walls: Option<&'a [u32]>,
+}
+
+/// Where a ray of the path loop arrives: the wall, where along it and on
+/// which side.
+struct Arrival<'s> {
+    index: u32,
+    h: Hit,
+    wall: &'s Wall,
+    x: DVec2,
+    side: Side,
+}
+
+impl Arrival<'_> {
+    /// The wall's unit normal on the arrival side.
+    #[inline(always)]
+    fn normal(&self) -> DVec2 {
+        self.wall.shape.normal_on(self.side, self.x)
+    }
+}
+
+impl<'a> PathState<'a> {
+    #[inline(always)]
+    fn new(
+        trace: &Trace,
+        fluence: Rgb,
+        ray: Ray,
+        line_walls: Option<&'a [u32]>,
+        leg: Leg,
+    ) -> PathState<'a> {
+        let Leg {
+            throughput,
+            skip,
+            bounce: diffuse,
+        } = leg;
+        PathState {
+            fluence,
+            ray,
+            throughput,
+            skip,
+            diffuse,
+            run: Run::new(throughput),
+            last_leg: diffuse >= trace.bounces,
+            events: ledger::Run::EMPTY,
+            from: match diffuse {
+                0 => ledger::Vertex::Floor,
+                _ => ledger::Vertex::Diffuse,
+            },
+            glossy_from: None,
+            unfolded: 0.0,
+            glass: GlassState::default(),
+            line_walls,
+        }
+    }
+
+    /// The ray's flight to `hit`: the line and circle lights it crosses
+    /// and the light of the wall it meets, where the ledger counts them
+    /// from the run since the last vertex, and the glass it flies through.
+    /// `None` where the path ends: it escapes, meets a wall exactly
+    /// tangent or exactly at an end.
+    #[inline(always)]
+    fn arrive<'s>(
+        &mut self,
+        trace: &Trace<'s>,
+        hit: Option<(u32, Hit)>,
+        stats: &mut Stats,
+    ) -> Option<Arrival<'s>> {
+        let scene = trace.scene;
         let hit_t = hit.map_or(f64::INFINITY, |(_, h)| h.t);
-        // What of a line or circle light that the ray meets counts: the
-        // ledger's answer from the run since the last vertex.
-        let meets = ledger.path_meets(events, from).counts();
-        if mirror_emission && (meets || (force && !events.is_specular())) {
+        let meets = trace.ledger.path_meets(self.events, self.from).counts();
+        if trace.mirror_emission && (meets || (trace.force && !self.events.is_specular())) {
             stats.work.emission_tests += 1;
-            let emitted =
-                emission_crossed(scene, &ray, hit_t, unfolded, glossy_from, glass.wavelength);
+            let emitted = emission_crossed(
+                scene,
+                &self.ray,
+                hit_t,
+                self.unfolded,
+                self.glossy_from,
+                self.glass.wavelength,
+            );
             if meets {
-                fluence += throughput * emitted;
+                self.fluence += self.throughput * emitted;
             }
         }
         let Some((index, h)) = hit else {
             stats.physics.paths_escaped += 1;
-            break;
+            return None;
         };
         let wall = &scene.walls[index as usize];
         let x = wall.shape.point_at(h.u);
-        let Some(side) = wall.shape.arrival_side(x, ray.dir) else {
+        let Some(side) = wall.shape.arrival_side(x, self.ray.dir) else {
             // A crossing implies the ray is not parallel to a segment; a
             // ray exactly tangent to an arc, to the last bit, ends here.
             stats.physics.paths_escaped += 1;
-            break;
+            return None;
         };
         if h.u == 0.0 || h.u == 1.0 {
             // The corner rule: a path that meets a wall exactly at an end
             // ends there. Leaving from a corner point, no side test could
             // tell the room's inside from its outside.
             stats.physics.paths_absorbed += 1;
-            break;
+            return None;
         }
-        unfolded += h.t;
+        self.unfolded += h.t;
         if !scene.glass.is_empty() {
             // Times exactly 1 in a scene without glass.
-            throughput *= transmit(
-                absorption(scene, glass.flight_body(&wall.material, side)),
+            self.throughput *= transmit(
+                absorption(scene, self.glass.flight_body(&wall.material, side)),
                 h.t,
             );
         }
         if meets && let Some(light) = scene.light_of_wall(index) {
-            fluence += throughput
+            self.fluence += self.throughput
                 * wall_emission(
                     scene,
                     (light, x),
                     side,
-                    unfolded,
-                    glossy_from,
-                    glass.wavelength,
+                    self.unfolded,
+                    self.glossy_from,
+                    self.glass.wavelength,
                 );
         }
+        Some(Arrival {
+            index,
+            h,
+            wall,
+            x,
+            side,
+        })
+    }
 
-        let bsdf = Bsdf::at(scene, wall.material, (index, h.u, x), trace.tables, stats);
+    /// The light that the vertex `at` with `bsdf` gathers: next-event
+    /// estimation at a diffuse or glossy wall, and the onward memo's rest
+    /// of the path where it holds it. Breaks where the path ends there:
+    /// the bounce limit, or the onward memo's read.
+    #[inline(always)]
+    fn gather(
+        &mut self,
+        trace: &Trace,
+        at: &Arrival,
+        bsdf: &Bsdf,
+        (path, onward): (u64, Option<&[WallMemo]>),
+        stream: &mut Stream,
+        stats: &mut Stats,
+    ) -> ControlFlow<()> {
+        let bounces = trace.bounces;
         // A transparent wall is no scattering event: the path goes on
         // straight, and nothing is counted.
-        let straight = bsdf.is_straight();
-        if straight {
+        if bsdf.is_straight() {
             stats.physics.transparent_passes += 1;
         } else if !bsdf.is_specular() {
-            if last_leg {
+            if self.last_leg {
                 stats.physics.paths_bounce_limit += 1;
-                break;
+                return ControlFlow::Break(());
             }
-            diffuse += 1;
+            self.diffuse += 1;
         }
-        // Computed where a branch needs it: a memo read does not.
-        let normal = || wall.shape.normal_on(side, x);
+        let diffuse = self.diffuse;
         if let Some(rho) = bsdf.lambertian() {
             // Next-event estimation, at the one non-specular BSDF: f E,
             // with f = rho / 2 and 2pi already in the throughput. The memo
             // holds E on each side of a diffuse wall.
-            let at = WallPoint {
-                index,
-                side,
-                u: h.u,
-                x,
+            let point = WallPoint {
+                index: at.index,
+                side: at.side,
+                u: at.h.u,
+                x: at.x,
                 path,
             };
-            let irradiance = wall_irradiance(trace, at, &normal, diffuse, stream, stats);
-            fluence += lambertian_light(throughput, rho, irradiance);
+            let normal = || at.normal();
+            let irradiance = wall_irradiance(trace, point, &normal, diffuse, stream, stats);
+            self.fluence += lambertian_light(self.throughput, rho, irradiance);
             if diffuse == bounces {
-                if !last_leg_sides.is_some_and(|sides| {
-                    sides.get(2 * index as usize + side.index()) == Some(&true)
+                if !trace.last_leg_sides.is_some_and(|sides| {
+                    sides.get(2 * at.index as usize + at.side.index()) == Some(&true)
                 }) {
                     stats.physics.paths_bounce_limit += 1;
-                    break;
+                    return ControlFlow::Break(());
                 }
-                last_leg = true;
+                self.last_leg = true;
             }
             // The rest of the path, on average over its directions from
             // this wall: the onward memo, where it holds that many
@@ -337,97 +450,119 @@ pub(crate) fn follow(
             }) {
                 stats.work.onward_lookups += 1;
                 stats.physics.paths_onward += 1;
-                fluence += throughput * rho * memo_irradiance(table, index, side, h.u);
-                break;
+                self.fluence +=
+                    self.throughput * rho * memo_irradiance(table, at.index, at.side, at.h.u);
+                return ControlFlow::Break(());
             }
         }
         if bsdf.is_glossy() {
             // Next-event estimation through the lobe, each light weighed
             // against the lobe's own sample below.
-            let at = (index, x, normal());
-            fluence +=
-                throughput * glossy_direct(trace, at, (&bsdf, -ray.dir), diffuse, stream, stats);
+            let point = (at.index, at.x, at.normal());
+            self.fluence += self.throughput
+                * glossy_direct(trace, point, (bsdf, -self.ray.dir), diffuse, stream, stats);
             if diffuse == bounces {
-                if !mirror_emission {
+                if !trace.mirror_emission {
                     stats.physics.paths_bounce_limit += 1;
-                    break;
+                    return ControlFlow::Break(());
                 }
                 // The lobe's sample still looks for lights with an area,
                 // and goes on by mirrors and glass; its next non-specular
                 // wall ends it.
-                last_leg = true;
+                self.last_leg = true;
             }
         }
+        ControlFlow::Continue(())
+    }
+
+    /// The ray that leaves the vertex `at` by sampling `bsdf`, and what
+    /// the loop carries on with it: the run of specular events and the
+    /// walls its line can meet. Breaks where the path ends: absorbed, or
+    /// past the run's most specular events.
+    #[inline(always)]
+    fn leave(
+        &mut self,
+        trace: &Trace<'a>,
+        at: &Arrival,
+        bsdf: &Bsdf,
+        stream: &mut Stream,
+        stats: &mut Stats,
+    ) -> ControlFlow<()> {
+        let (index, x) = (at.index, at.x);
+        let straight = bsdf.is_straight();
         if bsdf.is_mirror() {
             stats.physics.mirror_reflections += 1;
         }
-        let sampling = match integrator {
+        let sampling = match trace.integrator {
             // The light tracer never calls this function.
             Integrator::Path | Integrator::Light => Sampling::Cosine,
             Integrator::Original => Sampling::Uniform,
         };
         let scattered = bsdf.sample(
-            scene,
-            (ray.dir, normal(), side),
+            trace.scene,
+            (self.ray.dir, at.normal(), at.side),
             sampling,
             Transport::Radiance,
-            &mut glass,
+            &mut self.glass,
             stream,
             stats,
         );
-        throughput *= scattered.weight;
-        if throughput == Rgb::ZERO {
+        self.throughput *= scattered.weight;
+        if self.throughput == Rgb::ZERO {
             stats.physics.paths_absorbed += 1;
-            break;
+            return ControlFlow::Break(());
         }
         let left = Ray::new(x, scattered.dir);
-        glossy_from = if bsdf.is_glossy() {
+        self.glossy_from = if bsdf.is_glossy() {
             Some(GlossyStart {
                 x,
                 wall: index,
-                pdf: bsdf.pdf(normal(), -ray.dir, scattered.dir, sampling),
+                pdf: bsdf.pdf(at.normal(), -self.ray.dir, scattered.dir, sampling),
             })
         } else if straight {
-            glossy_from
+            self.glossy_from
         } else {
             None
         };
-        ray = left;
-        skip = Skip::one(index);
+        self.ray = left;
+        self.skip = Skip::one(index);
         if straight {
             // Still on the first ray's line: its walls still hold.
-            continue;
+            return ControlFlow::Continue(());
         }
         if bsdf.is_specular() {
-            let Some(weight) = run.next(specular, throughput, stream, stats) else {
-                break;
+            let Some(weight) = self
+                .run
+                .next(trace.specular, self.throughput, stream, stats)
+            else {
+                return ControlFlow::Break(());
             };
-            throughput *= weight;
+            self.throughput *= weight;
             // The path goes against the light: the event as light takes it.
-            let event = ledger::Event::of(wall, side, glass.inside.is_some());
-            events = events.with(event.reversed());
-            line_walls = if bsdf.is_mirror() {
+            let event = ledger::Event::of(at.wall, at.side, self.glass.inside.is_some());
+            self.events = self.events.with(event.reversed());
+            self.line_walls = if bsdf.is_mirror() {
                 trace
                     .mirror_arcs
-                    .and_then(|arcs| arcs.walls(index, h.u, ray.dir))
+                    .and_then(|arcs| arcs.walls(index, at.h.u, self.ray.dir))
             } else {
                 None
             };
-            if line_walls.is_some() {
+            if self.line_walls.is_some() {
                 stats.work.culled_mirror_rays += 1;
             }
         } else {
-            run = Run::new(throughput);
-            events = ledger::Run::EMPTY;
-            from = match bsdf.is_glossy() {
+            self.run = Run::new(self.throughput);
+            self.events = ledger::Run::EMPTY;
+            self.from = match bsdf.is_glossy() {
                 true => ledger::Vertex::Glossy,
                 false => ledger::Vertex::Diffuse,
             };
-            unfolded = 0.0;
-            line_walls = None;
+            self.unfolded = 0.0;
+            self.line_walls = None;
         }
+        ControlFlow::Continue(())
     }
-    fluence
 }
 
 /// The walls that a ray leaving wall `wall` (a mirror, or a diffuse wall

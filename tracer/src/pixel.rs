@@ -14,7 +14,8 @@ use crate::accel::coherence::{Coherence, FloorCoherence, centre_transmittance};
 use crate::accel::culling::{Batch, BlockCulling, Sums};
 use crate::accel::shortcut::memo_bounce;
 use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
-use crate::direct::{direct_light_chosen, direct_light_points, numbers_per_point};
+use crate::direct::{Strata, direct_light_chosen, direct_light_points, numbers_per_point};
+use crate::estimators::choice::LightTable;
 use crate::estimators::square::{Square, square_light, takes_square};
 use crate::estimators::{Receiver, Visibility, through_glass, through_mirrors};
 use crate::film::PixelSums;
@@ -124,241 +125,28 @@ pub(crate) fn render_pixel(
     let (Some(first), Some(last)) = (contexts.first(), contexts.last()) else {
         return total.unwrap_or_default();
     };
-    let Context {
-        options,
-        size,
-        floor_memo,
-        floor_squares,
-        coherence,
-        ref trace,
-        ..
-    } = *first;
-    let scene = trace.scene;
-    let pixel = Pixel::new(scene, size, x, y, options.seed);
-    let step = pixel.step;
-    let corner = scene.canvas.origin + DVec2::new(x as f64, y as f64) * step;
+    let scene = first.trace.scene;
+    let pixel = Pixel::new(scene, first.size, x, y, first.options.seed);
     // The passes' floor points: the direct light at each, filled once.
     let points = first.pass.points.start..last.pass.points.end;
-    if floor_memo && !points.is_empty() {
-        // Each light's transmittance where the whole pixel shares it.
-        let centre = corner + 0.5 * step;
-        // The floor's shadow rays, its points' and its centre's, take the
-        // pixel's block lists.
-        let shadow_walls = culled.map(|c| &c.shadows[..]);
-        let receiver = Receiver {
-            shadow_walls,
-            ..Receiver::FLOOR
-        };
-        let visibility = &mut batch.visibility;
-        batch.shared.clear();
-        match coherence {
-            // With a light table, each point takes a few lights: a shared
-            // transmittance is traced when a point first takes its light.
-            Some(coherence) if trace.light_table.is_some() => {
-                visibility.clear();
-                for state in coherence.pixel(x, y) {
-                    let (vis, shared) = match state {
-                        Coherence::Varies => (Visibility::Trace, false),
-                        Coherence::Same => (Visibility::Trace, true),
-                        Coherence::Clear => {
-                            stats.work.floor_shared_visibility += 1;
-                            (Visibility::Known(Rgb::ONE), false)
-                        }
-                    };
-                    visibility.push(vis);
-                    batch.shared.push(shared);
-                }
-            }
-            Some(coherence) => {
-                visibility.clear();
-                visibility.extend(
-                    coherence
-                        .pixel(x, y)
-                        .iter()
-                        .enumerate()
-                        .map(|(light, state)| match state {
-                            Coherence::Varies => Visibility::Trace,
-                            Coherence::Same => {
-                                stats.work.floor_shared_visibility += 1;
-                                Visibility::Known(centre_transmittance(
-                                    scene,
-                                    light,
-                                    centre,
-                                    receiver.walls_towards(light),
-                                    stats,
-                                ))
-                            }
-                            Coherence::Clear => {
-                                stats.work.floor_shared_visibility += 1;
-                                Visibility::Known(Rgb::ONE)
-                            }
-                        }),
-                )
-            }
-            // The same for every pixel of the render: filled once per
-            // batch, not per pixel (a pass over every light), unless the
-            // pixel's squares change it.
-            None => {
-                if visibility.len() != scene.lights.len() || floor_squares {
-                    visibility.clear();
-                    visibility.resize(scene.lights.len(), Visibility::of(trace.shadows));
-                }
-            }
-        }
-        // Points, spots and suns whose shadows cover some of the pixel,
-        // or whose kernel varies steeply across it, over the whole square
-        // in closed form: every point of the pixel takes their mean, and
-        // none of them takes their light again. Elsewhere the light
-        // reaches the whole pixel and only its kernel varies, gently:
-        // the points take it, with nothing in the way. The coherence
-        // masks' transmittance, where they know it, saves looking at the
-        // walls; the answer is the same.
-        let mut square = Rgb::ZERO;
-        if floor_squares {
-            let area = (corner, step);
-            for (light, vis) in visibility.iter_mut().enumerate() {
-                if !takes_square(&scene.lights[light].shape) {
-                    continue;
-                }
-                let known = match *vis {
-                    Visibility::Trace => None,
-                    Visibility::Known(known) => Some(known),
-                };
-                match square_light(scene, light, area, receiver, known, stats) {
-                    Some(Square::Uniform) => *vis = Visibility::Known(Rgb::ONE),
-                    Some(Square::Mean(mean)) => {
-                        square += mean;
-                        *vis = Visibility::Known(Rgb::ZERO);
-                    }
-                    None => {}
-                }
-            }
-        }
-        // The pass's points, from the pixel's scrambled Sobol sequence,
-        // and the numbers each line light draws, in the order
-        // `direct_light_with` draws them; then the lights one by one over
-        // all points (`direct_light_strata`).
-        let floor = &mut batch.floor;
-        floor.points.clear();
-        floor.numbers.clear();
-        let numbers = numbers_per_point(scene, trace.light_table);
-        let bits = pixel.key.stream(FLOOR_SEED_STREAM).bits();
-        let seeds = [(bits >> 32) as u32, bits as u32];
-        floor.points.resize(points.len(), DVec2::ZERO);
-        sobol_points(points.start, seeds, (corner, step), &mut floor.points);
-        if numbers > 0 {
-            for k in points.clone() {
-                let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
-                for _ in 0..numbers {
-                    floor.numbers.push(stream.uniform());
-                }
-            }
-        }
-        match trace.light_table {
-            Some(table) => {
-                // A light the whole pixel shares is traced once, from the
-                // centre, when a point first takes it (the very value each
-                // point's own ray would give); a light no point takes
-                // costs no ray.
-                let shared = &mut batch.shared;
-                let mut centre_stats = Stats::default();
-                let vis = |light: usize| {
-                    if shared.get(light).copied().unwrap_or(false) {
-                        shared[light] = false;
-                        centre_stats.work.floor_shared_visibility += 1;
-                        visibility[light] = Visibility::Known(centre_transmittance(
-                            scene,
-                            light,
-                            centre,
-                            receiver.walls_towards(light),
-                            &mut centre_stats,
-                        ));
-                    }
-                    visibility[light]
-                };
-                if first.strata_loops {
-                    let strata = (floor, &mut batch.weights);
-                    direct_light_chosen_strata(scene, table, receiver, strata, vis, stats);
-                } else {
-                    direct_light_chosen(scene, table, receiver, floor, vis, stats);
-                }
-                stats.merge(&centre_stats);
-            }
-            None if first.strata_loops => {
-                direct_light_strata(scene, floor, visibility, shadow_walls, stats)
-            }
-            None => direct_light_points(scene, floor, visibility, stats),
-        }
-        if square != Rgb::ZERO {
-            for value in &mut batch.floor.values {
-                *value += square;
-            }
-        }
-        if trace.mirror_lights {
-            // Lines and circles seen in one flat mirror, in closed form
-            // at every point (`estimators::exact`).
-            let floor = &mut batch.floor;
-            for (value, &x) in floor.values.iter_mut().zip(&floor.points) {
-                *value += through_mirrors(scene, &scene.flat_mirrors, x, Receiver::FLOOR, stats);
-            }
-        }
-        if trace.glass_lights {
-            // Lines and circles seen through one glass edge, in closed
-            // form (`estimators::refracted`): their mean over some of each
-            // half's points, given to every point of the half.
-            let floor = &mut batch.floor;
-            for context in contexts {
-                let from = (context.pass.points.start - points.start) as usize;
-                for half in glass_halves(from, context.pass.points.len()) {
-                    let (Some(values), Some(xs)) = (
-                        floor.values.get_mut(half.all.clone()),
-                        floor.points.get(half.taken),
-                    ) else {
-                        continue;
-                    };
-                    let mut mean = Rgb::ZERO;
-                    for &x in xs {
-                        mean += through_glass(scene, x, Receiver::FLOOR, stats);
-                    }
-                    let mean = mean / xs.len().max(1) as f64;
-                    for value in values {
-                        *value += mean;
-                    }
-                }
-            }
-        }
+    if first.floor_memo && !points.is_empty() {
+        floor_direct(
+            contexts,
+            &pixel,
+            (x, y),
+            points.clone(),
+            culled,
+            batch,
+            stats,
+        );
     }
     // Every pass's path samples, arc by arc over all of them.
     let mut sums = std::mem::take(&mut batch.sums);
     sums.clear();
     sums.extend(contexts.iter().map(|c| Sums::new(c.pass.middle)));
-    match culled {
-        // The lines took the floor's indirect light: no path samples.
-        _ if first.lines.is_some() => {}
-        Some(culled) => {
-            // Unchecked, a sample that is not finite makes the sum not
-            // finite; then the pixel's samples are taken again, each
-            // checked (a rare case: no test per sample in the common one).
-            let before = *stats;
-            culled_samples::<false>(contexts, &pixel, culled, &mut sums, stats);
-            if !sums.iter().all(|s| s.all.is_finite()) {
-                *stats = before;
-                for (sum, context) in sums.iter_mut().zip(contexts) {
-                    *sum = Sums::new(context.pass.middle);
-                }
-                checked_culled_samples(contexts, &pixel, culled, &mut sums, stats);
-            }
-        }
-        None => {
-            let all = first.pass.samples.start..last.pass.samples.end;
-            for (_, of_arc) in sample_order(pixel.arc_offset, all) {
-                for sample in of_arc {
-                    let pass = pass_of(contexts, sample);
-                    let value = sample_with(&contexts[pass], &pixel, sample, stats);
-                    add_sample::<true>(&mut sums[pass], value, (x, y, sample), stats);
-                }
-            }
-        }
+    // The lines took the floor's indirect light: no path samples.
+    if first.lines.is_none() {
+        path_samples(contexts, &pixel, (x, y), culled, &mut sums, stats);
     }
     for (context, sum) in contexts.iter().zip(&sums) {
         let pass_sums = pass_sums(
@@ -376,6 +164,348 @@ pub(crate) fn render_pixel(
     }
     batch.sums = sums;
     total.unwrap_or_default()
+}
+
+/// The floor's direct light at the passes' floor `points` of pixel
+/// `(x, y)`, into `batch.floor.values`: each light's visibility over the
+/// pixel where the coherence masks know it, the lights taken over the
+/// pixel's square in closed form, the sampled estimate at each point, and
+/// the closed forms through one flat mirror and one glass edge.
+#[inline(always)]
+fn floor_direct(
+    contexts: &[Context],
+    pixel: &Pixel,
+    (x, y): (u32, u32),
+    points: Range<u32>,
+    culled: Option<&BlockCulling>,
+    batch: &mut Batch,
+    stats: &mut Stats,
+) {
+    let Some(first) = contexts.first() else {
+        return;
+    };
+    let trace = &first.trace;
+    let scene = trace.scene;
+    let step = pixel.step;
+    let corner = scene.canvas.origin + pixel.position * step;
+    // Each light's transmittance where the whole pixel shares it.
+    let centre = corner + 0.5 * step;
+    // The floor's shadow rays, its points' and its centre's, take the
+    // pixel's block lists.
+    let receiver = Receiver {
+        shadow_walls: culled.map(|c| &c.shadows[..]),
+        ..Receiver::FLOOR
+    };
+    pixel_visibility(first, (x, y), centre, receiver, batch, stats);
+    let square = if first.floor_squares {
+        square_lights(
+            scene,
+            (corner, step),
+            receiver,
+            &mut batch.visibility,
+            stats,
+        )
+    } else {
+        Rgb::ZERO
+    };
+    floor_points(
+        scene,
+        trace.light_table,
+        pixel,
+        points.clone(),
+        &mut batch.floor,
+    );
+    sampled_direct(first, centre, receiver, batch, stats);
+    if square != Rgb::ZERO {
+        for value in &mut batch.floor.values {
+            *value += square;
+        }
+    }
+    closed_forms_at_points(contexts, points.start, &mut batch.floor, stats);
+}
+
+/// Each light's visibility over the pixel, into `batch.visibility`, and
+/// with a light table, whether the pixel shares it untraced, into
+/// `batch.shared`.
+#[inline(always)]
+fn pixel_visibility(
+    first: &Context,
+    (x, y): (u32, u32),
+    centre: DVec2,
+    receiver: Receiver,
+    batch: &mut Batch,
+    stats: &mut Stats,
+) {
+    let trace = &first.trace;
+    let scene = trace.scene;
+    let visibility = &mut batch.visibility;
+    batch.shared.clear();
+    match first.coherence {
+        // With a light table, each point takes a few lights: a shared
+        // transmittance is traced when a point first takes its light.
+        Some(coherence) if trace.light_table.is_some() => {
+            visibility.clear();
+            for state in coherence.pixel(x, y) {
+                let (vis, shared) = match state {
+                    Coherence::Varies => (Visibility::Trace, false),
+                    Coherence::Same => (Visibility::Trace, true),
+                    Coherence::Clear => {
+                        stats.work.floor_shared_visibility += 1;
+                        (Visibility::Known(Rgb::ONE), false)
+                    }
+                };
+                visibility.push(vis);
+                batch.shared.push(shared);
+            }
+        }
+        Some(coherence) => {
+            visibility.clear();
+            visibility.extend(
+                coherence
+                    .pixel(x, y)
+                    .iter()
+                    .enumerate()
+                    .map(|(light, state)| match state {
+                        Coherence::Varies => Visibility::Trace,
+                        Coherence::Same => {
+                            stats.work.floor_shared_visibility += 1;
+                            Visibility::Known(centre_transmittance(
+                                scene,
+                                light,
+                                centre,
+                                receiver.walls_towards(light),
+                                stats,
+                            ))
+                        }
+                        Coherence::Clear => {
+                            stats.work.floor_shared_visibility += 1;
+                            Visibility::Known(Rgb::ONE)
+                        }
+                    }),
+            )
+        }
+        // The same for every pixel of the render: filled once per
+        // batch, not per pixel (a pass over every light), unless the
+        // pixel's squares change it.
+        None => {
+            if visibility.len() != scene.lights.len() || first.floor_squares {
+                visibility.clear();
+                visibility.resize(scene.lights.len(), Visibility::of(trace.shadows));
+            }
+        }
+    }
+}
+
+/// Points, spots and suns whose shadows cover some of the pixel's square
+/// `area`, or whose kernel varies steeply across it, over the whole square
+/// in closed form: every point of the pixel takes their mean (returned),
+/// and none of them takes their light again (their `visibility` becomes
+/// zero). Elsewhere the light reaches the whole pixel and only its kernel
+/// varies, gently: the points take it, with nothing in the way. The
+/// coherence masks' transmittance, where they know it, saves looking at
+/// the walls; the answer is the same.
+#[inline(always)]
+fn square_lights(
+    scene: &Scene,
+    area: (DVec2, DVec2),
+    receiver: Receiver,
+    visibility: &mut [Visibility],
+    stats: &mut Stats,
+) -> Rgb {
+    let mut square = Rgb::ZERO;
+    for (light, vis) in visibility.iter_mut().enumerate() {
+        if !takes_square(&scene.lights[light].shape) {
+            continue;
+        }
+        let known = match *vis {
+            Visibility::Trace => None,
+            Visibility::Known(known) => Some(known),
+        };
+        match square_light(scene, light, area, receiver, known, stats) {
+            Some(Square::Uniform) => *vis = Visibility::Known(Rgb::ONE),
+            Some(Square::Mean(mean)) => {
+                square += mean;
+                *vis = Visibility::Known(Rgb::ZERO);
+            }
+            None => {}
+        }
+    }
+    square
+}
+
+/// The passes' floor `points`, from the pixel's scrambled Sobol sequence,
+/// and the numbers each line light draws, in the order
+/// `direct_light_with` draws them, into `floor`.
+#[inline(always)]
+fn floor_points(
+    scene: &Scene,
+    light_table: Option<&LightTable>,
+    pixel: &Pixel,
+    points: Range<u32>,
+    floor: &mut Strata,
+) {
+    floor.points.clear();
+    floor.numbers.clear();
+    let numbers = numbers_per_point(scene, light_table);
+    let bits = pixel.key.stream(FLOOR_SEED_STREAM).bits();
+    let seeds = [(bits >> 32) as u32, bits as u32];
+    let corner = scene.canvas.origin + pixel.position * pixel.step;
+    floor.points.resize(points.len(), DVec2::ZERO);
+    sobol_points(points.start, seeds, (corner, pixel.step), &mut floor.points);
+    if numbers > 0 {
+        for k in points {
+            let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
+            for _ in 0..numbers {
+                floor.numbers.push(stream.uniform());
+            }
+        }
+    }
+}
+
+/// The sampled direct light at the floor's points, into
+/// `batch.floor.values`: with a light table, the lights it chooses; else
+/// every light, light by light over all points (`direct_light_strata`)
+/// where the plan says so, else point by point.
+#[inline(always)]
+fn sampled_direct(
+    first: &Context,
+    centre: DVec2,
+    receiver: Receiver,
+    batch: &mut Batch,
+    stats: &mut Stats,
+) {
+    let scene = first.trace.scene;
+    let Batch {
+        visibility,
+        shared,
+        floor,
+        weights,
+        ..
+    } = batch;
+    match first.trace.light_table {
+        Some(table) => {
+            // A light the whole pixel shares is traced once, from the
+            // centre, when a point first takes it (the very value each
+            // point's own ray would give); a light no point takes costs
+            // no ray.
+            let mut centre_stats = Stats::default();
+            let vis = |light: usize| {
+                if shared.get(light).copied().unwrap_or(false) {
+                    shared[light] = false;
+                    centre_stats.work.floor_shared_visibility += 1;
+                    visibility[light] = Visibility::Known(centre_transmittance(
+                        scene,
+                        light,
+                        centre,
+                        receiver.walls_towards(light),
+                        &mut centre_stats,
+                    ));
+                }
+                visibility[light]
+            };
+            if first.strata_loops {
+                direct_light_chosen_strata(scene, table, receiver, (floor, weights), vis, stats);
+            } else {
+                direct_light_chosen(scene, table, receiver, floor, vis, stats);
+            }
+            stats.merge(&centre_stats);
+        }
+        None if first.strata_loops => {
+            direct_light_strata(scene, floor, visibility, receiver.shadow_walls, stats)
+        }
+        None => direct_light_points(scene, floor, visibility, stats),
+    }
+}
+
+/// The closed forms of the floor's direct light through one flat mirror
+/// and through one glass edge, added at the passes' floor points (filled
+/// from point `first_point` on) where the render takes them.
+#[inline(always)]
+fn closed_forms_at_points(
+    contexts: &[Context],
+    first_point: u32,
+    floor: &mut Strata,
+    stats: &mut Stats,
+) {
+    let Some(first) = contexts.first() else {
+        return;
+    };
+    let trace = &first.trace;
+    let scene = trace.scene;
+    if trace.mirror_lights {
+        // Lines and circles seen in one flat mirror, in closed form at
+        // every point (`estimators::exact`).
+        for (value, &x) in floor.values.iter_mut().zip(&floor.points) {
+            *value += through_mirrors(scene, &scene.flat_mirrors, x, Receiver::FLOOR, stats);
+        }
+    }
+    if trace.glass_lights {
+        // Lines and circles seen through one glass edge, in closed form
+        // (`estimators::refracted`): their mean over some of each half's
+        // points, given to every point of the half.
+        for context in contexts {
+            let from = (context.pass.points.start - first_point) as usize;
+            for half in glass_halves(from, context.pass.points.len()) {
+                let (Some(values), Some(xs)) = (
+                    floor.values.get_mut(half.all.clone()),
+                    floor.points.get(half.taken),
+                ) else {
+                    continue;
+                };
+                let mut mean = Rgb::ZERO;
+                for &x in xs {
+                    mean += through_glass(scene, x, Receiver::FLOOR, stats);
+                }
+                let mean = mean / xs.len().max(1) as f64;
+                for value in values {
+                    *value += mean;
+                }
+            }
+        }
+    }
+}
+
+/// Every pass's path samples of a pixel, arc by arc over all of them,
+/// into `sums` (one per pass): culled by the pixel's block where the
+/// render culls, else traced one by one.
+#[inline(always)]
+fn path_samples(
+    contexts: &[Context],
+    pixel: &Pixel,
+    (x, y): (u32, u32),
+    culled: Option<&BlockCulling>,
+    sums: &mut [Sums],
+    stats: &mut Stats,
+) {
+    let (Some(first), Some(last)) = (contexts.first(), contexts.last()) else {
+        return;
+    };
+    match culled {
+        Some(culled) => {
+            // Unchecked, a sample that is not finite makes the sum not
+            // finite; then the pixel's samples are taken again, each
+            // checked (a rare case: no test per sample in the common one).
+            let before = *stats;
+            culled_samples::<false>(contexts, pixel, culled, sums, stats);
+            if !sums.iter().all(|s| s.all.is_finite()) {
+                *stats = before;
+                for (sum, context) in sums.iter_mut().zip(contexts) {
+                    *sum = Sums::new(context.pass.middle);
+                }
+                checked_culled_samples(contexts, pixel, culled, sums, stats);
+            }
+        }
+        None => {
+            let all = first.pass.samples.start..last.pass.samples.end;
+            for (_, of_arc) in sample_order(pixel.arc_offset, all) {
+                for sample in of_arc {
+                    let pass = pass_of(contexts, sample);
+                    let value = sample_with(&contexts[pass], pixel, sample, stats);
+                    add_sample::<true>(&mut sums[pass], value, (x, y, sample), stats);
+                }
+            }
+        }
+    }
 }
 
 /// One floor point in this many takes the light through glass edges
