@@ -43,6 +43,22 @@ const OVER_THE_SQUARE: &str = "; on the floor, each pixel's mean over its square
 impl Plan {
     /// Every effect with its reason, in a fixed order, for printing.
     pub fn effects(&self) -> Vec<Effect> {
+        let mut effects = Vec::new();
+        self.direct_effects(&mut effects);
+        self.shadow_effects(&mut effects);
+        self.indirect_effects(&mut effects);
+        self.seen_effects(&mut effects);
+        self.wall_effects(&mut effects);
+        self.wall_cache_effects(&mut effects);
+        self.floor_cache_effects(&mut effects);
+        self.photon_effects(&mut effects);
+        self.glass_effects(&mut effects);
+        self.work_effects(&mut effects);
+        effects
+    }
+
+    /// The floor's direct light, by kind of light.
+    fn direct_effects(&self, effects: &mut Vec<Effect>) {
         let Inventory {
             points,
             spots,
@@ -51,69 +67,15 @@ impl Plan {
             suns,
             beams,
             lasers,
-            aimed,
-            areas,
-            lights,
-            walls,
             arcs,
-            mirrors,
-            rough_mirrors,
-            panes,
-            glass_edges,
-            glass_bodies,
-            dispersive,
-            rough_glass,
-            spectral,
-            diffuse,
-            floor_albedo_walls,
-            occluders,
-            reflectors,
-            specular_reflectors,
-            ref queries,
+            ..
         } = self.inventory;
         let Plan {
-            bounces,
-            specular: specular_limit,
             tracing_light,
-            reference,
-            memo_enabled,
-            caustics_enabled,
-            ref bin_length,
-            floor_points,
-            wall_memo_fits,
-            shadows,
-            indirect,
-            mirror_emission,
-            mirror_lights,
-            mirror_pairs,
-            glass_lights,
-            glass_pairs,
-            area_photons,
-            area_targets,
             caustics,
-            wall_memo,
-            onward,
-            original,
-            onward_enabled,
-            floor_memo,
-            floor_coherence,
             floor_squares,
-            floor_lines,
-            lines_enabled,
-            adaptive,
-            absorbing_glass,
-            line_piece_tenths,
-            dense_walls,
-            floor_ray_culling,
-            light_choice,
-            light_table,
-            ref fast,
             ..
         } = *self;
-        let force = reference;
-        let no_lights = lights == 0;
-        let specular = mirrors + glass_edges;
-        let mut effects = Vec::new();
         let mut add =
             |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
         let n = counted;
@@ -182,6 +144,27 @@ impl Plan {
                 },
             );
         }
+    }
+
+    /// Shadow rays, and the lights each point's rays go to.
+    fn shadow_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            lights, occluders, ..
+        } = self.inventory;
+        let Plan {
+            tracing_light,
+            shadows,
+            light_choice,
+            light_table,
+            ref fast,
+            reference,
+            ..
+        } = *self;
+        let force = reference;
+        let no_lights = self.inventory.lights == 0;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "shadow rays",
             shadows,
@@ -225,15 +208,32 @@ impl Plan {
                 )
             },
         );
+    }
+
+    /// Indirect light, and the mirrors that pass it on.
+    fn indirect_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            mirrors,
+            rough_mirrors,
+            reflectors,
+            ..
+        } = self.inventory;
+        let Plan {
+            bounces,
+            specular: specular_limit,
+            indirect,
+            reference,
+            ..
+        } = *self;
+        let force = reference;
+        let no_lights = self.inventory.lights == 0;
+        let specular = self.inventory.mirrors + self.inventory.glass_edges;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         // Mirrors and glass pass light on: by paths from the floor, by
         // the caustic pass, or by the light tracer's photons.
-        let specular_runs = specular_limit > 0 && (indirect || caustics || tracing_light);
-        let runs_of = |limit: u32| {
-            format!(
-                "up to {} in a row (Russian roulette past {ROULETTE_FROM})",
-                n(limit as usize, "mirror or glass event")
-            )
-        };
+        let specular_runs = self.specular_runs();
         add(
             "indirect light",
             indirect,
@@ -258,23 +258,7 @@ impl Plan {
                 )
             },
         );
-        // The limit is said once: with the indirect light where it runs.
-        let limit_said = if indirect {
-            String::new()
-        } else {
-            format!(", {}", runs_of(specular_limit))
-        };
-        let specular_why = |count: usize, what: &str| -> String {
-            if count == 0 {
-                format!("no {what} in the scene")
-            } else if specular_limit == 0 {
-                "specular = 0: light stops at mirrors and glass".into()
-            } else if !specular_runs {
-                "no indirect light is traced".into()
-            } else {
-                format!("{}{limit_said}", n(count, what))
-            }
-        };
+        let specular_why = |count: usize, what: &str| self.specular_why(count, what);
         add(
             "mirrors",
             specular_runs && mirrors > 0,
@@ -293,6 +277,34 @@ impl Plan {
                 n(rough_mirrors, "rough mirror")
             },
         );
+    }
+
+    /// Lines and circles seen in mirrors and through glass: in closed form, or by path rays.
+    fn seen_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            areas,
+            arcs,
+            rough_mirrors,
+            dispersive,
+            rough_glass,
+            ..
+        } = self.inventory;
+        let Plan {
+            bounces,
+            specular: specular_limit,
+            tracing_light,
+            indirect,
+            mirror_emission,
+            mirror_lights,
+            mirror_pairs,
+            glass_lights,
+            glass_pairs,
+            ..
+        } = *self;
+        let specular = self.inventory.mirrors + self.inventory.glass_edges;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "lines and circles in a mirror, closed form",
             mirror_lights,
@@ -368,6 +380,20 @@ impl Plan {
                 "no line or circle light in the scene".into()
             },
         );
+    }
+
+    /// Transparent walls, and walls that take the floor's albedo.
+    fn wall_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            panes,
+            diffuse,
+            floor_albedo_walls,
+            ..
+        } = self.inventory;
+        let Plan { indirect, .. } = *self;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "transparency",
             panes > 0,
@@ -390,6 +416,33 @@ impl Plan {
                 format!("{} take the floor's albedo", n(floor_albedo_walls, "wall"))
             },
         );
+    }
+
+    /// The caches of light on walls.
+    fn wall_cache_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            glass_edges,
+            diffuse,
+            ..
+        } = self.inventory;
+        let Plan {
+            bounces,
+            tracing_light,
+            memo_enabled,
+            ref bin_length,
+            wall_memo_fits,
+            indirect,
+            wall_memo,
+            onward,
+            original,
+            onward_enabled,
+            reference,
+            ..
+        } = *self;
+        let force = reference;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "cache: wall irradiance",
             wall_memo,
@@ -447,6 +500,33 @@ impl Plan {
                 )
             },
         );
+    }
+
+    /// The cache of the floor's direct light, and the floor's lines.
+    fn floor_cache_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory { .. } = self.inventory;
+        let Plan {
+            tracing_light,
+            memo_enabled,
+            floor_points,
+            indirect,
+            original,
+            floor_memo,
+            floor_coherence,
+            floor_squares,
+            floor_lines,
+            lines_enabled,
+            adaptive,
+            absorbing_glass,
+            line_piece_tenths,
+            dense_walls,
+            light_table,
+            ref fast,
+            ..
+        } = *self;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "cache: floor direct light per pixel",
             floor_memo,
@@ -504,6 +584,32 @@ impl Plan {
             floor_coherence,
             fast.coherence.why.clone(),
         );
+    }
+
+    /// The photon passes through mirrors and glass.
+    fn photon_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            beams,
+            lasers,
+            aimed,
+            areas,
+            glass_edges,
+            specular_reflectors,
+            ..
+        } = self.inventory;
+        let Plan {
+            specular: specular_limit,
+            tracing_light,
+            caustics_enabled,
+            area_photons,
+            area_targets,
+            caustics,
+            ..
+        } = *self;
+        let specular = self.inventory.mirrors + self.inventory.glass_edges;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "points, spots and sun seen in mirrors or glass",
             (caustics && aimed > 0)
@@ -564,6 +670,24 @@ impl Plan {
                 "an arc light in the scene: path rays find them".into()
             },
         );
+    }
+
+    /// Glass and its dispersion.
+    fn glass_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            glass_edges,
+            glass_bodies,
+            dispersive,
+            rough_glass,
+            spectral,
+            ..
+        } = self.inventory;
+        let specular_runs = self.specular_runs();
+        let limit_said = self.limit_said();
+        let specular_why = |count: usize, what: &str| self.specular_why(count, what);
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "glass",
             specular_runs && glass_edges > 0,
@@ -601,6 +725,21 @@ impl Plan {
                 n(dispersive, "dispersive glass body")
             },
         );
+    }
+
+    /// How the work is done: culling, the fast paths, the ray queries.
+    fn work_effects(&self, effects: &mut Vec<Effect>) {
+        let Inventory {
+            walls, ref queries, ..
+        } = self.inventory;
+        let Plan {
+            floor_ray_culling,
+            ref fast,
+            ..
+        } = *self;
+        let mut add =
+            |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
+        let n = counted;
         add(
             "floor rays: walls culled by direction",
             floor_ray_culling,
@@ -624,7 +763,6 @@ impl Plan {
                 format!("{}: {}", n(walls, "wall"), queries)
             },
         );
-        effects
     }
 }
 
@@ -684,4 +822,43 @@ fn counted(k: usize, what: &str) -> String {
     } else {
         format!("{k} {what}s")
     }
+}
+
+impl Plan {
+    /// Whether mirrors and glass pass light on: by paths from the floor,
+    /// by the caustic pass, or by the light tracer's photons.
+    fn specular_runs(&self) -> bool {
+        self.specular > 0 && (self.indirect || self.caustics || self.tracing_light)
+    }
+
+    /// The limit of specular events, said once: with the indirect light
+    /// where it runs, else with the mirrors' and glass's own lines.
+    fn limit_said(&self) -> String {
+        if self.indirect {
+            String::new()
+        } else {
+            format!(", {}", runs_of(self.specular))
+        }
+    }
+
+    /// Why mirrors or glass (`count` of `what`) pass light on or not.
+    fn specular_why(&self, count: usize, what: &str) -> String {
+        if count == 0 {
+            format!("no {what} in the scene")
+        } else if self.specular == 0 {
+            "specular = 0: light stops at mirrors and glass".into()
+        } else if !self.specular_runs() {
+            "no indirect light is traced".into()
+        } else {
+            format!("{}{}", counted(count, what), self.limit_said())
+        }
+    }
+}
+
+/// A run of at most `limit` specular events, in words.
+fn runs_of(limit: u32) -> String {
+    format!(
+        "up to {} in a row (Russian roulette past {ROULETTE_FROM})",
+        counted(limit as usize, "mirror or glass event")
+    )
 }
