@@ -22,6 +22,35 @@ pub(crate) struct PixelSums {
     pub first: Rgb,
 }
 
+/// A pixel's sum of sample values in one pass, and apart the sum of its
+/// first half of samples (those below `half`), whose difference from the
+/// second half estimates the pixel's noise. The sum of all is taken in
+/// the same order with or without the halves: the image does not change.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sums {
+    pub(crate) all: Rgb,
+    pub(crate) first: Rgb,
+    pub(crate) half: u32,
+}
+
+impl Sums {
+    pub(crate) fn new(half: u32) -> Sums {
+        Sums {
+            all: Rgb::ZERO,
+            first: Rgb::ZERO,
+            half,
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn add(&mut self, sample: u32, value: Rgb) {
+        self.all += value;
+        if sample < self.half {
+            self.first += value;
+        }
+    }
+}
+
 /// What one unit of work measured.
 pub(crate) enum Part {
     /// The sums of a tile's pixels for one pass, row by row.

@@ -51,9 +51,6 @@ pub mod spectrum;
 mod stats;
 mod tile;
 
-/// A linear RGB triple: a colour, an albedo, or a light quantity.
-pub type Rgb = glam::DVec3;
-
 pub use caustics::{FULL_RATE_SHARE, LEAST_RATE, PHOTONS_PER_SAMPLE, photon_rate};
 pub use options::{
     DEFAULT_SPECULAR, Image, Integrator, LightChoice, MANY_LIGHTS, MAX_CULLED_WALLS, MemoOptions,
@@ -72,5 +69,6 @@ pub use scene::{
     Canvas, Falloff, Floor, GlassBody, InvalidScene, Light, LightShape, Material, Parts, Scene,
     Wall,
 };
+pub use spectrum::Rgb;
 pub use stats::{Noise, Physics, Stats, Work};
 pub use tile::pixel_sample;

@@ -11,14 +11,14 @@ use flatray_geometry::{DVec2, Hit, HitLanes, Ray, RayLanes, Skip};
 use flatray_cache::WallMemo;
 
 use crate::accel::coherence::{Coherence, FloorCoherence, centre_transmittance};
-use crate::accel::culling::{Batch, BlockCulling, Sums};
+use crate::accel::culling::BlockCulling;
 use crate::accel::shortcut::memo_bounce;
 use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::direct::{Strata, direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::estimators::choice::LightTable;
 use crate::estimators::square::{Square, square_light, takes_square};
 use crate::estimators::{Receiver, Visibility, through_glass, through_mirrors};
-use crate::film::PixelSums;
+use crate::film::{PixelSums, Sums};
 use crate::lines::Lines;
 use crate::options::{LONG_LIST, RenderOptions};
 use crate::passes::Pass;
@@ -28,6 +28,26 @@ use crate::sampling::{
 };
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
+
+/// The buffers of a pixel's floor memo, kept by a tile for all its pixels:
+/// no allocation per pixel.
+#[derive(Default)]
+pub(crate) struct Batch {
+    /// Each light's visibility over the pixel (without coherence masks,
+    /// the same for every pixel, and filled once).
+    pub(crate) visibility: Vec<Visibility>,
+    /// Per light, whether the pixel shares its transmittance and it is
+    /// not yet traced (with a light table and coherence masks).
+    pub(crate) shared: Vec<bool>,
+    /// The floor memo's points of one pixel, for all its passes.
+    pub(crate) floor: Strata,
+    /// The light table's weights of the seen lights at those points.
+    pub(crate) weights: Vec<f64>,
+    /// The path samples' sums of each pass.
+    pub(crate) sums: Vec<Sums>,
+    /// Per light, whether the tile's points have its shadow list.
+    pub(crate) listed: Vec<bool>,
+}
 
 /// What every pixel of one render pass shares.
 pub(crate) struct Context<'a> {

@@ -19,8 +19,12 @@
 //! Every spectrum is held on one grid of [`CELLS`] cells of half a
 //! nanometre: its value, constant in each cell, is what is sampled and
 //! what is evaluated, so that the two agree exactly.
+//!
+//! [`Rgb`] is the linear RGB triple every colour, albedo and light
+//! quantity of the renderer is held in.
 
-use crate::Rgb;
+/// A linear RGB triple: a colour, an albedo, or a light quantity.
+pub type Rgb = glam::DVec3;
 
 /// The shortest and the longest wavelength counted, in nanometres.
 pub const RANGE_NM: (f64, f64) = (380.0, 780.0);

@@ -9,7 +9,7 @@ use flatray_geometry::{ArcCandidates, DVec2};
 use flatray_cache::WallMemo;
 
 use crate::accel::coherence::FloorCoherence;
-use crate::accel::culling::{Batch, BlockCulling, tile_lights};
+use crate::accel::culling::{BlockCulling, tile_lights};
 use crate::accel::mirror::MirrorArcs;
 use crate::caustics::Caustics;
 use crate::estimators::choice::LightTable;
@@ -22,6 +22,7 @@ use crate::options::MemoOptions;
 use crate::options::{CULL_BLOCK, FINE_CULLING_SAMPLES, RenderOptions, TILE, Window, image_size};
 use crate::passes::{Pass, PointRule};
 use crate::path::{MirrorWalls, Trace};
+use crate::pixel::Batch;
 use crate::pixel::{Context, Pixel, pixel_fn, render_pixel, sample_with};
 use crate::plan::Plan;
 use crate::run::Limits;

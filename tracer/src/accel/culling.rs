@@ -5,9 +5,6 @@
 
 use flatray_geometry::{ArcCandidates, DVec2, hull_candidates};
 
-use crate::Rgb;
-use crate::direct::Strata;
-use crate::estimators::Visibility;
 use crate::estimators::choice::LightTable;
 use crate::options::{LONG_LIST, TILE_SHADOW_TESTS};
 use crate::sampling::ARCS;
@@ -82,26 +79,6 @@ impl BlockCulling {
     }
 }
 
-/// The buffers of a pixel's floor memo, kept by a tile for all its pixels:
-/// no allocation per pixel.
-#[derive(Default)]
-pub(crate) struct Batch {
-    /// Each light's visibility over the pixel (without coherence masks,
-    /// the same for every pixel, and filled once).
-    pub(crate) visibility: Vec<Visibility>,
-    /// Per light, whether the pixel shares its transmittance and it is
-    /// not yet traced (with a light table and coherence masks).
-    pub(crate) shared: Vec<bool>,
-    /// The floor memo's points of one pixel, for all its passes.
-    pub(crate) floor: Strata,
-    /// The light table's weights of the seen lights at those points.
-    pub(crate) weights: Vec<f64>,
-    /// The path samples' sums of each pass.
-    pub(crate) sums: Vec<Sums>,
-    /// Per light, whether the tile's points have its shadow list.
-    pub(crate) listed: Vec<bool>,
-}
-
 /// Marks in `listed` the lights whose shadow rays from the tile `[lo, hi]`
 /// take a list: every light where lights times walls fit
 /// [`TILE_SHADOW_TESTS`]; else those that the table's cells under the tile
@@ -127,35 +104,6 @@ pub(crate) fn tile_lights(
     }
     listed.clear();
     listed.resize(lights, false);
-}
-
-/// A pixel's sum of sample values in one pass, and apart the sum of its
-/// first half of samples (those below `half`), whose difference from the
-/// second half estimates the pixel's noise. The sum of all is taken in
-/// the same order with or without the halves: the image does not change.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Sums {
-    pub(crate) all: Rgb,
-    pub(crate) first: Rgb,
-    pub(crate) half: u32,
-}
-
-impl Sums {
-    pub(crate) fn new(half: u32) -> Sums {
-        Sums {
-            all: Rgb::ZERO,
-            first: Rgb::ZERO,
-            half,
-        }
-    }
-
-    #[inline(always)]
-    pub(crate) fn add(&mut self, sample: u32, value: Rgb) {
-        self.all += value;
-        if sample < self.half {
-            self.first += value;
-        }
-    }
 }
 
 /// Where the culling lists pay: path tracing with indirect rays, walls
