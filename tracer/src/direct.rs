@@ -4,18 +4,18 @@ use flatray_geometry::DVec2;
 
 use crate::estimators::choice::{LightTable, NUMBERS};
 use crate::estimators::{
-    Receiver, Visibility, light_contribution, through_glass, through_mirrors, weighed_contribution,
+    Receiver, Visibility, light_contribution, weighed_contribution, with_closed_forms,
 };
+use crate::ledger::Ledger;
 use crate::material::{Bsdf, Sampling};
 use crate::sampling::Stream;
 use crate::scene::{Light, Scene};
 use crate::{Rgb, Stats};
 
 /// The light that reaches `x` directly from every light: fluence for the
-/// floor, irradiance for a wall side; with `mirror_lights`, and every line
-/// and circle light through one flat mirror (`estimators::exact`); with
-/// `glass_lights`, and through one edge of the glass body `x` is in
-/// (`estimators::refracted`). Without a `table`, one shadow ray
+/// floor, irradiance for a wall side, with the closed forms the `ledger`
+/// gives it (`estimators::with_closed_forms`). Shadow rays are cast
+/// where `shadows` says. Without a `table`, one shadow ray
 /// per light, each light drawing its numbers from `stream`
 /// (`LightShape::numbers`); with one, the lights the table chooses, from
 /// [`NUMBERS`] numbers.
@@ -23,12 +23,12 @@ pub(crate) fn direct_light(
     scene: &Scene,
     x: DVec2,
     receiver: Receiver,
-    shadows: (bool, bool, bool),
+    (shadows, ledger): (bool, &Ledger),
     table: Option<&LightTable>,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
-    let vis = Visibility::of(shadows.0);
+    let vis = Visibility::of(shadows);
     let direct = match table {
         Some(table) => {
             let numbers = std::array::from_fn(|_| stream.uniform());
@@ -36,7 +36,7 @@ pub(crate) fn direct_light(
         }
         None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
     };
-    with_specular(direct, scene, x, receiver, shadows, stats)
+    with_closed_forms(direct, ledger, scene, (x, receiver), None, stats)
 }
 
 /// [`direct_light`] from every light, whatever the `table`, but those it
@@ -47,12 +47,12 @@ pub(crate) fn direct_light_every(
     scene: &Scene,
     x: DVec2,
     receiver: Receiver,
-    shadows: (bool, bool, bool),
+    (shadows, ledger): (bool, &Ledger),
     table: Option<&LightTable>,
     stream: &mut Stream,
     stats: &mut Stats,
 ) -> Rgb {
-    let vis = Visibility::of(shadows.0);
+    let vis = Visibility::of(shadows);
     let direct = match table {
         Some(table) => {
             let cell = table.cell_of(x);
@@ -67,31 +67,7 @@ pub(crate) fn direct_light_every(
         }
         None => direct_light_with(scene, x, receiver, |_| vis, stream, stats),
     };
-    with_specular(direct, scene, x, receiver, shadows, stats)
-}
-
-/// `direct` and the closed forms of [`direct_light`]: with
-/// `mirror_lights`, every line and circle light through one flat mirror;
-/// with `glass_lights`, through one edge of the glass body `x` is in.
-#[inline(always)]
-fn with_specular(
-    direct: Rgb,
-    scene: &Scene,
-    x: DVec2,
-    receiver: Receiver,
-    (_, mirror_lights, glass_lights): (bool, bool, bool),
-    stats: &mut Stats,
-) -> Rgb {
-    let direct = if mirror_lights {
-        direct + through_mirrors(scene, &scene.flat_mirrors, x, receiver, stats)
-    } else {
-        direct
-    };
-    if glass_lights {
-        direct + through_glass(scene, x, receiver, stats)
-    } else {
-        direct
-    }
+    with_closed_forms(direct, ledger, scene, (x, receiver), None, stats)
 }
 
 /// Next-event estimation at a glossy wall point `x` (the receiver: the

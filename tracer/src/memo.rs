@@ -9,9 +9,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use flatray_cache::{Value, WallMemo};
 use flatray_geometry::Side;
 
-use crate::estimators::{
-    Receiver, Visibility, light_contribution, through_glass_of, through_mirrors_of,
-};
+use crate::estimators::{Receiver, Visibility, light_contribution, with_closed_forms};
+use crate::ledger::Ledger;
 use crate::options::MemoOptions;
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
@@ -72,7 +71,7 @@ pub(crate) fn build_wall_memo(
     scene: &Scene,
     options: &MemoOptions,
     scale: f64,
-    (shadows, mirror_lights, glass_lights): (bool, bool, bool),
+    (shadows, ledger): (bool, &Ledger),
     stats: &mut Stats,
 ) -> WallMemo {
     let lengths = scene.diffuse_lengths();
@@ -119,17 +118,14 @@ pub(crate) fn build_wall_memo(
                 );
             }
             let value = value / samples as f64;
-            let value = if mirror_lights {
-                let mirrors = &scene.flat_mirrors;
-                value + through_mirrors_of(scene, mirrors, light_index, x, receiver, &mut local)
-            } else {
-                value
-            };
-            let value = if glass_lights {
-                value + through_glass_of(scene, light_index, x, receiver, &mut local)
-            } else {
-                value
-            };
+            let value = with_closed_forms(
+                value,
+                ledger,
+                scene,
+                (x, receiver),
+                Some(light_index),
+                &mut local,
+            );
             rays.fetch_add(local.work.shadow_rays, Ordering::Relaxed);
             to_value(value)
         },

@@ -85,7 +85,7 @@ pub(crate) fn path_begin(
             trace.scene,
             p,
             receiver,
-            (trace.shadows, trace.mirror_lights, trace.glass_lights),
+            (trace.shadows, &trace.ledger),
             trace.light_table,
             stream,
             stats,
@@ -598,14 +598,6 @@ pub(crate) struct Trace<'a> {
     pub shadows: bool,
     /// Whether path rays look for line lights after a mirror.
     pub mirror_emission: bool,
-    /// Whether receivers take line and circle lights through one flat
-    /// mirror in closed form (`Plan::mirror_lights`); path rays then add
-    /// nothing from them right after exactly that one mirror.
-    pub mirror_lights: bool,
-    /// Whether receivers inside glass take line and circle lights through
-    /// one edge of their body in closed form (`Plan::glass_lights`); path
-    /// rays then add nothing for them right after that one refraction.
-    pub glass_lights: bool,
     /// Who counts which light path (`ledger.rs`): what path rays that
     /// meet a light add, and what a rough mirror leaves to photons.
     pub ledger: Ledger,
@@ -743,7 +735,7 @@ fn wall_irradiance(
         wall: Some(index),
         shadow_walls: None,
     };
-    let shadows = (shadows, trace.mirror_lights, trace.glass_lights);
+    let shadows = (shadows, &trace.ledger);
     let direct = |stream: &mut Stream, stats: &mut Stats| {
         direct_light(scene, x, receiver(), shadows, light_table, stream, stats)
     };

@@ -452,14 +452,14 @@ fn closed_forms_at_points(
     };
     let trace = &first.trace;
     let scene = trace.scene;
-    if trace.mirror_lights {
+    if trace.ledger.mirror_lights {
         // Lines and circles seen in one flat mirror, in closed form at
         // every point (`estimators::exact`).
         for (value, &x) in floor.values.iter_mut().zip(&floor.points) {
             *value += through_mirrors(scene, &scene.flat_mirrors, x, Receiver::FLOOR, stats);
         }
     }
-    if trace.glass_lights {
+    if trace.ledger.glass_lights {
         // Lines and circles seen through one glass edge, in closed form
         // (`estimators::refracted`): their mean over some of each half's
         // points, given to every point of the half.

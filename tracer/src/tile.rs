@@ -54,7 +54,7 @@ impl Shared {
         let (width, height) = image_size(scene, options.scale);
         let plan = Plan::new(scene, options);
         let memo = plan.wall_memo.then(|| {
-            let shadows = (plan.shadows, plan.mirror_lights, plan.glass_lights);
+            let shadows = (plan.shadows, &plan.ledger());
             build_wall_memo(scene, &options.memo, options.scale, shadows, stats)
         });
         // Rays off mirrors are culled wherever the floor's are, and so
@@ -484,8 +484,6 @@ pub(crate) fn trace_with<'a>(
         memo_checks: true,
         shadows: plan.shadows,
         mirror_emission: plan.mirror_emission,
-        mirror_lights: plan.mirror_lights,
-        glass_lights: plan.glass_lights,
         ledger: crate::ledger::Ledger {
             caustics: caustics.is_some(),
             ..plan.ledger()

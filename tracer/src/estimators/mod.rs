@@ -25,3 +25,41 @@ pub(crate) use contribution::{
 };
 pub(crate) use exact::{MAX_MIRROR_PAIRS, is_exact, through_mirrors, through_mirrors_of};
 pub(crate) use refracted::{MAX_GLASS_PAIRS, glass_pairs, through_glass, through_glass_of};
+
+use flatray_geometry::DVec2;
+
+use crate::ledger::Ledger;
+use crate::scene::Scene;
+use crate::{Rgb, Stats};
+
+/// A receiver's `sampled` direct light with the closed forms the ledger
+/// gives it added: line and circle lights seen in one flat mirror
+/// (`Ledger::mirror_lights`), then through one edge of the glass body `x`
+/// is in (`Ledger::glass_lights`); of every light, or with `light`, of
+/// that light alone. The one sum of a receiver's direct light: path
+/// vertices, the floor without its memo and the wall memo's bins all
+/// take it. (The floor memo's points take the same closed forms, the
+/// glass's shared across a half of the points: `pixel.rs`.)
+#[inline(always)]
+pub(crate) fn with_closed_forms(
+    sampled: Rgb,
+    ledger: &Ledger,
+    scene: &Scene,
+    (x, receiver): (DVec2, Receiver),
+    light: Option<usize>,
+    stats: &mut Stats,
+) -> Rgb {
+    let mirrors = &scene.flat_mirrors;
+    let value = match (ledger.mirror_lights, light) {
+        (false, _) => sampled,
+        (true, None) => sampled + through_mirrors(scene, mirrors, x, receiver, stats),
+        (true, Some(light)) => {
+            sampled + through_mirrors_of(scene, mirrors, light, x, receiver, stats)
+        }
+    };
+    match (ledger.glass_lights, light) {
+        (false, _) => value,
+        (true, None) => value + through_glass(scene, x, receiver, stats),
+        (true, Some(light)) => value + through_glass_of(scene, light, x, receiver, stats),
+    }
+}
