@@ -39,6 +39,11 @@ pub(crate) struct MeasureArgs {
     /// Write the false-colour map (PNG).
     #[arg(long)]
     map: Option<PathBuf>,
+    /// Render until every room's E_min, E_avg and U0 have a standard
+    /// error of at most this per cent of their value: each round doubles
+    /// the samples of every batch (up to 16384 spp a batch).
+    #[arg(long, value_name = "PERCENT")]
+    target_error: Option<f64>,
     /// Every `Sun` of the scene off: under a sky alone, the rooms'
     /// daylight factor.
     #[arg(long)]
@@ -89,17 +94,36 @@ pub(crate) fn measure(
         batches: args.batches,
         scale: args.scale,
         door_width: args.door_width,
+        target_error: args.target_error,
     };
+    if let Some(t) = args.target_error
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(Failure::usage(format!(
+            "--target-error: expected a finite per cent > 0, found {t}"
+        )));
+    }
     let (width, height) = checked_size(&loaded, args.scale)?;
-    let per_batch = measure::batch_samples(&loaded, &request);
-    let work = per_batch as u64 * width as u64 * height as u64 * args.batches as u64;
-    let bar = progress_bar(work, args.quiet, "measuring");
+    // Each batch adds its work as it starts: with a target error, the
+    // rounds are not known ahead.
+    let bar = progress_bar(0, args.quiet, "measuring");
     let progress = |n: u64| bar.inc(n);
     let (found, measured) = measure::run(&loaded, &request, |options| {
+        bar.inc_length(options.samples as u64 * width as u64 * height as u64);
         flatray_tracer::render(&loaded.scene, options, &progress).image
     })
     .map_err(|e| Failure::usage(format!("{}: {e}", args.scene.display())))?;
     bar.finish_and_clear();
+    if let Some(t) = measured.target
+        && !t.met
+    {
+        let _ = writeln!(
+            err,
+            "warning: some room's E_min, E_avg or U0 has a standard error over {} % of its value at {} spp a batch, the most a target renders to",
+            t.percent,
+            measure::MAX_TARGET_BATCH_SPP
+        );
+    }
     if let Some(csv) = &args.csv {
         flatray_io::write_text(csv, &measure::csv(&measured))
             .map_err(|e| Failure::other(e.to_string()))?;
@@ -112,11 +136,21 @@ pub(crate) fn measure(
         let _ = writeln!(out, "{}", measure::json(&measured));
     } else {
         let _ = write!(out, "{}", measure::table(&measured));
+        let target = match measured.target {
+            Some(t) if t.met => format!("; every room's figures within {} %", t.percent),
+            Some(t) => format!(
+                "; some room's figures over {} % at {} spp a batch (the most)",
+                t.percent,
+                measure::MAX_TARGET_BATCH_SPP
+            ),
+            None => String::new(),
+        };
         let _ = writeln!(
             out,
-            "{} on the EN 12464-1 grid; ± one standard error over {} batches of {per_batch} spp; {:.2} s",
+            "{} on the EN 12464-1 grid; ± one standard error over {} batches of {} spp{target}; {:.2} s",
             flatray_io::counted(measured.rooms.len(), "room", "rooms"),
             measured.batches,
+            measured.batch_spp,
             started.elapsed().as_secs_f64()
         );
     }

@@ -149,11 +149,8 @@ fn a_line_lit_room_measures_the_fluence_integrated_by_hand() {
 }
 
 /// An L-shaped room turned by 20 degrees, bright walls, three bounces, a
-/// lamp and a line light: many measurements of a few samples each, their
-/// stated standard errors against their spread about a reference of many
-/// samples.
-#[test]
-fn the_stated_uncertainty_is_the_true_error() {
+/// lamp and a line light, rendered with `seed`.
+fn l_room(seed: u64) -> String {
     let (s, c) = 20f64.to_radians().sin_cos();
     let at = |x: f64, y: f64| {
         let (x, y) = (x - 60.0, y - 60.0);
@@ -177,9 +174,8 @@ fn the_stated_uncertainty_is_the_true_error() {
             )
         })
         .collect();
-    let text = |seed: u64| {
-        format!(
-            r#"Scene(
+    format!(
+        r#"Scene(
     canvas: (120, 120),
     floor: Color((0.8, 0.8, 0.8)),
     walls: [{}],
@@ -191,13 +187,20 @@ fn the_stated_uncertainty_is_the_true_error() {
     units: (metres_per_unit: 0.1),
     rooms: [Room(name: "L", at: {})],
 )"#,
-            walls.join("\n        "),
-            at(85.0, 40.0),
-            at(25.0, 90.0),
-            at(25.0, 60.0),
-            at(40.0, 40.0)
-        )
-    };
+        walls.join("\n        "),
+        at(85.0, 40.0),
+        at(25.0, 90.0),
+        at(25.0, 60.0),
+        at(40.0, 40.0)
+    )
+}
+
+/// The L-shaped room ([`l_room`]): many measurements of a few samples
+/// each, their stated standard errors against their spread about a
+/// reference of many samples.
+#[test]
+fn the_stated_uncertainty_is_the_true_error() {
+    let text = l_room;
     let dir = scratch("honest");
     let (reference, reference_rows) = measure(&dir, &text(1000), &["--spp", "2048"]);
     let runs = 20;
@@ -384,4 +387,49 @@ fn the_daylight_factor_is_the_angle_of_sky_over_a_full_turn() {
     // With the sun on, there is no daylight factor.
     let (json, _) = measure(&dir, text, &["--door-width", "60"]);
     assert!(json["rooms"][0]["daylight_factor"].is_null());
+}
+
+/// `--target-error 0.5` on the L-shaped room from 1 spp a batch: the
+/// samples double until every figure's standard error is within 0.5 %
+/// of it, and the figures then agree with a reference of many samples
+/// within 4 of their standard errors (stopping at the target biases
+/// nothing that the batches' independence does not cover).
+#[test]
+fn a_target_error_renders_until_every_room_figure_meets_it() {
+    let dir = scratch("target");
+    let (reference, _) = measure(&dir, &l_room(1000), &["--spp", "2048"]);
+    let (json, _) = measure(&dir, &l_room(7), &["--spp", "8", "--target-error", "0.5"]);
+    assert_eq!(json["target_error"]["percent"].as_f64(), Some(0.5));
+    assert_eq!(json["target_error"]["met"].as_bool(), Some(true));
+    let spp = json["batch_spp"].as_u64().unwrap();
+    assert!(spp > 1 && spp.is_power_of_two(), "{spp} spp a batch");
+    // Without the target, the same start misses it: the rounds were needed.
+    let (start, _) = measure(&dir, &l_room(7), &["--spp", "8"]);
+    assert!(start["target_error"].is_null());
+    let missed = ["e_avg", "e_min", "u0"].iter().any(|name| {
+        let (value, se) = figure(&start["rooms"][0], name);
+        se > 0.005 * value
+    });
+    assert!(missed, "8 spp already meets 0.5 %: the test shows nothing");
+    for name in ["e_avg", "e_min", "u0"] {
+        let (value, se) = figure(&json["rooms"][0], name);
+        let (want, want_se) = figure(&reference["rooms"][0], name);
+        assert!(se <= 0.005 * value, "{name}: {value} ± {se}");
+        assert!(
+            (value - want).abs() <= 4.0 * (se * se + want_se * want_se).sqrt(),
+            "{name}: {value} ± {se} against {want} ± {want_se}"
+        );
+    }
+    // A target that is no per cent is refused, naming the flag.
+    let scene = dir.join("scene.ron");
+    for bad in ["0", "-1", "nan", "inf"] {
+        let output = flatray()
+            .args(["measure", "--quiet", &format!("--target-error={bad}")])
+            .arg(&scene)
+            .output()
+            .unwrap();
+        assert!(!output.status.success(), "{bad} accepted");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains("--target-error"), "{bad}: {stderr}");
+    }
 }

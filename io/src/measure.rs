@@ -116,8 +116,20 @@ pub struct Measured {
     pub rooms: Vec<RoomFigures>,
     pub points: Vec<GridPoint>,
     pub batches: usize,
+    /// Samples per pixel of each batch.
+    pub batch_spp: u32,
     /// What one world unit measures in metres, when the scene says.
     pub metres: Option<f64>,
+    /// The target the figures were rendered to, where one was asked for.
+    pub target: Option<Target>,
+}
+
+/// A target error of the room figures, and whether the figures met it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Target {
+    /// Per cent of each figure's value.
+    pub percent: f64,
+    pub met: bool,
 }
 
 /// Why a scene cannot be measured.
@@ -280,7 +292,9 @@ pub fn measure(
         rooms: figures,
         points,
         batches,
+        batch_spp: 0,
         metres,
+        target: None,
     })
 }
 
@@ -296,6 +310,26 @@ pub struct Request {
     /// Door gaps narrower than this (world units) part rooms; `None`:
     /// [`DOOR_WIDTH_METRES`] where the scene gives its units, else 0.
     pub door_width: Option<f64>,
+    /// Render until every room's E_min, E_avg and U0 have a standard
+    /// error of at most this per cent of their value, doubling the
+    /// samples each round ([`run`]); `None`: one round.
+    pub target_error: Option<f64>,
+}
+
+/// Most samples per pixel of one batch that a target error renders to:
+/// past it, the figures are given with `met: false`.
+pub const MAX_TARGET_BATCH_SPP: u32 = 1 << 14;
+
+/// Whether every room's E_min, E_avg and U0 have a standard error of at
+/// most `percent` per cent of their value (a figure of zero with no
+/// error meets any target; a room without grid points has none).
+pub fn target_met(measured: &Measured, percent: f64) -> bool {
+    measured.rooms.iter().all(|room| {
+        [room.e_min, room.e_avg, room.u0]
+            .iter()
+            .filter(|f| f.value.is_finite())
+            .all(|f| f.se <= percent / 100.0 * f.value.abs())
+    })
 }
 
 /// The default door width where the scene gives its units: the widest
@@ -309,6 +343,12 @@ pub const MAX_BATCHES: u32 = 64;
 /// `request.batches` times by `render` (given each batch's options, seeds
 /// far apart), and measures the rooms on the renders. `render` is the
 /// caller's: this crate never renders.
+///
+/// With a target error, while some room's figures miss it, each round
+/// renders as many batches again at the same samples, each averaged with
+/// one of the last round's: the batches stay independent and alike, with
+/// twice the samples, and the standard error falls by about `sqrt 2` a
+/// round, up to [`MAX_TARGET_BATCH_SPP`] per batch.
 pub fn run(
     loaded: &crate::Loaded,
     request: &Request,
@@ -324,6 +364,13 @@ pub fn run(
         return Err(format!(
             "batches: expected 2 to {MAX_BATCHES}, found {}",
             request.batches
+        ));
+    }
+    if let Some(t) = request.target_error
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(format!(
+            "target error: expected a finite per cent > 0, found {t}"
         ));
     }
     if let Some(d) = request.door_width
@@ -351,21 +398,46 @@ pub fn run(
     if found.rooms.is_empty() {
         return Err("no room: name one with `rooms: [Room(name: \"..\", at: (x, y))]`".to_string());
     }
-    let mut maps = Vec::with_capacity(request.batches as usize);
-    for k in 0..request.batches {
-        let options = batch_options(loaded, request, k);
+    let batches = request.batches;
+    let mut spp = batch_samples(loaded, request);
+    let mut maps = Vec::with_capacity(batches as usize);
+    for k in 0..batches {
+        let options = batch_options(loaded, spp, request.scale, k);
         let image = render(&options);
         maps.push(illuminance(&image, &loaded.scene, options.exposure));
     }
-    let measured = measure(
-        &maps,
-        &found,
-        &loaded.scene,
-        loaded.metres_per_unit,
-        loaded.sky,
-    )
-    .map_err(|e| e.to_string())?;
-    Ok((found, measured))
+    for round in 1u32.. {
+        let mut measured = measure(
+            &maps,
+            &found,
+            &loaded.scene,
+            loaded.metres_per_unit,
+            loaded.sky,
+        )
+        .map_err(|e| e.to_string())?;
+        measured.batch_spp = spp;
+        let Some(percent) = request.target_error else {
+            return Ok((found, measured));
+        };
+        let met = target_met(&measured, percent);
+        if met || spp > MAX_TARGET_BATCH_SPP / 2 {
+            measured.target = Some(Target { percent, met });
+            return Ok((found, measured));
+        }
+        // As many batches again, each averaged into one of the last
+        // round's: seeds apart from every earlier batch's.
+        for (k, map) in maps.iter_mut().enumerate() {
+            let index = round * batches + k as u32;
+            let options = batch_options(loaded, spp, request.scale, index);
+            let image = render(&options);
+            let more = illuminance(&image, &loaded.scene, options.exposure);
+            for (e, m) in map.iter_mut().zip(more) {
+                *e = 0.5 * (*e + m);
+            }
+        }
+        spp *= 2;
+    }
+    Err("the target error's rounds ran out".to_string())
 }
 
 /// The samples per pixel of each batch of `request`.
@@ -374,16 +446,17 @@ pub fn batch_samples(loaded: &crate::Loaded, request: &Request) -> u32 {
     total.div_ceil(request.batches.max(1)).max(1)
 }
 
-/// Batch `k`'s render options: the scene's, at the request's scale and
-/// samples, its seed moved far from the other batches'.
+/// Batch `k`'s render options: the scene's, at `spp` samples and `scale`,
+/// its seed moved far from the other batches'.
 fn batch_options(
     loaded: &crate::Loaded,
-    request: &Request,
+    spp: u32,
+    scale: f64,
     k: u32,
 ) -> flatray_tracer::RenderOptions {
     let mut options = loaded.options;
-    options.samples = batch_samples(loaded, request);
-    options.scale = request.scale;
+    options.samples = spp;
+    options.scale = scale;
     options.seed = options
         .seed
         .wrapping_add((k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
@@ -478,12 +551,15 @@ fn figure_json(f: Figure) -> Value {
     }
 }
 
-/// The rooms as JSON: `{"batches", "rooms": [{name, area, spacing,
-/// points, e_min, e_avg, e_max, u0, daylight_factor}]}`.
+/// The rooms as JSON: `{"batches", "batch_spp", "metres_per_unit",
+/// "target_error": {percent, met} or null, "rooms": [{name, area,
+/// spacing, points, e_min, e_avg, e_max, u0, daylight_factor}]}`.
 pub fn json(measured: &Measured) -> Value {
     json!({
         "batches": measured.batches,
+        "batch_spp": measured.batch_spp,
         "metres_per_unit": measured.metres,
+        "target_error": measured.target.map(|t| json!({"percent": t.percent, "met": t.met})),
         "rooms": measured.rooms.iter().map(|r| json!({
             "name": r.name,
             "area": r.area,

@@ -597,7 +597,7 @@ fn work_total(loaded: &Loaded, options: &RenderOptions) -> u64 {
 /// count. The GIL is released during each batch's render; Ctrl-C is
 /// heard between batches.
 #[pyfunction]
-#[pyo3(signature = (scene, *, spp = None, batches = 8, scale = 1.0, door_width = None))]
+#[pyo3(signature = (scene, *, spp = None, batches = 8, scale = 1.0, door_width = None, target_error = None))]
 fn measure<'py>(
     py: Python<'py>,
     scene: &Bound<'py, LoadedScene>,
@@ -605,6 +605,7 @@ fn measure<'py>(
     batches: u32,
     scale: f64,
     door_width: Option<f64>,
+    target_error: Option<f64>,
 ) -> PyResult<(String, Bound<'py, PyBytes>, usize)> {
     let loaded = &scene.get().loaded;
     let request = flatray_io::measure::Request {
@@ -612,6 +613,7 @@ fn measure<'py>(
         batches,
         scale,
         door_width,
+        target_error,
     };
     let mut interrupt: Option<PyErr> = None;
     let result = flatray_io::measure::run(loaded, &request, |options| {

@@ -538,3 +538,24 @@ def test_measure_gives_the_clis_figures_and_the_grid_as_an_array(cli, repo, tmp_
         assert np.isclose(grid[grid[:, 2] == k, 3].mean(), room["e_avg"]["value"], rtol=1e-12)
     with pytest.raises(ValueError, match="batches"):
         flatray.measure(flatray.load(scene_path), batches=1)
+
+
+def test_measure_to_a_target_error_gives_the_clis_figures(cli, repo):
+    scene_path = repo / "scenes" / "daylight.ron"
+    out = subprocess.run(
+        [cli, "measure", str(scene_path), "--spp", "8", "--scale", "0.5",
+         "--target-error", "1", "--json", "--quiet"],
+        check=True, capture_output=True, text=True,
+    ).stdout
+    expected = json.loads(out)
+    got = flatray.measure(flatray.load(scene_path), spp=8, scale=0.5, target_error=1)
+    got.pop("grid")
+    assert got == expected
+    assert got["target_error"] == {"percent": 1.0, "met": True}
+    # 8 spp over 8 batches is 1 a batch: the rounds doubled it.
+    assert got["batch_spp"] > 1
+    for room in got["rooms"]:
+        for name in ("e_min", "e_avg", "u0"):
+            assert room[name]["se"] <= 0.01 * room[name]["value"]
+    with pytest.raises(ValueError, match="target error"):
+        flatray.measure(flatray.load(scene_path), target_error=0)

@@ -466,12 +466,16 @@ def measure(
     batches: int = 8,
     scale: float = 1.0,
     door_width: Optional[float] = None,
+    target_error: Optional[float] = None,
 ) -> Dict[str, Any]:
     """Measures each room of ``scene`` as ``flatray measure`` does: E_min,
     E_avg, E_max and U0 on the EN 12464-1 grid, and the daylight factor
     where the scene's only light is a sky, each as ``{"value", "se"}``
     (``se`` the standard error over ``batches`` independent renders of
-    ``spp`` samples per pixel in all).
+    ``spp`` samples per pixel in all). With ``target_error`` (per cent),
+    the samples double until every room's E_min, E_avg and U0 have a
+    standard error of at most that share of their value (up to 16384 per
+    batch); ``"target_error"`` then says whether they met it.
 
     Returns a dict: ``"rooms"`` (a list of each room's figures, with its
     ``"name"``, ``"area"``, ``"spacing"`` and ``"points"``), ``"batches"``,
@@ -482,7 +486,7 @@ def measure(
         raise TypeError(f"expected a flatray.Scene, found {type(scene).__name__}")
     spp = _maybe_whole("spp", spp, 1, _MAX_SAMPLES)
     batches = _whole("batches", batches, 2, 64)
-    for name, value in (("scale", scale), ("door_width", door_width)):
+    for name, value in (("scale", scale), ("door_width", door_width), ("target_error", target_error)):
         if value is not None and (
             isinstance(value, bool) or not isinstance(value, (int, float, np.number))
         ):
@@ -493,6 +497,7 @@ def measure(
         batches=batches,
         scale=float(scale),
         door_width=None if door_width is None else float(door_width),
+        target_error=None if target_error is None else float(target_error),
     )
     result: Dict[str, Any] = json.loads(text)
     result["grid"] = np.frombuffer(data, dtype="<f8").reshape(rows, 5).copy()
