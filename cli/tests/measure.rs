@@ -433,3 +433,150 @@ fn a_target_error_renders_until_every_room_figure_meets_it() {
         assert!(stderr.contains("--target-error"), "{bad}: {stderr}");
     }
 }
+
+/// In lumens (`units: (light: Lumens(storey: H))`), under the 2.5D
+/// reading: a lamp of flux `F` sends `F / H` lm per metre of height, and
+/// the floor's fluence is in lux. Worked out in metres, apart from the
+/// renderer's own units: a two-sided Lambertian line of length `L` sends
+/// `4 I L` per metre of height at radiance `I`, so `I = F / (4 H L)` and
+/// a point sees `I` times the angle the line subtends; a point lamp
+/// gives `F / (2 pi H r)` at `r` metres. A room 10 m by 5 m turned by 30
+/// degrees, black walls, no bounces; the grid's cells against their
+/// means by the midpoint rule, within 4 standard errors.
+#[test]
+fn lumens_give_lux_under_the_two_and_a_half_d_reading() {
+    const METRES: f64 = 0.05;
+    const STOREY: f64 = 2.5;
+    const FLUX: f64 = 800.0;
+    let (s, c) = 30f64.to_radians().sin_cos();
+    let turn = |x: f64, y: f64| {
+        let (x, y) = (x - 100.0, y - 50.0);
+        (120.0 + c * x - s * y, 120.0 + s * x + c * y)
+    };
+    let back = |x: f64, y: f64| {
+        let (x, y) = (x - 120.0, y - 120.0);
+        (100.0 + c * x + s * y, 50.0 - s * x + c * y)
+    };
+    let p = |(x, y): (f64, f64)| format!("({x:.6}, {y:.6})");
+    let corners = [(0.0, 0.0), (200.0, 0.0), (200.0, 100.0), (0.0, 100.0)];
+    let walls: Vec<String> = (0..4)
+        .map(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            format!(
+                "Wall(a: {}, b: {}, material: Diffuse(albedo: (0, 0, 0))),",
+                p(turn(a.0, a.1)),
+                p(turn(b.0, b.1))
+            )
+        })
+        .collect();
+    let scene = |light: &str| {
+        format!(
+            r#"Scene(
+    canvas: (240, 240),
+    floor: Color((1, 1, 1)),
+    walls: [{}],
+    lights: [{light}],
+    render: (samples: 32, bounces: 0),
+    units: (metres_per_unit: {METRES}, light: Lumens(storey: {STOREY})),
+    rooms: [Room(name: "hall", at: {})],
+)"#,
+            walls.join("\n        "),
+            p(turn(20.0, 80.0))
+        )
+    };
+    // The room's own frame: a line from (50, 40) to (150, 40), a point at
+    // (100, 60).
+    let line_text = scene(&format!(
+        "Line(a: {}, b: {}, intensity: {FLUX})",
+        p(turn(50.0, 40.0)),
+        p(turn(150.0, 40.0))
+    ));
+    let point_at = (100.0, 60.0);
+    let point_text = scene(&format!(
+        "Point(at: {}, intensity: {FLUX})",
+        p(turn(point_at.0, point_at.1))
+    ));
+    let radiance = FLUX / (4.0 * STOREY * 100.0 * METRES);
+    let line = |x: f64, y: f64| {
+        let (a, b) = ((50.0 - x, 40.0 - y), (150.0 - x, 40.0 - y));
+        radiance * (a.0 * b.1 - a.1 * b.0).abs().atan2(a.0 * b.0 + a.1 * b.1)
+    };
+    let point = |x: f64, y: f64| {
+        let r = ((x - point_at.0).powi(2) + (y - point_at.1).powi(2)).sqrt() * METRES;
+        FLUX / (std::f64::consts::TAU * STOREY * r)
+    };
+    let dir = scratch("lumens");
+    for (text, lux, name) in [
+        (&line_text, &line as &dyn Fn(f64, f64) -> f64, "line"),
+        (&point_text, &point, "point"),
+    ] {
+        let (json, rows) = measure(&dir, text, &[]);
+        // Cells are whole pixels (of one unit): of the spacing rounded
+        // down or up, told apart by where their centres fall.
+        let spacing = json["rooms"][0]["spacing"].as_f64().unwrap();
+        let half_of = |at: f64| {
+            let odd = spacing.floor() as i64 % 2 == 1;
+            let on_half = (at - at.floor() - 0.5).abs() < 1e-9;
+            0.5 * if on_half == odd {
+                spacing.floor()
+            } else {
+                spacing.ceil()
+            }
+        };
+        let mut compared = 0;
+        let inside = |(x, y): (f64, f64)| (0.0..=200.0).contains(&x) && (0.0..=100.0).contains(&y);
+        for r in &rows {
+            // The grid's cells are squares of the canvas: those wholly in
+            // the room, each's mean by the midpoint rule over its square
+            // (cells near the point lamp, where 1 / r is steep, left out).
+            let (hx, hy) = (half_of(r.0), half_of(r.1));
+            let whole = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .iter()
+                .all(|&(i, j)| inside(back(r.0 + hx * i, r.1 + hy * j)));
+            let (cx, cy) = back(r.0, r.1);
+            if !whole || (name == "point" && (cx - point_at.0).hypot(cy - point_at.1) < 30.0) {
+                continue;
+            }
+            let n = 60;
+            let mut sum = 0.0;
+            for j in 0..n {
+                for i in 0..n {
+                    let x = r.0 - hx + (i as f64 + 0.5) * 2.0 * hx / n as f64;
+                    let y = r.1 - hy + (j as f64 + 0.5) * 2.0 * hy / n as f64;
+                    let (x, y) = back(x, y);
+                    sum += lux(x, y);
+                }
+            }
+            let want = sum / (n * n) as f64;
+            assert!(
+                (r.3 - want).abs() <= 4.0 * r.4 + 3e-3 * want,
+                "{name} ({cx:.1}, {cy:.1}): {} ± {} lx against {want} lx",
+                r.3,
+                r.4
+            );
+            compared += 1;
+        }
+        assert!(compared >= 15, "{name}: {compared} cells");
+    }
+    // The same lamp in the renderer's own units differs: the units are read.
+    let relative = line_text.replace(", light: Lumens(storey: 2.5)", "");
+    assert_ne!(relative, line_text);
+    let (json, _) = measure(&dir, &relative, &[]);
+    let (e, _) = figure(&json["rooms"][0], "e_avg");
+    assert!(e > 10.0 * radiance, "{e}");
+    // A lamp whose falloff is not the physical one has no flux in lumens.
+    let bad = point_text.replace("intensity: 800)", "intensity: 800, falloff: InverseSquare)");
+    let path = dir.join("bad.ron");
+    std::fs::write(&path, &bad).unwrap();
+    let output = flatray()
+        .args(["measure", "--quiet"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("light 0") && stderr.contains("falloff"),
+        "{stderr}"
+    );
+}

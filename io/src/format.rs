@@ -391,11 +391,39 @@ pub struct RoomSpec {
     pub at: Point,
 }
 
-/// What one world unit measures.
+/// What one world unit measures, and what the lights' intensities mean.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Units")]
 pub struct Units {
     pub metres_per_unit: Positive,
+    #[serde(default)]
+    pub light: LightUnits,
+}
+
+/// What the lights' intensities mean.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+pub enum LightUnits {
+    /// The renderer's own units.
+    #[default]
+    Relative,
+    /// Photometric units under the 2.5D reading (`docs/model.md`): a
+    /// lamp's (and an emitting wall's) intensity is its luminous flux in
+    /// lumens, spread evenly over a storey `storey` metres high; a sun's,
+    /// its illuminance in lux on a surface facing it; a sky's, the
+    /// illuminance in lux of a floor open to it. The floor's fluence is
+    /// then in lux.
+    Lumens {
+        #[serde(default = "default_storey")]
+        storey: Positive,
+    },
+}
+
+/// The storey height a lamp's lumens are spread over by default, in
+/// metres.
+pub const DEFAULT_STOREY_METRES: f64 = 2.5;
+
+fn default_storey() -> Positive {
+    Positive(DEFAULT_STOREY_METRES)
 }
 
 /// A glass body: a closed polygon (the last point joins the first).

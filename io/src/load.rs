@@ -12,8 +12,9 @@ use ron::extensions::Extensions;
 use crate::error::SceneError;
 use crate::format::MAX_COORDINATE;
 use crate::format::{
-    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LampName, LightSpec, LightsSpec,
-    MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MaterialSpec, SceneFile, SpectrumSpec, ToneMap,
+    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LampName, LightSpec, LightUnits,
+    LightsSpec, MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MaterialSpec, SceneFile, SpectrumSpec, ToneMap,
+    Units,
 };
 use crate::locate;
 
@@ -388,6 +389,9 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
     let default_falloff = falloff(file.falloff);
     let mut walls = Vec::with_capacity(file.walls.len());
     let mut lights = Vec::with_capacity(file.lights.len());
+    // What each of `lights` is to the scene's units of light, and where
+    // the file has it.
+    let mut photometry = Vec::with_capacity(file.lights.len());
     for (wall_index, wall) in file.walls.iter().enumerate() {
         let shape = wall.geometry();
         let segment = shape.chord();
@@ -444,6 +448,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
                     )
                 })?,
             });
+            photometry.push((Photometry::Lamp, Place::Wall(wall_index)));
         }
         walls.push(Wall { shape, material });
     }
@@ -452,6 +457,11 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         // A sky's frame encloses every wall: it is built once they are.
         if !matches!(spec, LightSpec::Sky { .. }) {
             lights.push(light(k, spec, default_falloff, source, &mut walls)?);
+            let kind = match spec {
+                LightSpec::Sun { .. } => Photometry::Sun,
+                _ => Photometry::Lamp,
+            };
+            photometry.push((kind, Place::Light(k)));
         }
     }
 
@@ -464,7 +474,26 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         polygons.push(points);
     }
 
-    lights.extend(sky_lights(&file, source, &canvas, &walls)?);
+    for (k, sky) in sky_lights(&file, source, &canvas, &walls)? {
+        lights.push(sky);
+        photometry.push((Photometry::Sky, Place::Light(k)));
+    }
+    if let Some(Units {
+        metres_per_unit,
+        light: LightUnits::Lumens { storey },
+    }) = file.units
+    {
+        for (light, &(kind, place)) in lights.iter_mut().zip(&photometry) {
+            in_lumens(light, kind, (storey.0, metres_per_unit.0)).map_err(|message| {
+                let what = match place {
+                    Place::Wall(w) => format!("wall {w}"),
+                    Place::Light(k) => format!("light {k}"),
+                    _ => "a light".to_string(),
+                };
+                source.error(place, format!("{what}: {message}"))
+            })?;
+        }
+    }
 
     let warnings = match *source {
         Source::Text { text, .. } => {
@@ -569,10 +598,14 @@ fn doors_and_windows(
     Ok(doors)
 }
 
-/// `2 pi` times the luminance of the file's skies' radiance, where every
-/// light of the file is a sky or a sun that is off (of intensity 0, or
-/// below the horizon) and no wall emits.
+/// The illuminance of a floor open to the file's skies, where every light
+/// of the file is a sky or a sun that is off (of intensity 0, or below the
+/// horizon) and no wall emits: `2 pi` times the luminance of their
+/// radiance, or in lumens ([`LightUnits::Lumens`]) their intensities.
 fn unobstructed_sky(file: &SceneFile) -> Option<f64> {
+    let lumens = file
+        .units
+        .is_some_and(|u| matches!(u.light, LightUnits::Lumens { .. }));
     let off = |l: &LightSpec| match *l {
         LightSpec::Sky { .. } => true,
         LightSpec::Sun { intensity, .. } => {
@@ -593,6 +626,12 @@ fn unobstructed_sky(file: &SceneFile) -> Option<f64> {
         file.lights
             .iter()
             .map(|l| match *l {
+                LightSpec::Sky {
+                    color, intensity, ..
+                } if lumens => {
+                    let luminance = 0.2126 * color.0 + 0.7152 * color.1 + 0.0722 * color.2;
+                    if luminance > 0.0 { intensity.0 } else { 0.0 }
+                }
                 LightSpec::Sky {
                     color, intensity, ..
                 } => {
@@ -981,7 +1020,7 @@ fn sky_lights(
     source: &Source,
     canvas: &Canvas,
     walls: &[Wall],
-) -> Result<Vec<Light>, SceneError> {
+) -> Result<Vec<(usize, Light)>, SceneError> {
     let mut lights = Vec::new();
     for (k, spec) in file.lights.iter().enumerate() {
         if let LightSpec::Sky {
@@ -992,22 +1031,82 @@ fn sky_lights(
                 source.error(Place::Light(k), format!("light {k}: {message}"))
             })?;
             for segment in crate::daylight::sky_frame(canvas, walls) {
-                lights.push(Light {
-                    shape: LightShape::Line {
-                        segment,
-                        one_sided: true,
-                        wall: None,
+                lights.push((
+                    k,
+                    Light {
+                        shape: LightShape::Line {
+                            segment,
+                            one_sided: true,
+                            wall: None,
+                        },
+                        color: rgb(color),
+                        intensity: intensity.0,
+                        // Radiance: each radian of sky brings `intensity`.
+                        falloff: Falloff::Flatland,
+                        spectrum,
                     },
-                    color: rgb(color),
-                    intensity: intensity.0,
-                    // Radiance: each radian of sky brings `intensity`.
-                    falloff: Falloff::Flatland,
-                    spectrum,
-                });
+                ));
             }
         }
     }
     Ok(lights)
+}
+
+/// What a light is to the scene's units of light ([`LightUnits`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Photometry {
+    /// A lamp or an emitting wall: its intensity is a luminous flux.
+    Lamp,
+    /// Its intensity is the illuminance of a surface facing it.
+    Sun,
+    /// One of a sky's frame of lines: its intensity is the illuminance of
+    /// a floor open to the sky.
+    Sky,
+}
+
+/// `light`'s intensity, given in the photometric units of
+/// [`LightUnits::Lumens`] (a storey `storey` metres high, `metres` a world
+/// unit), turned into the renderer's, so that the floor's fluence is in
+/// lux under the 2.5D reading (`docs/model.md`): a lamp of flux `F` lm
+/// sends `F / storey` lm per metre of height, its power in world units
+/// `F / (storey metres)`; luminance weights its colour (a spectrum's is
+/// 1).
+fn in_lumens(
+    light: &mut Light,
+    kind: Photometry,
+    (storey, metres): (f64, f64),
+) -> Result<(), String> {
+    let luminance = match light.spectrum {
+        Some(_) => 1.0,
+        None => 0.2126 * light.color.x + 0.7152 * light.color.y + 0.0722 * light.color.z,
+    };
+    if luminance.is_nan() || luminance <= 0.0 {
+        // A black light sends nothing, in any units.
+        light.intensity = 0.0;
+        return Ok(());
+    }
+    let per_unit = match kind {
+        Photometry::Sun => 1.0,
+        Photometry::Sky => std::f64::consts::TAU,
+        Photometry::Lamp => {
+            if matches!(
+                light.falloff,
+                Falloff::InverseSquare | Falloff::Window { .. }
+            ) {
+                return Err(
+                    "lumens (`units: (light: Lumens(..))`) need the physical falloff: `falloff: Flatland` (the default)"
+                        .to_string(),
+                );
+            }
+            let power = light.shape.lamp_power().unwrap_or(0.0);
+            if power.is_nan() || power <= 0.0 {
+                return Err("a lamp of no size has no luminous flux to spread".to_string());
+            }
+            storey * metres * power
+        }
+    };
+    light.intensity /= per_unit * luminance;
+    Ok(())
 }
 
 /// The directional light that sun `light` (light `k` of the file) stands

@@ -208,18 +208,29 @@ impl LightShape {
     /// over the circle of directions), before colour.
     pub(crate) fn power(&self, scene: &Scene) -> f64 {
         match *self {
+            LightShape::Directional { direction } => sun::power(scene, direction),
+            _ => self.lamp_power().unwrap_or(0.0),
+        }
+    }
+
+    /// A lamp's power per unit intensity in world units (per unit time,
+    /// integrated over the circle of directions), before colour: what
+    /// turns a luminous flux into an intensity. `None` for a sun, whose
+    /// power is the scene's frame's.
+    pub fn lamp_power(&self) -> Option<f64> {
+        Some(match *self {
+            LightShape::Directional { .. } => return None,
             LightShape::Point { .. } => point::power(),
             LightShape::Spot { cone, softness, .. } => spot::power(cone, softness),
             LightShape::Line {
                 segment, one_sided, ..
             } => line::power(&segment, one_sided),
             LightShape::Arc { arc, .. } => arc::power(&arc),
-            LightShape::Directional { direction } => sun::power(scene, direction),
             LightShape::Circle { radius, .. } => circle::power(radius),
             LightShape::Beam { segment, direction } => beam::power(&segment, direction),
             // Its intensity is its power.
             LightShape::Laser { .. } => 1.0,
-        }
+        })
     }
 
     /// A photon leaving light `light` (of this shape), drawn from `stream`.
