@@ -1,7 +1,8 @@
 //! Doors and windows: a closed door and a shut window let no light
 //! through in turned rooms, under every integrator and bounce count; an
 //! open door and an open window do; a door is a bound between rooms
-//! whether open or shut.
+//! whether open or shut; a generated apartment's rooms are found one by
+//! one.
 
 use flatray_geometry::DVec2;
 use flatray_tests::{options, render, scene};
@@ -126,6 +127,73 @@ fn a_door_bounds_two_rooms_open_or_shut() {
         if door_open {
             let joined = flatray_io::rooms::find(&loaded.scene, (120, 80), &loaded.rooms, &[], 0.0);
             assert!(joined.is_err());
+        }
+    }
+}
+
+/// Generated apartments (`flatray generate`) of 4, 9 and 16 rooms under
+/// several seeds: with the door width a little over the generator's
+/// doors (24 units), every room of the grid is a region of its own, and
+/// the outside one more; the rooms share the grid about evenly (the inner
+/// grid lines move by up to a fifth of a room). Without it, the doors'
+/// gaps join rooms: fewer regions of a room's size.
+#[test]
+fn the_rooms_of_a_generated_apartment_are_found_one_by_one() {
+    for rooms in [4u32, 9, 16] {
+        for seed in 1..=3 {
+            let apartment = flatray_io::generate::Apartment {
+                rooms,
+                seed,
+                ..Default::default()
+            };
+            let loaded = scene(&apartment.to_ron());
+            let (w, h) = flatray_tracer::image_size(&loaded.scene, 0.5);
+            let found = flatray_io::rooms::find(&loaded.scene, (w, h), &[], &loaded.doors, 25.0)
+                .expect("regions");
+            let inside: Vec<f64> = found
+                .rooms
+                .iter()
+                .filter(|r| !r.open)
+                .map(|r| r.area)
+                .collect();
+            let what = format!("{rooms} rooms, seed {seed}");
+            // Furniture drawn closed encloses small regions of its own:
+            // the rooms are the regions of over a quarter of a room's
+            // share of the grid, and the small ones hold little of it.
+            let total: f64 = inside.iter().sum();
+            let share = total / rooms as f64;
+            let big: Vec<f64> = inside
+                .iter()
+                .copied()
+                .filter(|&a| a > 0.25 * share)
+                .collect();
+            assert_eq!(big.len(), rooms as usize, "{what}: {inside:?}");
+            assert!(
+                total - big.iter().sum::<f64>() < 0.05 * total,
+                "{what}: {inside:?}"
+            );
+            assert_eq!(
+                found.rooms.iter().filter(|r| r.open).count(),
+                1,
+                "{what}: the outside"
+            );
+            for area in &big {
+                assert!(
+                    (0.5..=1.6).contains(&(area / share)),
+                    "{what}: {area} of {share}"
+                );
+            }
+            let joined = flatray_io::rooms::find(&loaded.scene, (w, h), &[], &loaded.doors, 0.0)
+                .expect("regions");
+            let joined_rooms = joined
+                .rooms
+                .iter()
+                .filter(|r| !r.open && r.area > 0.25 * share)
+                .count();
+            assert!(
+                joined_rooms < rooms as usize,
+                "{what}: {joined_rooms} rooms without the door gaps closed"
+            );
         }
     }
 }
