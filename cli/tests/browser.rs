@@ -548,3 +548,107 @@ fn spectra_lenses_spots_and_the_sun_are_drawn_as_they_are_and_can_be_changed() {
     drop(browser);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The "measure the rooms" switch draws each room's illuminance map over
+/// the render, at the render's place and scale, with its legend beside;
+/// after a lamp is dragged, the map is measured again and changes.
+#[test]
+fn the_measure_switch_draws_the_rooms_map_over_the_render_and_follows_edits() {
+    let dir = std::env::temp_dir().join(format!("flatray-browser-measure-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("room.ron");
+    let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
+    std::fs::copy(&room, &scene).unwrap();
+    let server = common::serve(&scene);
+    let url = server.url.clone();
+    let (browser, tab) = open(&dir, &url);
+    tab.wait_for_element("circle[data-light='1']").unwrap();
+    let first_job = wait_for_render(&tab, 0, 16);
+    tab.find_element("#showmeasure").unwrap().click().unwrap();
+    wait_until(
+        &tab,
+        "the map",
+        "document.getElementById('measure').dataset.version !== undefined",
+    );
+    // The map's plan part lies over the render, the same size; the rest
+    // of its picture is the legend, in the side panel.
+    let layout: serde_json::Value = serde_json::from_str(
+        evaluate(
+            &tab,
+            "JSON.stringify((() => { const r = document.getElementById('render').getBoundingClientRect(); const m = document.getElementById('measure').getBoundingClientRect(); const i = document.querySelector('#measure img'); return {r: [r.x, r.y, r.width, r.height], m: [m.x, m.y, m.width, m.height], natural: i.naturalWidth, canvas: items.canvas, legend: document.getElementById('legend').getBoundingClientRect().width, hidden: document.getElementById('measure').hidden}; })())",
+        )
+        .as_str()
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(layout["hidden"], false, "{layout}");
+    for k in 0..4 {
+        let (r, m) = (
+            layout["r"][k].as_f64().unwrap(),
+            layout["m"][k].as_f64().unwrap(),
+        );
+        assert!((r - m).abs() < 1.0, "the map over the render: {layout}");
+    }
+    let canvas_width = layout["canvas"][0].as_f64().unwrap();
+    let natural = layout["natural"].as_f64().unwrap();
+    assert!(natural > canvas_width, "{layout}");
+    assert!(
+        (layout["legend"].as_f64().unwrap() - (natural - canvas_width)).abs() < 1.0,
+        "{layout}"
+    );
+    // Asked as the page asks: a POST with the page's token.
+    let token = evaluate(&tab, "token")
+        .as_str()
+        .unwrap_or_default()
+        .to_string();
+    let map = |url: &str| -> image::RgbImage {
+        let mut r = ureq::post(&format!("{url}/api/measure.png"))
+            .header("content-type", "application/json")
+            .header("x-flatray-token", &token)
+            .send("{}")
+            .unwrap();
+        let bytes = r
+            .body_mut()
+            .with_config()
+            .limit(64 << 20)
+            .read_to_vec()
+            .unwrap();
+        image::load_from_memory(&bytes).unwrap().to_rgb8()
+    };
+    let before = map(&url);
+    // Inside the room the cells take the colour scale, not the grey of
+    // what no room holds.
+    let inside = before.get_pixel(200, 200).0;
+    assert_ne!(inside, [48, 48, 48], "{inside:?}");
+    // Drag the second lamp: the page measures the edited scene again.
+    let measured = evaluate(&tab, "document.getElementById('measure').dataset.version");
+    drag(&tab, (313.0, 134.0), (420.0, 420.0));
+    wait_for_render(&tab, first_job, 16);
+    wait_until(
+        &tab,
+        "the map of the edited scene",
+        &format!("document.getElementById('measure').dataset.version !== {measured}"),
+    );
+    let after = map(&url);
+    assert_eq!(before.dimensions(), after.dimensions());
+    assert_ne!(before.as_raw(), after.as_raw(), "the map follows the edit");
+    screenshot(&tab, None, "serve-measure.png");
+    // Without the token, no page but its own makes the server measure.
+    let refused = ureq::post(&format!("{url}/api/measure.png"))
+        .header("content-type", "application/json")
+        .send("{}");
+    assert!(
+        matches!(refused, Err(ureq::Error::StatusCode(403))),
+        "{refused:?}"
+    );
+    // Off, the map is gone from over the render.
+    tab.find_element("#showmeasure").unwrap().click().unwrap();
+    wait_until(
+        &tab,
+        "the map hidden",
+        "document.getElementById('measure').hidden",
+    );
+    drop(browser);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -107,6 +107,7 @@ fn every_picture_in_the_docs_is_what_its_command_makes() {
         "serve.png",
         "serve-conflict.png",
         "serve-optics.png",
+        "serve-measure.png",
         "python-batch.png",
         "import-tavern-map.png",
         "import-corridor-map.png",

@@ -184,6 +184,7 @@ pub(crate) fn serve(
         .route("/api/export.exr", get(export_exr))
         .route("/api/noise.txt", get(export_noise))
         .route("/api/scene.ron", get(export_scene))
+        .route("/api/measure.png", post(measure_png))
         .layer(DefaultBodyLimit::max(guard::MAX_BODY))
         .layer(axum::middleware::from_fn_with_state(guard, guard::check))
         .with_state(shared);
@@ -748,6 +749,50 @@ async fn resolve(State(shared): State<Arc<Shared>>, body: axum::body::Bytes) -> 
         }
     }
     axum::Json(serde_json::json!({"version": scene.version})).into_response()
+}
+
+/// The live view's measure of the rooms: `flatray measure`'s figures and
+/// map from this many batches of this many samples per pixel in all, a
+/// quick look (each figure's error is on the map's labels' scale, not a
+/// report's).
+const MEASURE_BATCHES: u32 = 4;
+const MEASURE_SPP: u32 = 16;
+
+/// The false-colour map of each room's illuminance (`flatray measure
+/// --map`: the plan at the canvas's size, then its legend) of the scene as
+/// the page has it, edits included; 422 with the reason where it has no
+/// room or does not load. Measured apart from the render, on a blocking
+/// thread. A `POST`, as a change is: it costs renders, so it is taken only
+/// from the page itself, with its token (`guard.rs`).
+async fn measure_png(State(shared): State<Arc<Shared>>) -> Response {
+    let text = lock(&shared).text.clone();
+    let own = Arc::clone(&shared);
+    match tokio::task::spawn_blocking(move || measure_map(&text, &own)).await {
+        Ok(Ok(bytes)) => png(bytes),
+        Ok(Err(message)) => refused(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            serde_json::json!({"message": message}),
+        ),
+        Err(_) => refused(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            serde_json::json!({"message": "the measure stopped"}),
+        ),
+    }
+}
+
+fn measure_map(text: &str, shared: &Shared) -> Result<Vec<u8>, String> {
+    let loaded = load_text(text, shared).map_err(|r| r.message)?;
+    let request = flatray_io::measure::Request {
+        spp: Some(MEASURE_SPP),
+        batches: MEASURE_BATCHES,
+        scale: 1.0,
+        door_width: None,
+        target_error: None,
+    };
+    let (rooms, measured) = flatray_io::measure::run(&loaded, &request, |options| {
+        flatray_tracer::render(&loaded.scene, options, &|_| {}).image
+    })?;
+    flatray_io::measure::map_png(&measured, &rooms, &loaded.scene)
 }
 
 async fn export_png(State(shared): State<Arc<Shared>>) -> Response {
