@@ -652,3 +652,129 @@ fn the_measure_switch_draws_the_rooms_map_over_the_render_and_follows_edits() {
     drop(browser);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Two rooms, a lamp in the west one, a sky outside; the door between
+/// them shut and the east room's window shuttered whole: the east room
+/// is dark. Opening the door in the page, then drawing the shutter back,
+/// each lights it; a door's end dragged moves in the scene's text.
+#[test]
+fn doors_open_and_shutters_draw_back_in_the_page() {
+    let dir = std::env::temp_dir().join(format!("flatray-browser-doors-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("flat.ron");
+    let wall = |a: (f64, f64), b: (f64, f64)| {
+        format!(
+            "Wall(a: ({}, {}), b: ({}, {})),",
+            4.0 * a.0,
+            4.0 * a.1,
+            4.0 * b.0,
+            4.0 * b.1
+        )
+    };
+    let walls = [
+        wall((10.0, 10.0), (110.0, 10.0)),
+        wall((110.0, 10.0), (110.0, 25.0)),
+        wall((110.0, 55.0), (110.0, 70.0)),
+        wall((110.0, 70.0), (10.0, 70.0)),
+        wall((10.0, 70.0), (10.0, 10.0)),
+        wall((60.0, 10.0), (60.0, 30.0)),
+        wall((60.0, 50.0), (60.0, 70.0)),
+    ]
+    .join("\n        ");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"Scene(
+    canvas: (480, 320),
+    floor: Color((0.8, 0.8, 0.8)),
+    walls: [{walls}],
+    doors: [Door(a: (240, 120), b: (240, 200))],
+    windows: [Window(a: (440, 100), b: (440, 220), shutter: 1)],
+    lights: [
+        Point(at: (120, 160), intensity: 4),
+        Sky(intensity: 0.05),
+    ],
+)"#
+        ),
+    )
+    .unwrap();
+    let server = common::serve(&scene);
+    let url = server.url.clone();
+    let (browser, tab) = open(&dir, &url);
+    tab.wait_for_element("line[data-door='0']").unwrap();
+    let mut job = wait_for_render(&tab, 0, 16);
+    let export = |path: &str| -> Vec<u8> {
+        let mut r = ureq::get(&format!("{url}{path}")).call().unwrap();
+        r.body_mut()
+            .with_config()
+            .limit(64 << 20)
+            .read_to_vec()
+            .unwrap()
+    };
+    let east = (360.0, 160.0);
+    let shut = brightness(&export("/api/export.png"), east, 20.0);
+    assert!(shut < 1.0, "the east room, shut: {shut}");
+
+    // Click the door, tick "open".
+    tab.find_element("line[data-door='0']")
+        .unwrap()
+        .click()
+        .unwrap();
+    tab.wait_for_element("#door-open").unwrap().click().unwrap();
+    job = wait_for_render(&tab, job, 16);
+    let opened = brightness(&export("/api/export.png"), east, 20.0);
+    assert!(opened > shut + 5.0, "the door opened: {shut} -> {opened}");
+    let text = String::from_utf8(export("/api/scene.ron")).unwrap();
+    assert!(
+        text.contains("Door(a: (240, 120), b: (240, 200), open: true)"),
+        "{text}"
+    );
+
+    // Click the window, draw its shutter back.
+    tab.find_element("line[data-window='0']")
+        .unwrap()
+        .click()
+        .unwrap();
+    tab.wait_for_element("#shutter").unwrap();
+    evaluate(
+        &tab,
+        "(() => { const s = document.getElementById('shutter'); s.value = 0; s.dispatchEvent(new Event('change')); return true; })()",
+    );
+    job = wait_for_render(&tab, job, 16);
+    let drawn = brightness(&export("/api/export.png"), east, 20.0);
+    assert!(
+        drawn > opened + 2.0,
+        "the shutter drawn back: {opened} -> {drawn}"
+    );
+    let text = String::from_utf8(export("/api/scene.ron")).unwrap();
+    assert!(text.contains("shutter: 0)"), "{text}");
+
+    // Drag the door's lower end down the partition.
+    drag(&tab, (240.0, 200.0), (240.0, 180.0));
+    wait_for_render(&tab, job, 16);
+    let text = String::from_utf8(export("/api/scene.ron")).unwrap();
+    let door = text
+        .lines()
+        .find(|l| l.contains("Door("))
+        .unwrap_or_default()
+        .to_string();
+    let b: Vec<f64> = door
+        .split("b: (")
+        .nth(1)
+        .and_then(|r| r.split(')').next())
+        .map(|xy| {
+            xy.split(',')
+                .filter_map(|v| v.trim().parse().ok())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert_eq!(b.len(), 2, "{door}");
+    assert!(
+        (b[0] - 240.0).abs() < 3.0 && (b[1] - 180.0).abs() < 3.0,
+        "{door}"
+    );
+    screenshot(&tab, Some("line[data-window='0']"), "serve-doors.png");
+    drop(browser);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,6 +1,7 @@
 //! Edits to a scene file's text, as a live view makes them (a light
-//! dragged, a wall's end moved, an intensity, a colour or a material
-//! changed), and the scene's items as the view draws them.
+//! dragged, a wall's, a door's or a window's end moved, an intensity, a
+//! colour or a material changed, a door opened, a shutter drawn), and the
+//! scene's items as the view draws them.
 //!
 //! An edit rewrites only the value it changes, in place, so the rest of
 //! the file (its comments, its layout, every other number as written)
@@ -56,6 +57,23 @@ pub enum Edit {
         index: usize,
         material: MaterialKind,
     },
+    /// Moves one end of a door.
+    MoveDoorEnd {
+        index: usize,
+        end: End,
+        to: (f64, f64),
+    },
+    /// Opens or shuts a door.
+    DoorOpen { index: usize, open: bool },
+    /// Moves one end of a window.
+    MoveWindowEnd {
+        index: usize,
+        end: End,
+        to: (f64, f64),
+    },
+    /// Sets the share of a window (from its end `a`) that its shutter
+    /// covers, 0 to 1.
+    WindowShutter { index: usize, value: f64 },
 }
 
 /// An end of a segment.
@@ -113,6 +131,8 @@ pub fn apply(
         | Edit::LightSpectrum { index, .. }
         | Edit::LightDirection { index, .. } => ("lights", index),
         Edit::MoveWallEnd { index, .. } | Edit::WallMaterial { index, .. } => ("walls", index),
+        Edit::MoveDoorEnd { index, .. } | Edit::DoorOpen { index, .. } => ("doors", index),
+        Edit::MoveWindowEnd { index, .. } | Edit::WindowShutter { index, .. } => ("windows", index),
     };
     let item = locate::item_range(text, list, index)
         .ok_or_else(|| format!("there is no item {index} in `{list}` (counting from 0)"))?;
@@ -126,9 +146,12 @@ pub fn apply(
     let text = text.as_str();
     let (field, value) = match *edit {
         Edit::MoveLight { to, .. } => ("at", point(to)?),
-        Edit::MoveLightEnd { end, to, .. } | Edit::MoveWallEnd { end, to, .. } => {
-            (end.field(), point(to)?)
-        }
+        Edit::MoveLightEnd { end, to, .. }
+        | Edit::MoveWallEnd { end, to, .. }
+        | Edit::MoveDoorEnd { end, to, .. }
+        | Edit::MoveWindowEnd { end, to, .. } => (end.field(), point(to)?),
+        Edit::DoorOpen { open, .. } => ("open", open.to_string()),
+        Edit::WindowShutter { value, .. } => ("shutter", number(value)?),
         Edit::LightIntensity { value, .. } => ("intensity", number(value)?),
         Edit::LightColor {
             value: (r, g, b), ..
@@ -237,6 +260,25 @@ pub struct Items {
     pub walls: Vec<WallItem>,
     pub lights: Vec<LightItem>,
     pub glass: Vec<GlassItem>,
+    pub doors: Vec<DoorItem>,
+    pub windows: Vec<WindowItem>,
+}
+
+/// A door as drawn: its ends, and whether it is open.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DoorItem {
+    pub a: (f64, f64),
+    pub b: (f64, f64),
+    pub open: bool,
+}
+
+/// A window as drawn: its ends, and the share its shutter covers from
+/// `a`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct WindowItem {
+    pub a: (f64, f64),
+    pub b: (f64, f64),
+    pub shutter: f64,
 }
 
 /// A glass body as drawn: its corners, and its outline as SVG path data
@@ -533,12 +575,32 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
         })
         .collect();
     let glass = file.glass.iter().map(glass_item).collect();
+    let doors = file
+        .doors
+        .iter()
+        .map(|d| DoorItem {
+            a: (d.a.0, d.a.1),
+            b: (d.b.0, d.b.1),
+            open: d.open,
+        })
+        .collect();
+    let windows = file
+        .windows
+        .iter()
+        .map(|w| WindowItem {
+            a: (w.a.0, w.a.1),
+            b: (w.b.0, w.b.1),
+            shutter: w.shutter.0,
+        })
+        .collect();
     Ok(Items {
         canvas: (canvas.width, canvas.height),
         origin: (canvas.origin.x, canvas.origin.y),
         walls,
         lights,
         glass,
+        doors,
+        windows,
     })
 }
 
@@ -794,6 +856,145 @@ Scene(
         assert_eq!(
             items.glass[1].points,
             vec![(10.0, 10.0), (30.0, 10.0), (20.0, 30.0)]
+        );
+    }
+
+    /// A wall with a door and a window in it: each end moves, the door
+    /// opens and shuts, the shutter is drawn; the rest of the text stays,
+    /// the items say so, and a shutter past the window's end is refused.
+    #[test]
+    fn doors_and_windows_are_moved_opened_and_shuttered_in_place() {
+        const PLAN: &str = "Scene(
+    canvas: (100, 80),
+    floor: Color((0.5, 0.5, 0.5)),
+    walls: [
+        Wall(a: (10, 10), b: (40, 10)),
+        Wall(a: (50, 10), b: (60, 10)),
+        Wall(a: (80, 10), b: (90, 10)),
+    ],
+    doors: [Door(a: (40, 10), b: (50, 10))], // the front door
+    windows: [Window(a: (60, 10), b: (80, 10), shutter: 0.5)],
+    lights: [Point(at: (50, 40), intensity: 20)],
+)
+";
+        let run = |text: &str, e: Edit| {
+            apply(text, &e, Path::new("t.ron"), Path::new(".")).map(|(text, _)| text)
+        };
+        let opened = run(
+            PLAN,
+            Edit::DoorOpen {
+                index: 0,
+                open: true,
+            },
+        )
+        .unwrap();
+        assert!(
+            opened
+                .contains("doors: [Door(a: (40, 10), b: (50, 10), open: true)], // the front door"),
+            "{opened}"
+        );
+        let shut = run(
+            &opened,
+            Edit::DoorOpen {
+                index: 0,
+                open: false,
+            },
+        )
+        .unwrap();
+        assert!(shut.contains("open: false)], // the front door"), "{shut}");
+        let moved = run(
+            PLAN,
+            Edit::MoveDoorEnd {
+                index: 0,
+                end: End::B,
+                to: (48.5, 10.0),
+            },
+        )
+        .unwrap();
+        assert!(
+            moved.contains("Door(a: (40, 10), b: (48.5, 10))"),
+            "{moved}"
+        );
+        let drawn = run(
+            PLAN,
+            Edit::WindowShutter {
+                index: 0,
+                value: 0.25,
+            },
+        )
+        .unwrap();
+        assert!(
+            drawn.contains("Window(a: (60, 10), b: (80, 10), shutter: 0.25)"),
+            "{drawn}"
+        );
+        let window = run(
+            PLAN,
+            Edit::MoveWindowEnd {
+                index: 0,
+                end: End::A,
+                to: (62.0, 10.0),
+            },
+        )
+        .unwrap();
+        assert!(
+            window.contains("Window(a: (62, 10), b: (80, 10)"),
+            "{window}"
+        );
+        // Only the edited value changed.
+        assert_eq!(
+            drawn.replace("shutter: 0.25", "shutter: 0.5"),
+            PLAN,
+            "the rest of the text stays"
+        );
+        let loaded = crate::parse(&opened, Path::new("t.ron"), Path::new(".")).unwrap();
+        let listed = items(&opened, &loaded).unwrap();
+        assert_eq!(
+            listed.doors,
+            vec![DoorItem {
+                a: (40.0, 10.0),
+                b: (50.0, 10.0),
+                open: true
+            }]
+        );
+        assert_eq!(listed.windows[0].shutter, 0.5);
+        assert!(
+            run(
+                PLAN,
+                Edit::WindowShutter {
+                    index: 0,
+                    value: 1.5
+                }
+            )
+            .is_err()
+        );
+        assert!(
+            run(
+                PLAN,
+                Edit::DoorOpen {
+                    index: 1,
+                    open: true
+                }
+            )
+            .is_err()
+        );
+        // As the page sends them.
+        let sent: Edit =
+            serde_json::from_str(r#"{"op": "door_open", "index": 0, "open": true}"#).unwrap();
+        assert_eq!(
+            sent,
+            Edit::DoorOpen {
+                index: 0,
+                open: true
+            }
+        );
+        let sent: Edit =
+            serde_json::from_str(r#"{"op": "window_shutter", "index": 0, "value": 0.3}"#).unwrap();
+        assert_eq!(
+            sent,
+            Edit::WindowShutter {
+                index: 0,
+                value: 0.3
+            }
         );
     }
 }

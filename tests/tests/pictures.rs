@@ -108,6 +108,7 @@ fn every_picture_in_the_docs_is_what_its_command_makes() {
         "serve-conflict.png",
         "serve-optics.png",
         "serve-measure.png",
+        "serve-doors.png",
         "python-batch.png",
         "import-tavern-map.png",
         "import-corridor-map.png",
