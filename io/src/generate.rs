@@ -215,18 +215,19 @@ impl Apartment {
         );
         let _ = writeln!(
             text,
-            "Scene(\n    canvas: ({width}, {height}),\n    floor: Tiles(size: 20.0, grout_width: 1.0, tile: (0.76, 0.7, 0.62), grout: (0.4, 0.38, 0.35), variation: 0.15),\n    walls: [\n{}    ],\n    lights: [\n{lights}    ],\n    render: (samples: 16, bounces: 3),\n)",
-            walls.text
+            "Scene(\n    canvas: ({width}, {height}),\n    floor: Tiles(size: 20.0, grout_width: 1.0, tile: (0.76, 0.7, 0.62), grout: (0.4, 0.38, 0.35), variation: 0.15),\n    walls: [\n{}    ],\n    doors: [\n{}    ],\n    lights: [\n{lights}    ],\n    render: (samples: 16, bounces: 3),\n)",
+            walls.text, walls.doors
         );
         text
     }
 }
 
-/// Wall lines of scene text, counted.
+/// Wall lines of scene text, counted, and the doors' lines.
 #[derive(Default)]
 struct Walls {
     text: String,
     count: usize,
+    doors: String,
 }
 
 impl Walls {
@@ -244,7 +245,8 @@ impl Walls {
     }
 
     /// A wall from `a` to `b` with an opening centred at fraction `at` of
-    /// it: a window (a clear pane) or a door (nothing).
+    /// it: a window (a clear pane) or an open door (no wall, but a bound
+    /// between the rooms).
     fn split(&mut self, a: (f64, f64), b: (f64, f64), at: f64, window: bool) {
         let width = if window { WINDOW } else { DOOR };
         let length = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
@@ -256,6 +258,13 @@ impl Walls {
                 p(t0),
                 p(t1),
                 ", material: Transparent(tint: (0.9, 0.95, 1.0))",
+            );
+        } else {
+            let (d0, d1) = (p(t0), p(t1));
+            let _ = writeln!(
+                self.doors,
+                "        Door(a: ({:.2}, {:.2}), b: ({:.2}, {:.2}), open: true),",
+                d0.0, d0.1, d1.0, d1.1
             );
         }
         self.wall(p(t1), b, "");

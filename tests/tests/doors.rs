@@ -132,11 +132,11 @@ fn a_door_bounds_two_rooms_open_or_shut() {
 }
 
 /// Generated apartments (`flatray generate`) of 4, 9 and 16 rooms under
-/// several seeds: with the door width a little over the generator's
-/// doors (24 units), every room of the grid is a region of its own, and
-/// the outside one more; the rooms share the grid about evenly (the inner
-/// grid lines move by up to a fifth of a room). Without it, the doors'
-/// gaps join rooms: fewer regions of a room's size.
+/// several seeds, whose doors are `Door` elements (open): every room of
+/// the grid is a region of its own, and the outside one more; the rooms
+/// share the grid about evenly (the inner grid lines move by up to a
+/// fifth of a room). Without the doors, their gaps join rooms (fewer
+/// regions of a room's size), unless the door width closes the gaps.
 #[test]
 fn the_rooms_of_a_generated_apartment_are_found_one_by_one() {
     for rooms in [4u32, 9, 16] {
@@ -148,7 +148,8 @@ fn the_rooms_of_a_generated_apartment_are_found_one_by_one() {
             };
             let loaded = scene(&apartment.to_ron());
             let (w, h) = flatray_tracer::image_size(&loaded.scene, 0.5);
-            let found = flatray_io::rooms::find(&loaded.scene, (w, h), &[], &loaded.doors, 25.0)
+            assert!(!loaded.doors.is_empty());
+            let found = flatray_io::rooms::find(&loaded.scene, (w, h), &[], &loaded.doors, 0.0)
                 .expect("regions");
             let inside: Vec<f64> = found
                 .rooms
@@ -183,16 +184,26 @@ fn the_rooms_of_a_generated_apartment_are_found_one_by_one() {
                     "{what}: {area} of {share}"
                 );
             }
-            let joined = flatray_io::rooms::find(&loaded.scene, (w, h), &[], &loaded.doors, 0.0)
-                .expect("regions");
-            let joined_rooms = joined
-                .rooms
-                .iter()
-                .filter(|r| !r.open && r.area > 0.25 * share)
-                .count();
+            let rooms_of = |doors: &[_], width: f64| {
+                let found = flatray_io::rooms::find(&loaded.scene, (w, h), &[], doors, width)
+                    .expect("regions");
+                found
+                    .rooms
+                    .iter()
+                    .filter(|r| !r.open && r.area > 0.25 * share)
+                    .count()
+            };
+            let joined = rooms_of(&[], 0.0);
             assert!(
-                joined_rooms < rooms as usize,
-                "{what}: {joined_rooms} rooms without the door gaps closed"
+                joined < rooms as usize,
+                "{what}: {joined} rooms without the doors"
+            );
+            // A door width a little over the generator's doors (24 units)
+            // closes their gaps without them.
+            assert_eq!(
+                rooms_of(&[], 25.0),
+                rooms as usize,
+                "{what}: by the door width"
             );
         }
     }
