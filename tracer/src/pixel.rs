@@ -531,7 +531,7 @@ fn path_samples(
 /// One floor point in this many takes the light through glass edges
 /// (`estimators::refracted`) for its half of the pass's points: the light
 /// inside glass varies gently across a pixel, and each look costs several
-/// path samples (`docs/model.md` has the study that chose 8).
+/// path samples (`docs/performance.md` has the study that chose 8).
 pub(crate) const GLASS_POINT_SHARE: usize = 8;
 
 /// One half of a pass's floor points ([`noise_halves`]): all its points,
