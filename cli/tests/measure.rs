@@ -579,4 +579,19 @@ fn lumens_give_lux_under_the_two_and_a_half_d_reading() {
         stderr.contains("light 0") && stderr.contains("falloff"),
         "{stderr}"
     );
+    // A directional light's intensity is the illuminance of a surface
+    // facing it: an open floor across its rays takes exactly that.
+    let open = format!(
+        r#"Scene(
+    canvas: (100, 100),
+    floor: Color((1, 1, 1)),
+    walls: [],
+    lights: [Directional(direction: (0.6, 0.8), intensity: 500)],
+    render: (samples: 4, bounces: 0),
+    units: (metres_per_unit: {METRES}, light: Lumens(storey: {STOREY})),
+)"#
+    );
+    let (json, _) = measure(&dir, &open, &[]);
+    let (e, se) = figure(&json["rooms"][0], "e_avg");
+    assert!((e - 500.0).abs() <= 4.0 * se + 1e-9 * 500.0, "{e} ± {se}");
 }

@@ -408,8 +408,9 @@ pub enum LightUnits {
     Relative,
     /// Photometric units under the 2.5D reading (`docs/model.md`): a
     /// lamp's (and an emitting wall's) intensity is its luminous flux in
-    /// lumens, spread evenly over a storey `storey` metres high; a sun's,
-    /// its illuminance in lux on a surface facing it; a sky's, the
+    /// lumens, spread evenly over a storey `storey` metres high; a sun's
+    /// or a directional light's, its illuminance in lux on a surface
+    /// facing it; a sky's, the
     /// illuminance in lux of a floor open to it. The floor's fluence is
     /// then in lux.
     Lumens {

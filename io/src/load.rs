@@ -458,7 +458,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         if !matches!(spec, LightSpec::Sky { .. }) {
             lights.push(light(k, spec, default_falloff, source, &mut walls)?);
             let kind = match spec {
-                LightSpec::Sun { .. } => Photometry::Sun,
+                LightSpec::Sun { .. } | LightSpec::Directional { .. } => Photometry::Sun,
                 _ => Photometry::Lamp,
             };
             photometry.push((kind, Place::Light(k)));
@@ -1057,7 +1057,8 @@ fn sky_lights(
 enum Photometry {
     /// A lamp or an emitting wall: its intensity is a luminous flux.
     Lamp,
-    /// Its intensity is the illuminance of a surface facing it.
+    /// A sun or a directional light: its intensity is the illuminance of
+    /// a surface facing it.
     Sun,
     /// One of a sky's frame of lines: its intensity is the illuminance of
     /// a floor open to the sky.
