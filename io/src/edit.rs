@@ -394,6 +394,29 @@ fn glass_item(g: &crate::format::GlassSpec) -> GlassItem {
     }
 }
 
+/// The file's doors and windows as drawn.
+fn openings(file: &crate::format::SceneFile) -> (Vec<DoorItem>, Vec<WindowItem>) {
+    let doors = file
+        .doors
+        .iter()
+        .map(|d| DoorItem {
+            a: (d.a.0, d.a.1),
+            b: (d.b.0, d.b.1),
+            open: d.open,
+        })
+        .collect();
+    let windows = file
+        .windows
+        .iter()
+        .map(|w| WindowItem {
+            a: (w.a.0, w.a.1),
+            b: (w.b.0, w.b.1),
+            shutter: w.shutter.0,
+        })
+        .collect();
+    (doors, windows)
+}
+
 /// The items of a scene `text` that loads (`loaded`, its canvas).
 pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
@@ -575,24 +598,7 @@ pub fn items(text: &str, loaded: &crate::Loaded) -> Result<Items, String> {
         })
         .collect();
     let glass = file.glass.iter().map(glass_item).collect();
-    let doors = file
-        .doors
-        .iter()
-        .map(|d| DoorItem {
-            a: (d.a.0, d.a.1),
-            b: (d.b.0, d.b.1),
-            open: d.open,
-        })
-        .collect();
-    let windows = file
-        .windows
-        .iter()
-        .map(|w| WindowItem {
-            a: (w.a.0, w.a.1),
-            b: (w.b.0, w.b.1),
-            shutter: w.shutter.0,
-        })
-        .collect();
+    let (doors, windows) = openings(&file);
     Ok(Items {
         canvas: (canvas.width, canvas.height),
         origin: (canvas.origin.x, canvas.origin.y),

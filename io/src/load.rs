@@ -457,11 +457,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         // A sky's frame encloses every wall: it is built once they are.
         if !matches!(spec, LightSpec::Sky { .. }) {
             lights.push(light(k, spec, default_falloff, source, &mut walls)?);
-            let kind = match spec {
-                LightSpec::Sun { .. } | LightSpec::Directional { .. } => Photometry::Sun,
-                _ => Photometry::Lamp,
-            };
-            photometry.push((kind, Place::Light(k)));
+            photometry.push((Photometry::of(spec), Place::Light(k)));
         }
     }
 
@@ -478,22 +474,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         lights.push(sky);
         photometry.push((Photometry::Sky, Place::Light(k)));
     }
-    if let Some(Units {
-        metres_per_unit,
-        light: LightUnits::Lumens { storey },
-    }) = file.units
-    {
-        for (light, &(kind, place)) in lights.iter_mut().zip(&photometry) {
-            in_lumens(light, kind, (storey.0, metres_per_unit.0)).map_err(|message| {
-                let what = match place {
-                    Place::Wall(w) => format!("wall {w}"),
-                    Place::Light(k) => format!("light {k}"),
-                    _ => "a light".to_string(),
-                };
-                source.error(place, format!("{what}: {message}"))
-            })?;
-        }
-    }
+    light_units(&file, &mut lights, &photometry, source)?;
 
     let warnings = match *source {
         Source::Text { text, .. } => {
@@ -1052,6 +1033,35 @@ fn sky_lights(
     Ok(lights)
 }
 
+/// The file's lights in the renderer's units: with
+/// [`LightUnits::Lumens`], each of `lights` turned from photometric units
+/// by what `photometry` says it is ([`in_lumens`]); else as they are.
+fn light_units(
+    file: &SceneFile,
+    lights: &mut [Light],
+    photometry: &[(Photometry, Place)],
+    source: &Source,
+) -> Result<(), SceneError> {
+    let Some(Units {
+        metres_per_unit,
+        light: LightUnits::Lumens { storey },
+    }) = file.units
+    else {
+        return Ok(());
+    };
+    for (light, &(kind, place)) in lights.iter_mut().zip(photometry) {
+        in_lumens(light, kind, (storey.0, metres_per_unit.0)).map_err(|message| {
+            let what = match place {
+                Place::Wall(w) => format!("wall {w}"),
+                Place::Light(k) => format!("light {k}"),
+                _ => "a light".to_string(),
+            };
+            source.error(place, format!("{what}: {message}"))
+        })?;
+    }
+    Ok(())
+}
+
 /// What a light is to the scene's units of light ([`LightUnits`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Photometry {
@@ -1063,6 +1073,16 @@ enum Photometry {
     /// One of a sky's frame of lines: its intensity is the illuminance of
     /// a floor open to the sky.
     Sky,
+}
+
+impl Photometry {
+    /// What the file's light `spec` is (not a sky, which is built apart).
+    fn of(spec: &LightSpec) -> Photometry {
+        match spec {
+            LightSpec::Sun { .. } | LightSpec::Directional { .. } => Photometry::Sun,
+            _ => Photometry::Lamp,
+        }
+    }
 }
 
 /// `light`'s intensity, given in the photometric units of
