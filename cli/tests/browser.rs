@@ -206,11 +206,31 @@ fn wait_until(tab: &Tab, what: &str, js: &str) {
     }
 }
 
-#[test]
-fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
-    let dir = std::env::temp_dir().join(format!("flatray-browser-{}", std::process::id()));
+/// A new, empty folder of this test process's own, named `name`.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("flatray-browser{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The body of a response, read whole (up to 64 MiB).
+fn body(mut r: ureq::http::Response<ureq::Body>) -> Vec<u8> {
+    r.body_mut()
+        .with_config()
+        .limit(64 << 20)
+        .read_to_vec()
+        .unwrap()
+}
+
+/// What the server at `url` answers a `GET` of `path` with.
+fn get(url: &str, path: &str) -> Vec<u8> {
+    body(ureq::get(&format!("{url}{path}")).call().unwrap())
+}
+
+#[test]
+fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
+    let dir = scratch("");
     let scene = dir.join("room.ron");
     let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
     std::fs::copy(&room, &scene).unwrap();
@@ -220,14 +240,7 @@ fn a_lamp_dragged_in_the_page_moves_in_the_render_and_is_saved() {
     let (browser, tab) = open(&dir, &url);
     tab.wait_for_element("circle[data-light='1']").unwrap();
     let first_job = wait_for_render(&tab, 0, 64);
-    let export = |path: &str| -> Vec<u8> {
-        let mut r = ureq::get(&format!("{url}{path}")).call().unwrap();
-        r.body_mut()
-            .with_config()
-            .limit(64 << 20)
-            .read_to_vec()
-            .unwrap()
-    };
+    let export = |path: &str| get(&url, path);
     let before = export("/api/export.png");
 
     // Drag the second lamp, (313, 134), to (420, 420), as a user would.
@@ -554,9 +567,7 @@ fn spectra_lenses_spots_and_the_sun_are_drawn_as_they_are_and_can_be_changed() {
 /// after a lamp is dragged, the map is measured again and changes.
 #[test]
 fn the_measure_switch_draws_the_rooms_map_over_the_render_and_follows_edits() {
-    let dir = std::env::temp_dir().join(format!("flatray-browser-measure-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("-measure");
     let scene = dir.join("room.ron");
     let room = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.ron");
     std::fs::copy(&room, &scene).unwrap();
@@ -603,18 +614,12 @@ fn the_measure_switch_draws_the_rooms_map_over_the_render_and_follows_edits() {
         .unwrap_or_default()
         .to_string();
     let map = |url: &str| -> image::RgbImage {
-        let mut r = ureq::post(&format!("{url}/api/measure.png"))
+        let r = ureq::post(&format!("{url}/api/measure.png"))
             .header("content-type", "application/json")
             .header("x-flatray-token", &token)
             .send("{}")
             .unwrap();
-        let bytes = r
-            .body_mut()
-            .with_config()
-            .limit(64 << 20)
-            .read_to_vec()
-            .unwrap();
-        image::load_from_memory(&bytes).unwrap().to_rgb8()
+        image::load_from_memory(&body(r)).unwrap().to_rgb8()
     };
     let before = map(&url);
     // Inside the room the cells take the colour scale, not the grey of
@@ -659,9 +664,7 @@ fn the_measure_switch_draws_the_rooms_map_over_the_render_and_follows_edits() {
 /// each lights it; a door's end dragged moves in the scene's text.
 #[test]
 fn doors_open_and_shutters_draw_back_in_the_page() {
-    let dir = std::env::temp_dir().join(format!("flatray-browser-doors-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("-doors");
     let scene = dir.join("flat.ron");
     let wall = |a: (f64, f64), b: (f64, f64)| {
         format!(
@@ -704,14 +707,7 @@ fn doors_open_and_shutters_draw_back_in_the_page() {
     let (browser, tab) = open(&dir, &url);
     tab.wait_for_element("line[data-door='0']").unwrap();
     let mut job = wait_for_render(&tab, 0, 16);
-    let export = |path: &str| -> Vec<u8> {
-        let mut r = ureq::get(&format!("{url}{path}")).call().unwrap();
-        r.body_mut()
-            .with_config()
-            .limit(64 << 20)
-            .read_to_vec()
-            .unwrap()
-    };
+    let export = |path: &str| get(&url, path);
     let east = (360.0, 160.0);
     let shut = brightness(&export("/api/export.png"), east, 20.0);
     assert!(shut < 1.0, "the east room, shut: {shut}");
