@@ -609,16 +609,13 @@ fn unobstructed_sky(file: &SceneFile) -> Option<f64> {
             .map(|l| match *l {
                 LightSpec::Sky {
                     color, intensity, ..
-                } if lumens => {
-                    let luminance = 0.2126 * color.0 + 0.7152 * color.1 + 0.0722 * color.2;
-                    if luminance > 0.0 { intensity.0 } else { 0.0 }
-                }
-                LightSpec::Sky {
-                    color, intensity, ..
                 } => {
-                    std::f64::consts::TAU
-                        * intensity.0
-                        * (0.2126 * color.0 + 0.7152 * color.1 + 0.0722 * color.2)
+                    let luminance = crate::measure::luminance((color.0, color.1, color.2));
+                    match lumens {
+                        true if luminance > 0.0 => intensity.0,
+                        true => 0.0,
+                        false => std::f64::consts::TAU * intensity.0 * luminance,
+                    }
                 }
                 _ => 0.0,
             })
@@ -1099,7 +1096,7 @@ fn in_lumens(
 ) -> Result<(), String> {
     let luminance = match light.spectrum {
         Some(_) => 1.0,
-        None => 0.2126 * light.color.x + 0.7152 * light.color.y + 0.0722 * light.color.z,
+        None => crate::measure::luminance(light.color.into()),
     };
     if luminance.is_nan() || luminance <= 0.0 {
         // A black light sends nothing, in any units.

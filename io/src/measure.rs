@@ -21,6 +21,11 @@ use crate::rooms::Rooms;
 /// Luminance weights of linear Rec. 709 RGB.
 const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
 
+/// The luminance of a linear Rec. 709 colour.
+pub(crate) fn luminance((r, g, b): (f64, f64, f64)) -> f64 {
+    LUMINANCE[0] * r + LUMINANCE[1] * g + LUMINANCE[2] * b
+}
+
 /// A floor albedo channel below this is too dark to read the fluence
 /// through: such pixels are left out of the grid.
 const LEAST_ALBEDO: f64 = 0.02;
