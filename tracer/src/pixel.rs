@@ -231,7 +231,7 @@ fn floor_direct(
     floor_points(
         scene,
         trace.light_table,
-        pixel,
+        (pixel, (corner, step)),
         points.clone(),
         &mut batch.floor,
     );
@@ -353,14 +353,14 @@ fn square_lights(
     square
 }
 
-/// The passes' floor `points`, from the pixel's scrambled Sobol sequence,
-/// and the numbers each line light draws, in the order
-/// `direct_light_with` draws them, into `floor`.
+/// The passes' floor `points` over the pixel's square `area`, from its
+/// scrambled Sobol sequence, and the numbers each line light draws, in the
+/// order `direct_light_with` draws them, into `floor`.
 #[inline(always)]
 fn floor_points(
     scene: &Scene,
     light_table: Option<&LightTable>,
-    pixel: &Pixel,
+    (pixel, area): (&Pixel, (DVec2, DVec2)),
     points: Range<u32>,
     floor: &mut Strata,
 ) {
@@ -369,9 +369,8 @@ fn floor_points(
     let numbers = numbers_per_point(scene, light_table);
     let bits = pixel.key.stream(FLOOR_SEED_STREAM).bits();
     let seeds = [(bits >> 32) as u32, bits as u32];
-    let corner = scene.canvas.origin + pixel.position * pixel.step;
     floor.points.resize(points.len(), DVec2::ZERO);
-    sobol_points(points.start, seeds, (corner, pixel.step), &mut floor.points);
+    sobol_points(points.start, seeds, area, &mut floor.points);
     if numbers > 0 {
         for k in points {
             let mut stream = pixel.key.stream(FLOOR_STREAMS + k as u64);
