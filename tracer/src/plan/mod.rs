@@ -224,126 +224,35 @@ impl Plan {
     pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
         let inventory = Inventory::of(scene);
         let Inventory {
-            aimed,
-            lasers,
-            areas,
-            rough_mirrors,
-            glass_edges,
             diffuse,
-            occluders,
             reflectors,
-            specular_reflectors,
+            glass_edges,
             ..
         } = inventory;
         let force = options.reference;
-        let no_lights = scene.lights.is_empty();
-
         // The light tracer casts no shadow ray and reads no memo.
         let tracing_light = options.integrator == Integrator::Light;
-        let shadows = !tracing_light && (force || (occluders > 0 && !no_lights));
-        // Light can come by mirrors and glass without a diffuse bounce.
-        let specular_paths = options.specular > 0 && specular_reflectors > 0;
-        let indirect_possible = (options.bounces > 0 || specular_paths) && !no_lights;
-        // Rays leave the floor where they can bring light back: off a
-        // wall that reflects, within the bounces, or from a light with an
-        // area seen in a mirror or through glass.
-        let indirect = indirect_possible
-            && ((options.bounces > 0 && (force || reflectors > 0))
-                || (specular_paths && areas > 0));
-        // A rough mirror's own samples meet lights with an area, weighed
-        // against next-event estimation there.
-        let glossy_paths = options.bounces > 0 && rough_mirrors > 0;
-        let mirror_emission =
-            indirect && (force || ((specular_paths || glossy_paths) && areas > 0));
+        let shadows =
+            !tracing_light && (force || (inventory.occluders > 0 && !scene.lights.is_empty()));
         let (mirror_pairs, mirror_lights, glass_pairs, glass_lights) =
             closed_form_decisions(scene, options, &inventory, shadows);
-        // Lines and circles through glass: what enters a body and leaves
-        // it, or reflects inside it first, photons take far better than
-        // paths, which meet a small light by chance. Not with arc lights,
-        // which paths find as walls.
-        let area_targets = if glass_edges > 0 {
-            crate::caustics::area_targets(scene).len()
-        } else {
-            0
-        };
-        let area_photons = options.caustics
-            && !tracing_light
-            && specular_paths
-            && areas > 0
-            && glass_edges > 0
-            && area_targets <= crate::caustics::MAX_AREA_TARGETS
-            && !scene
-                .lights
-                .iter()
-                .any(|l| matches!(l.shape, crate::scene::LightShape::Arc { .. }));
-        // Past its last diffuse bounce a path goes on only where such a
-        // light could be met, and photons do not take it; not forced, as
-        // it would find none.
-        let last_legs = indirect && specular_paths && areas > 0 && !area_photons;
-        // Path tracing cannot find their light after a mirror or glass,
-        // and leaves it to photons off a rough mirror at a path's first
-        // bounce (where a narrow lobe makes paths noisy): the caustic pass
-        // does, wherever both are in the scene.
-        // A laser's light no path finds at all: the caustic pass takes it
-        // wherever the scene has one.
-        let caustics = options.caustics
-            && !tracing_light
-            && !no_lights
-            && (((specular_paths || glossy_paths) && aimed > 0) || lasers > 0 || area_photons);
+        let transport = transport_decisions(scene, options, &inventory);
         let (wall_memo_fits, wall_memo, onward) = memo_decisions(
             scene,
             options,
             MemoFacts {
                 tracing_light,
-                indirect,
+                indirect: transport.indirect,
                 force,
                 diffuse,
                 reflectors,
                 glass_edges,
             },
         );
+        let floor = floor_decisions(scene, options, &inventory, &transport);
         let pairs = scene.walls.len() * scene.lights.len();
         let (width, height) = crate::options::image_size(scene, options.scale);
         let mask_cells = width as u64 * height as u64 * scene.lights.len() as u64;
-        // Path tracing's next-event estimation, wherever it runs, takes
-        // the table's lights in a scene of many (the same in the reference:
-        // it is the estimator, not a fast path).
-        let light_table = !tracing_light
-            && match options.light_choice {
-                LightChoice::Auto => scene.lights.len() > MANY_LIGHTS,
-                LightChoice::Every => false,
-                LightChoice::Table => !no_lights,
-            };
-        // Points, spots and suns over each pixel's square in closed form,
-        // where the floor's direct light is estimated once per pixel.
-        let squares = !light_table
-            && scene
-                .lights
-                .iter()
-                .any(|l| crate::estimators::square::takes_square(&l.shape));
-        // The floor memo runs where paths reuse it, and where the squares
-        // make a pixel's direct light exact at shadow edges. The reference
-        // never changes how the floor's direct light is estimated: that
-        // would change the image.
-        let floor_memo = !tracing_light
-            && options.memo.enabled
-            && ((indirect_possible && reflectors > 0) || (squares && occluders > 0));
-        let floor_squares = floor_memo && squares;
-        let absorbing_glass = scene
-            .glass
-            .iter()
-            .filter(|g| g.absorption != crate::Rgb::ZERO)
-            .count();
-        let line_pieces = crate::lines::pieces_per_pixel(scene, (width, height));
-        let dense_walls = line_pieces > crate::lines::MAX_PIECES_PER_PIXEL;
-        let line_piece_tenths = (10.0 / line_pieces).round().min(u32::MAX as f64) as u32;
-        let floor_lines = floor_memo
-            && indirect
-            && options.floor_lines
-            && !dense_walls
-            && options.integrator == Integrator::Path
-            && !options.adaptive
-            && absorbing_glass == 0;
         // Each fast path says where it runs (`accel`). With a light table
         // too, a pixel's points trace a shared transmittance once, when
         // one of them first takes that light.
@@ -355,22 +264,22 @@ impl Plan {
             mirrors: inventory.mirrors,
             floor_albedo_walls: inventory.floor_albedo_walls,
             tracing_light,
-            indirect,
+            indirect: transport.indirect,
             shadows,
-            floor_memo,
+            floor_memo: floor.floor_memo,
             wall_memo,
             onward,
-            light_table,
+            light_table: floor.light_table,
             pairs,
             mask_cells,
         });
-        let floor_coherence = fast.coherence.runs;
-        let floor_ray_culling = fast.culling.runs;
         Plan {
+            floor_coherence: fast.coherence.runs,
+            floor_ray_culling: fast.culling.runs,
             fast,
             fast_paths: options.fast_paths,
             light_choice: options.light_choice,
-            light_table,
+            light_table: floor.light_table,
             inventory,
             bounces: options.bounces,
             specular: options.specular,
@@ -382,37 +291,197 @@ impl Plan {
             floor_points: crate::passes::pass_points(
                 options.samples.min(crate::passes::FIRST_PASS),
                 options.memo.floor_samples,
-                crate::passes::PointRule::First { light_table },
+                crate::passes::PointRule::First {
+                    light_table: floor.light_table,
+                },
             ),
             wall_memo_fits,
             pairs,
             mask_cells,
             shadows,
-            indirect,
-            mirror_emission,
+            indirect: transport.indirect,
+            mirror_emission: transport.mirror_emission,
             mirror_lights,
             mirror_pairs,
             glass_lights,
             glass_pairs,
-            area_photons,
-            area_targets,
-            last_legs,
-            caustics,
+            area_photons: transport.area_photons,
+            area_targets: transport.area_targets,
+            last_legs: transport.last_legs,
+            caustics: transport.caustics,
             wall_memo,
             onward,
             original: options.integrator == Integrator::Original,
             onward_enabled: options.memo.onward,
-            floor_memo,
-            floor_coherence,
-            floor_squares,
-            floor_lines,
+            floor_memo: floor.floor_memo,
+            floor_squares: floor.floor_squares,
+            floor_lines: floor.floor_lines,
             lines_enabled: options.floor_lines,
             adaptive: options.adaptive,
-            absorbing_glass,
-            line_piece_tenths,
-            dense_walls,
-            floor_ray_culling,
+            absorbing_glass: floor.absorbing_glass,
+            line_piece_tenths: floor.line_piece_tenths,
+            dense_walls: floor.dense_walls,
         }
+    }
+}
+
+/// How light gets from the lights to the floor in a render: whether
+/// paths leave the floor, which lights path rays meet, and what the
+/// caustic pass takes ([`transport_decisions`]).
+struct Transport {
+    /// Paths can bring light back at all: bounces, or mirrors and glass.
+    indirect_possible: bool,
+    indirect: bool,
+    mirror_emission: bool,
+    area_targets: usize,
+    area_photons: bool,
+    last_legs: bool,
+    caustics: bool,
+}
+
+/// The plan's decisions of how light travels (`Plan::indirect`,
+/// `mirror_emission`, `area_photons`, `last_legs`, `caustics`).
+fn transport_decisions(scene: &Scene, options: &RenderOptions, inventory: &Inventory) -> Transport {
+    let Inventory {
+        aimed,
+        lasers,
+        areas,
+        rough_mirrors,
+        glass_edges,
+        reflectors,
+        specular_reflectors,
+        ..
+    } = *inventory;
+    let force = options.reference;
+    let no_lights = scene.lights.is_empty();
+    let tracing_light = options.integrator == Integrator::Light;
+    // Light can come by mirrors and glass without a diffuse bounce.
+    let specular_paths = options.specular > 0 && specular_reflectors > 0;
+    let indirect_possible = (options.bounces > 0 || specular_paths) && !no_lights;
+    // Rays leave the floor where they can bring light back: off a
+    // wall that reflects, within the bounces, or from a light with an
+    // area seen in a mirror or through glass.
+    let indirect = indirect_possible
+        && ((options.bounces > 0 && (force || reflectors > 0)) || (specular_paths && areas > 0));
+    // A rough mirror's own samples meet lights with an area, weighed
+    // against next-event estimation there.
+    let glossy_paths = options.bounces > 0 && rough_mirrors > 0;
+    let mirror_emission = indirect && (force || ((specular_paths || glossy_paths) && areas > 0));
+    // Lines and circles through glass: what enters a body and leaves
+    // it, or reflects inside it first, photons take far better than
+    // paths, which meet a small light by chance. Not with arc lights,
+    // which paths find as walls.
+    let area_targets = if glass_edges > 0 {
+        crate::caustics::area_targets(scene).len()
+    } else {
+        0
+    };
+    let area_photons = options.caustics
+        && !tracing_light
+        && specular_paths
+        && areas > 0
+        && glass_edges > 0
+        && area_targets <= crate::caustics::MAX_AREA_TARGETS
+        && !scene
+            .lights
+            .iter()
+            .any(|l| matches!(l.shape, crate::scene::LightShape::Arc { .. }));
+    // Past its last diffuse bounce a path goes on only where such a
+    // light could be met, and photons do not take it; not forced, as
+    // it would find none.
+    let last_legs = indirect && specular_paths && areas > 0 && !area_photons;
+    // Path tracing cannot find their light after a mirror or glass,
+    // and leaves it to photons off a rough mirror at a path's first
+    // bounce (where a narrow lobe makes paths noisy): the caustic pass
+    // does, wherever both are in the scene.
+    // A laser's light no path finds at all: the caustic pass takes it
+    // wherever the scene has one.
+    let caustics = options.caustics
+        && !tracing_light
+        && !no_lights
+        && (((specular_paths || glossy_paths) && aimed > 0) || lasers > 0 || area_photons);
+    Transport {
+        indirect_possible,
+        indirect,
+        mirror_emission,
+        area_targets,
+        area_photons,
+        last_legs,
+        caustics,
+    }
+}
+
+/// How the floor's direct and indirect light are estimated
+/// ([`floor_decisions`]).
+struct FloorDecisions {
+    light_table: bool,
+    floor_memo: bool,
+    floor_squares: bool,
+    floor_lines: bool,
+    absorbing_glass: usize,
+    line_piece_tenths: u32,
+    dense_walls: bool,
+}
+
+/// The plan's decisions for the floor: the light table, the floor memo
+/// and its squares, and the lines across the image.
+fn floor_decisions(
+    scene: &Scene,
+    options: &RenderOptions,
+    inventory: &Inventory,
+    transport: &Transport,
+) -> FloorDecisions {
+    let tracing_light = options.integrator == Integrator::Light;
+    let no_lights = scene.lights.is_empty();
+    // Path tracing's next-event estimation, wherever it runs, takes
+    // the table's lights in a scene of many (the same in the reference:
+    // it is the estimator, not a fast path).
+    let light_table = !tracing_light
+        && match options.light_choice {
+            LightChoice::Auto => scene.lights.len() > MANY_LIGHTS,
+            LightChoice::Every => false,
+            LightChoice::Table => !no_lights,
+        };
+    // Points, spots and suns over each pixel's square in closed form,
+    // where the floor's direct light is estimated once per pixel.
+    let squares = !light_table
+        && scene
+            .lights
+            .iter()
+            .any(|l| crate::estimators::square::takes_square(&l.shape));
+    // The floor memo runs where paths reuse it, and where the squares
+    // make a pixel's direct light exact at shadow edges. The reference
+    // never changes how the floor's direct light is estimated: that
+    // would change the image.
+    let floor_memo = !tracing_light
+        && options.memo.enabled
+        && ((transport.indirect_possible && inventory.reflectors > 0)
+            || (squares && inventory.occluders > 0));
+    let floor_squares = floor_memo && squares;
+    let absorbing_glass = scene
+        .glass
+        .iter()
+        .filter(|g| g.absorption != crate::Rgb::ZERO)
+        .count();
+    let (width, height) = crate::options::image_size(scene, options.scale);
+    let line_pieces = crate::lines::pieces_per_pixel(scene, (width, height));
+    let dense_walls = line_pieces > crate::lines::MAX_PIECES_PER_PIXEL;
+    let line_piece_tenths = (10.0 / line_pieces).round().min(u32::MAX as f64) as u32;
+    let floor_lines = floor_memo
+        && transport.indirect
+        && options.floor_lines
+        && !dense_walls
+        && options.integrator == Integrator::Path
+        && !options.adaptive
+        && absorbing_glass == 0;
+    FloorDecisions {
+        light_table,
+        floor_memo,
+        floor_squares,
+        floor_lines,
+        absorbing_glass,
+        line_piece_tenths,
+        dense_walls,
     }
 }
 
