@@ -26,6 +26,7 @@
 
 mod accel;
 mod caustics;
+mod decision;
 mod direct;
 mod estimators;
 mod film;

@@ -26,30 +26,9 @@ pub(crate) mod strata;
 
 use crate::options::{FastPath, RenderOptions};
 
-/// Whether a fast path runs in a render, and why: what the fast path
-/// declares it supports, written once in its own file. The plan keeps
-/// it, the pixel loop obeys it, and the plan's wording prints its reason.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Decision {
-    pub runs: bool,
-    pub why: String,
-}
+pub use crate::decision::Decision;
 
 impl Decision {
-    pub(crate) fn runs(why: impl Into<String>) -> Decision {
-        Decision {
-            runs: true,
-            why: why.into(),
-        }
-    }
-
-    pub(crate) fn skipped(why: impl Into<String>) -> Decision {
-        Decision {
-            runs: false,
-            why: why.into(),
-        }
-    }
-
     /// The reasons every fast path shares for not running: the reference
     /// model runs none, and `--without` leaves one out.
     pub(crate) fn allowed(options: &RenderOptions, path: FastPath, flag: &str) -> Option<Decision> {
