@@ -27,7 +27,7 @@ flatray render scenes/room.ron --draw-walls -o "$out/room-walls.png"
 flatray render scenes/room.ron --integrator light --spp 16 -o "$out/room-light.png"
 flatray render scenes/soft-shadow.ron -o "$out/soft-shadow.png"
 flatray render scenes/prism.ron -o "$out/prism.png"
-flatray render scenes/bathroom.ron --spp 256 --caustics off -o "$out/bathroom-no-caustics.png"
+flatray render scenes/bathroom.ron --spp 256 --specular 0 -o "$out/bathroom-specular-0.png"
 flatray render scenes/bathroom.ron --spp 256 -o "$out/bathroom.png"
 # docs/tutorial.md
 flatray render scenes/first-flat.ron --spp 256 -o "$out/first-flat.png"

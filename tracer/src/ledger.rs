@@ -31,6 +31,9 @@ pub(crate) struct Ledger {
     /// Receivers take line and circle lights seen in one flat mirror in
     /// closed form (`estimators::exact::through_mirrors`).
     pub mirror_lights: bool,
+    /// Receivers take points, spots, suns and beams seen in one flat
+    /// mirror in closed form (`estimators::mirrored`).
+    pub aimed_mirrors: bool,
     /// Receivers inside glass take line and circle lights through one edge
     /// of their body in closed form (`estimators::refracted`).
     pub glass_lights: bool,
@@ -200,19 +203,27 @@ pub(crate) struct Photon {
 impl Ledger {
     /// Whether next-event estimation at a receiver of kind `at` takes the
     /// light of `light` that reaches it after `run`: in closed form through
-    /// one flat mirror or one glass edge, for a line or circle light at
-    /// the floor or a diffuse wall (a glossy wall's next-event estimation
+    /// one flat mirror or one glass edge, for a line or circle light, or
+    /// through one flat mirror for a point, spot, sun or beam, at the
+    /// floor or a diffuse wall (a glossy wall's next-event estimation
     /// takes no light through mirrors or glass).
     #[inline]
     pub(crate) fn closed_form(self, light: LightKind, run: Run, at: Vertex) -> bool {
-        light == LightKind::Area
-            && at != Vertex::Glossy
+        at != Vertex::Glossy
             && run.events == 1
-            && match run.only {
-                Some(Event::FlatMirror) => self.mirror_lights,
-                Some(Event::GlassIn) => self.glass_lights,
+            && match (light, run.only) {
+                (LightKind::Area, Some(Event::FlatMirror)) => self.mirror_lights,
+                (LightKind::Area, Some(Event::GlassIn)) => self.glass_lights,
+                (LightKind::Aimed, Some(Event::FlatMirror)) => self.aimed_mirrors,
                 _ => false,
             }
+    }
+
+    /// Whether receivers take a closed form at their point alone
+    /// (`estimators::at_point`).
+    #[inline]
+    pub(crate) fn takes_at_point(self) -> bool {
+        self.mirror_lights || self.aimed_mirrors
     }
 
     /// What next-event estimation at a receiver of kind `at` takes of the
@@ -264,8 +275,11 @@ impl Ledger {
         if photon.area {
             photon.run.is_specular()
                 && !self.closed_form(LightKind::Area, photon.run, Vertex::Floor)
+        } else if photon.lobes > 0 || photon.unseen {
+            true
         } else {
-            photon.run.is_specular() || photon.lobes > 0 || photon.unseen
+            photon.run.is_specular()
+                && !self.closed_form(LightKind::Aimed, photon.run, Vertex::Floor)
         }
     }
 

@@ -17,7 +17,7 @@ use crate::accel::strata::{direct_light_chosen_strata, direct_light_strata};
 use crate::direct::{Strata, direct_light_chosen, direct_light_points, numbers_per_point};
 use crate::estimators::choice::LightTable;
 use crate::estimators::square::{Square, square_light, takes_square};
-use crate::estimators::{Receiver, Visibility, through_glass, through_mirrors};
+use crate::estimators::{Receiver, Visibility, at_point, through_glass};
 use crate::film::{PixelSums, Sums};
 use crate::lines::Lines;
 use crate::options::{LONG_LIST, RenderOptions};
@@ -436,8 +436,9 @@ fn sampled_direct(
     }
 }
 
-/// The closed forms of the floor's direct light through one flat mirror
-/// and through one glass edge, added at the passes' floor points (filled
+/// The closed forms of the floor's direct light, those each point takes
+/// on its own and those through one glass edge, added at the passes'
+/// floor points (filled
 /// from point `first_point` on) where the render takes them.
 #[inline(always)]
 fn closed_forms_at_points(
@@ -451,11 +452,13 @@ fn closed_forms_at_points(
     };
     let trace = &first.trace;
     let scene = trace.scene;
-    if trace.ledger.mirror_lights {
-        // Lines and circles seen in one flat mirror, in closed form at
-        // every point (`estimators::exact`).
+    if trace.ledger.takes_at_point() {
+        // The closed forms each point takes on its own: lights seen in
+        // one flat mirror (`estimators::at_point`).
         for (value, &x) in floor.values.iter_mut().zip(&floor.points) {
-            *value += through_mirrors(scene, &scene.flat_mirrors, x, Receiver::FLOOR, stats);
+            if let Some(v) = at_point(&trace.ledger, scene, (x, Receiver::FLOOR), None, stats) {
+                *value += v;
+            }
         }
     }
     if trace.ledger.glass_lights {

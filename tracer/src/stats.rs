@@ -78,6 +78,10 @@ pub struct Work {
     /// Shadow rays tested only against a list of the walls between their
     /// pixels and the light (a part of `shadow_rays`).
     pub listed_shadow_rays: u64,
+    /// Shadow rays of the closed form for points, spots, suns and beams
+    /// seen in a flat mirror, two legs a ray each (a part of
+    /// `shadow_rays`).
+    pub mirrored_shadow_rays: u64,
     /// Entries of the wall memo: (wall, side, bin, light) keys.
     pub memo_entries: u64,
     /// Bytes held by the wall memo.
@@ -328,6 +332,7 @@ impl Work {
         self.culled_empty += other.culled_empty;
         self.culled_mirror_rays += other.culled_mirror_rays;
         self.listed_shadow_rays += other.listed_shadow_rays;
+        self.mirrored_shadow_rays += other.mirrored_shadow_rays;
         self.memo_entries += other.memo_entries;
         self.memo_bytes += other.memo_bytes;
         self.memo_fill_rays += other.memo_fill_rays;
@@ -425,6 +430,7 @@ impl fmt::Display for StatsText<'_> {
             writeln!(f, "  arc has no wall  {:>14}", w.culled_empty)?;
             writeln!(f, "  culled off mirrors {:>12}", w.culled_mirror_rays)?;
             writeln!(f, "  listed shadow rays {:>12}", w.listed_shadow_rays)?;
+            writeln!(f, "  mirrored shadow rays {:>10}", w.mirrored_shadow_rays)?;
             writeln!(f, "  floor albedo     {:>14}", w.floor_albedo_reads)?;
             writeln!(f, "  emission tests   {:>14}", w.emission_tests)?;
             writeln!(f, "  wall entries     {:>14}", w.memo_entries)?;

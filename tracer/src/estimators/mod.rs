@@ -8,7 +8,13 @@
 //! - `refracted.rs`: a line or circle light seen from inside a smooth
 //!   glass body through one of its edges (`Ledger::glass_lights`);
 //! - `square.rs`: a point, spot or sun averaged over a pixel's square of
-//!   the floor.
+//!   the floor;
+//! - `mirrored.rs`: a point, spot, sun or beam seen from a receiver point
+//!   through one flat mirror (`Ledger::aimed_mirrors`).
+//!
+//! A closed form the plan decides by a rule of its own has an entry in
+//! [`ClosedForms`]: its decision, which the ledger reads and the plan's
+//! wording lists, and its term in [`at_point`].
 //!
 //! What the lights themselves answer (a sample of their light at a point,
 //! their power, a photon) is `lights/`; these modules ask it and never
@@ -17,6 +23,7 @@
 pub(crate) mod choice;
 mod contribution;
 pub(crate) mod exact;
+pub(crate) mod mirrored;
 pub(crate) mod refracted;
 pub(crate) mod square;
 
@@ -28,15 +35,72 @@ pub(crate) use refracted::{MAX_GLASS_PAIRS, glass_pairs, through_glass, through_
 
 use flatray_geometry::DVec2;
 
+use crate::decision::Decision;
 use crate::ledger::Ledger;
+use crate::options::RenderOptions;
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
+/// The closed forms that decide where they run by rules of their own,
+/// each with its decision and the reason for it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ClosedForms {
+    /// Points, spots, suns and beams seen in one flat mirror
+    /// (`mirrored.rs`).
+    pub aimed_mirrors: Decision,
+}
+
+impl ClosedForms {
+    /// Each closed form's decision for `scene` rendered with `options`,
+    /// where the plan casts shadow rays if `shadows`.
+    pub(crate) fn of(scene: &Scene, options: &RenderOptions, shadows: bool) -> ClosedForms {
+        ClosedForms {
+            aimed_mirrors: mirrored::decide(scene, options, shadows),
+        }
+    }
+
+    /// Each closed form's name, as the plan lists it, and its decision.
+    pub(crate) fn named(&self) -> [(&'static str, &Decision); 1] {
+        [(
+            "points, spots and suns in a mirror, closed form",
+            &self.aimed_mirrors,
+        )]
+    }
+}
+
+/// The closed forms that a receiver point `x` takes at that point alone,
+/// as the `ledger` gives them, of every light or with `light` of that
+/// light alone: line and circle lights in one flat mirror
+/// (`Ledger::mirror_lights`), points, spots, suns and beams in one
+/// (`Ledger::aimed_mirrors`). `None` where the ledger gives none.
+#[inline(always)]
+pub(crate) fn at_point(
+    ledger: &Ledger,
+    scene: &Scene,
+    (x, receiver): (DVec2, Receiver),
+    light: Option<usize>,
+    stats: &mut Stats,
+) -> Option<Rgb> {
+    let mirrors = &scene.flat_mirrors;
+    let lines = match (ledger.mirror_lights, light) {
+        (false, _) => None,
+        (true, None) => Some(through_mirrors(scene, mirrors, x, receiver, stats)),
+        (true, Some(light)) => Some(through_mirrors_of(
+            scene, mirrors, light, x, receiver, stats,
+        )),
+    };
+    if !ledger.aimed_mirrors {
+        return lines;
+    }
+    let aimed = mirrored::aimed_in_mirrors(scene, light, x, receiver, stats);
+    Some(lines.map_or(aimed, |lines| lines + aimed))
+}
+
 /// A receiver's `sampled` direct light with the closed forms the ledger
-/// gives it added: line and circle lights seen in one flat mirror
-/// (`Ledger::mirror_lights`), then through one edge of the glass body `x`
-/// is in (`Ledger::glass_lights`); of every light, or with `light`, of
-/// that light alone. The one sum of a receiver's direct light: path
+/// gives it added: those it takes at its point ([`at_point`]), then line
+/// and circle lights through one edge of the glass body `x` is in
+/// (`Ledger::glass_lights`); of every light, or with `light`, of that
+/// light alone. The one sum of a receiver's direct light: path
 /// vertices, the floor without its memo and the wall memo's bins all
 /// take it. (The floor memo's points take the same closed forms, the
 /// glass's shared across a half of the points: `pixel.rs`.)
@@ -49,13 +113,9 @@ pub(crate) fn with_closed_forms(
     light: Option<usize>,
     stats: &mut Stats,
 ) -> Rgb {
-    let mirrors = &scene.flat_mirrors;
-    let value = match (ledger.mirror_lights, light) {
-        (false, _) => sampled,
-        (true, None) => sampled + through_mirrors(scene, mirrors, x, receiver, stats),
-        (true, Some(light)) => {
-            sampled + through_mirrors_of(scene, mirrors, light, x, receiver, stats)
-        }
+    let value = match at_point(ledger, scene, (x, receiver), light, stats) {
+        None => sampled,
+        Some(at_point) => sampled + at_point,
     };
     match (ledger.glass_lights, light) {
         (false, _) => value,

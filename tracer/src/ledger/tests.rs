@@ -214,11 +214,12 @@ fn classes(n: usize) -> Vec<Class> {
 fn ledgers() -> Vec<Ledger> {
     let mut out = Vec::new();
     for bounces in 0..=3 {
-        for bits in 0..8u32 {
+        for bits in 0..16u32 {
             out.push(Ledger {
                 mirror_lights: bits & 1 != 0,
                 glass_lights: bits & 2 != 0,
                 area_photons: bits & 4 != 0,
+                aimed_mirrors: bits & 8 != 0,
                 caustics: true,
                 bounces,
             });
@@ -247,8 +248,8 @@ fn every_path_class_up_to_six_events_is_counted_exactly_once() {
             }
         }
     }
-    // 3 lights times (7^0 + ... + 7^6) step lists, times 32 ledgers.
-    assert_eq!(walked, 3 * 137_257 * 32);
+    // 3 lights times (7^0 + ... + 7^6) step lists, times 64 ledgers.
+    assert_eq!(walked, 3 * 137_257 * 64);
     assert!(
         failures.is_empty(),
         "{wrong} of {walked} wrong, among them:\n{}",
@@ -301,6 +302,47 @@ fn without_the_caustic_pass_only_what_photons_take_goes_uncounted() {
         let photons_only = class.light == LightKind::Laser
             || (class.light == LightKind::Aimed && class.vertices()[0].1.is_specular());
         assert_eq!(count.once(), !photons_only, "{class:?}: {count:?}");
+    }
+}
+
+#[test]
+fn a_point_in_one_flat_mirror_is_counted_by_its_closed_form_or_by_photons() {
+    let class = |steps: Vec<Step>| Class {
+        light: LightKind::Aimed,
+        steps,
+    };
+    let mirror = Step::Specular(Event::FlatMirror);
+    let diffuse = Step::Wall(Vertex::Diffuse);
+    for bounces in 0..=2 {
+        let photons = Ledger {
+            caustics: true,
+            bounces,
+            ..Ledger::default()
+        };
+        let closed = Ledger {
+            aimed_mirrors: true,
+            ..photons
+        };
+        // To the floor, and to a diffuse wall that lights the floor.
+        let floor = class(vec![mirror]);
+        assert_eq!(count(photons, &floor).all, vec!["caustic floor"]);
+        assert_eq!(count(closed, &floor).all, vec!["next-event estimation"]);
+        if bounces > 0 {
+            let wall = class(vec![mirror, diffuse]);
+            assert_eq!(count(photons, &wall).all, vec!["caustic bins"]);
+            assert_eq!(count(closed, &wall).all, vec!["next-event estimation"]);
+        }
+        // Two mirrors, or a mirror then glass: still the photons'.
+        for second in [mirror, Step::Specular(Event::GlassIn)] {
+            let two = class(vec![mirror, second]);
+            assert_eq!(count(closed, &two).all, vec!["caustic floor"]);
+        }
+        // Without the caustic pass the closed form still counts it.
+        let alone = Ledger {
+            caustics: false,
+            ..closed
+        };
+        assert_eq!(count(alone, &floor).all, vec!["next-event estimation"]);
     }
 }
 

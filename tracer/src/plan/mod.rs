@@ -8,6 +8,7 @@ mod wording;
 
 use crate::accel::Facts;
 pub use crate::accel::{Decision, FastDecisions};
+pub use crate::estimators::ClosedForms;
 use crate::lights::LightCounts;
 use crate::options::{FastPaths, Integrator, LightChoice, MANY_LIGHTS, RenderOptions};
 use crate::scene::{Material, Scene};
@@ -142,6 +143,9 @@ pub struct Plan {
     pub glass_lights: bool,
     /// Pairs of a glass edge and a line or circle light.
     pub glass_pairs: usize,
+    /// The closed forms that decide by rules of their own, each with its
+    /// reason (`estimators::ClosedForms`).
+    pub closed_forms: ClosedForms,
     /// Line and circle lights send caustic photons at the mirror and
     /// glass edges, which take their light after runs of specular events
     /// that no closed form takes; path rays then add no light they meet
@@ -212,6 +216,7 @@ impl Plan {
         crate::ledger::Ledger {
             mirror_lights: self.mirror_lights,
             glass_lights: self.glass_lights,
+            aimed_mirrors: self.closed_forms.aimed_mirrors.runs,
             area_photons: self.area_photons,
             caustics: self.caustics,
             bounces: self.bounces,
@@ -236,6 +241,7 @@ impl Plan {
             !tracing_light && (force || (inventory.occluders > 0 && !scene.lights.is_empty()));
         let (mirror_pairs, mirror_lights, glass_pairs, glass_lights) =
             closed_form_decisions(scene, options, &inventory, shadows);
+        let closed_forms = ClosedForms::of(scene, options, shadows);
         let transport = transport_decisions(scene, options, &inventory);
         let (wall_memo_fits, wall_memo, onward) = memo_decisions(
             scene,
@@ -305,6 +311,7 @@ impl Plan {
             mirror_pairs,
             glass_lights,
             glass_pairs,
+            closed_forms,
             area_photons: transport.area_photons,
             area_targets: transport.area_targets,
             last_legs: transport.last_legs,

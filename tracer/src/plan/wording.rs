@@ -48,6 +48,7 @@ impl Plan {
         self.shadow_effects(&mut effects);
         self.indirect_effects(&mut effects);
         self.seen_effects(&mut effects);
+        self.closed_form_effects(&mut effects);
         self.wall_effects(&mut effects);
         self.wall_cache_effects(&mut effects);
         self.floor_cache_effects(&mut effects);
@@ -277,6 +278,18 @@ impl Plan {
                 n(rough_mirrors, "rough mirror")
             },
         );
+    }
+
+    /// The closed forms that decide by rules of their own
+    /// (`estimators::ClosedForms`), each as it gives its reason.
+    fn closed_form_effects(&self, effects: &mut Vec<Effect>) {
+        for (name, decision) in self.closed_forms.named() {
+            effects.push(Effect {
+                name,
+                runs: decision.runs,
+                why: decision.why.clone(),
+            });
+        }
     }
 
     /// Lines and circles seen in mirrors and through glass: in closed form, or by path rays.

@@ -851,6 +851,11 @@ pub struct Scene {
     /// The walls that are flat, perfect mirrors (`Material::Mirror`), in
     /// index order.
     pub(crate) flat_mirrors: Vec<u32>,
+    /// Per light and flat mirror (`light * flat_mirrors.len() + k`), the
+    /// parts of the mirror (intervals of its parameter) that opaque walls
+    /// surely hide from the light: filled once, when the closed form of
+    /// lights in mirrors first asks (`estimators::mirrored`).
+    pub(crate) mirror_shadows: std::sync::OnceLock<Vec<Vec<(f64, f64)>>>,
     /// The glass edges that are segments, each body's together (by body,
     /// then index).
     pub(crate) glass_edges: Vec<u32>,
@@ -1082,6 +1087,7 @@ impl Scene {
             wall_light,
             light_wall,
             flat_mirrors,
+            mirror_shadows: std::sync::OnceLock::new(),
             glass_edges,
             segments,
             albedo_along,

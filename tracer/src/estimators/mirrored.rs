@@ -1,0 +1,288 @@
+//! Points, spots, suns and beams seen in one flat mirror, in closed form.
+//!
+//! Counts one class of light paths (`Ledger::aimed_mirrors`): light from
+//! a light of one direction per point, reflected once off a flat mirror,
+//! arriving at the floor or at a diffuse wall. Such a light reaches a
+//! receiver `x` by the mirror along exactly one path: the one the light
+//! sends the receiver's image `x'` (`x` reflected in the mirror's line),
+//! folded at the point `h` where it crosses the mirror. The light's own
+//! sample at `x'` gives what arrives (its falloff over the path's whole
+//! length, a spot's window in the direction it leaves, a beam's strip),
+//! the receiver's normal reflected gives the cosine, and two shadow rays,
+//! `x` to `h` and `h` to the light, the walls in the way. No sample is
+//! drawn: at a floor point or a wall point the value is exact, and the
+//! caustic pass, which would otherwise count these paths by photons,
+//! leaves them alone.
+//!
+//! What it never does: take a light with an area (`exact.rs` does, through
+//! mirrors), a curved mirror, or more than one reflection.
+
+use flatray_geometry::{DVec2, Ray, Segment, Skip, cross};
+
+use crate::decision::Decision;
+use crate::estimators::{Receiver, transmittance};
+use crate::lights::arriving;
+use crate::options::{Integrator, RenderOptions};
+use crate::scene::{LightShape, Material, Scene};
+use crate::{Rgb, Stats};
+
+/// Most pairs of a flat mirror and a point, spot, sun or beam that
+/// receivers take in closed form: each pair costs every receiver point a
+/// reflection and, where the mirror is in view, two shadow rays.
+pub const MAX_AIMED_MIRROR_PAIRS: usize = 64;
+
+/// Whether a light is one this closed form takes: one direction per
+/// point, found by a shadow ray (not a laser, which no receiver finds).
+#[inline]
+pub(crate) fn is_aimed(shape: &LightShape) -> bool {
+    matches!(
+        shape,
+        LightShape::Point { .. }
+            | LightShape::Spot { .. }
+            | LightShape::Directional { .. }
+            | LightShape::Beam { .. }
+    )
+}
+
+/// Pairs of a flat mirror and a point, spot, sun or beam.
+pub(crate) fn pairs(scene: &Scene) -> usize {
+    let aimed = scene.lights.iter().filter(|l| is_aimed(&l.shape)).count();
+    scene.flat_mirrors.len() * aimed
+}
+
+/// Where receivers take points, spots, suns and beams seen in one flat
+/// mirror in closed form, and why: wherever shadow rays are cast and
+/// mirrors reflect, within [`MAX_AIMED_MIRROR_PAIRS`].
+pub(crate) fn decide(scene: &Scene, options: &RenderOptions, shadows: bool) -> Decision {
+    let pairs = pairs(scene);
+    let counted = |n: usize| match n {
+        1 => "1 flat mirror and light pair".to_string(),
+        n => format!("{n} flat mirror and light pairs"),
+    };
+    if options.integrator == Integrator::Light {
+        Decision::skipped("light tracing does not take it")
+    } else if pairs == 0 {
+        Decision::skipped("no flat mirror and point, spot, directional light or beam in the scene")
+    } else if options.specular == 0 {
+        Decision::skipped("specular = 0: no light is reflected")
+    } else if pairs > MAX_AIMED_MIRROR_PAIRS {
+        Decision::skipped(format!(
+            "{}, over {MAX_AIMED_MIRROR_PAIRS}: the caustic pass takes them",
+            counted(pairs)
+        ))
+    } else if !shadows {
+        Decision::skipped("no shadow rays are cast")
+    } else {
+        Decision::runs(format!(
+            "{}: every floor and wall point takes them exactly, by the path to its image; the caustic pass leaves them alone",
+            counted(pairs)
+        ))
+    }
+}
+
+/// The light that every point, spot, sun and beam (or light `light`
+/// alone) brings `x` after exactly one reflection off one of the scene's
+/// flat mirrors, tinted by the mirror and coloured by the light.
+pub(crate) fn aimed_in_mirrors(
+    scene: &Scene,
+    light: Option<usize>,
+    x: DVec2,
+    receiver: Receiver,
+    stats: &mut Stats,
+) -> Rgb {
+    let lights = match light {
+        Some(index) => index..index.saturating_add(1).min(scene.lights.len()),
+        None => 0..scene.lights.len(),
+    };
+    let shadows = scene.mirror_shadows.get_or_init(|| mirror_shadows(scene));
+    let mirrors = scene.flat_mirrors.len();
+    let mut sum = Rgb::ZERO;
+    for index in lights {
+        let shape = &scene.lights[index].shape;
+        if !is_aimed(shape) {
+            continue;
+        }
+        let mut of_light = Rgb::ZERO;
+        for (k, &m) in scene.flat_mirrors.iter().enumerate() {
+            let hidden = shadows.get(index * mirrors + k).map_or(&[][..], |h| &h[..]);
+            let wall = &scene.walls[m as usize];
+            let Material::Mirror { tint } = wall.material else {
+                continue;
+            };
+            // A receiver on the mirror, or a light on it, meets no
+            // reflection there.
+            if tint == Rgb::ZERO || receiver.wall == Some(m) || scene.light_wall[index] == Some(m) {
+                continue;
+            }
+            let Some(mirror) = wall.as_segment() else {
+                continue;
+            };
+            of_light += tint * in_mirror(scene, index, (m, mirror, hidden), x, receiver, stats);
+        }
+        sum += of_light * scene.lights[index].color;
+    }
+    sum
+}
+
+/// What light `index` brings `x` off mirror `m` (its segment `mirror`),
+/// uncoloured and untinted by the mirror (tinted by the panes it
+/// crosses), times the light's intensity.
+fn in_mirror(
+    scene: &Scene,
+    index: usize,
+    (m, mirror, hidden): (u32, &Segment, &[(f64, f64)]),
+    x: DVec2,
+    receiver: Receiver,
+    stats: &mut Stats,
+) -> Rgb {
+    let light = &scene.lights[index];
+    // A point on the mirror's line sees it edge-on.
+    let side = mirror.side_value(x);
+    if side == 0.0 || !side.is_finite() {
+        return Rgb::ZERO;
+    }
+    let e = mirror.b - mirror.a;
+    let image = reflect_point(mirror, x);
+    // The light's number: points, spots, suns and beams draw none.
+    let Some(s) = light.shape.incident(light, image, 0.5, scene.small_radius) else {
+        return Rgb::ZERO;
+    };
+    if s.at_the_light() {
+        return Rgb::ZERO;
+    }
+    // Where the ray from the image towards the light crosses the mirror's
+    // line (`image + t to = a + u e`): within the segment, before the
+    // light. A light on the image's side of the line is never crossed to.
+    let denom = cross(s.to, e);
+    let rel = mirror.a - image;
+    let t = cross(rel, e) / denom;
+    let u = cross(rel, s.to) / denom;
+    if !(t > 0.0 && t < s.t_max && u > 0.0 && u < 1.0) {
+        return Rgb::ZERO;
+    }
+    // The receiver's normal reflected in the mirror's line, as the image
+    // sees it: the cosine of the light arriving at `x`.
+    let cosine = match receiver.normal {
+        None => 1.0,
+        Some(n) => {
+            let reflected = 2.0 * e * (n.dot(e) / e.length_squared()) - n;
+            reflected.dot(s.dir()).max(0.0)
+        }
+    };
+    let v = arriving(light.intensity, s.value, cosine, s.pdf);
+    if !(v > 0.0 && v.is_finite()) {
+        return Rgb::ZERO;
+    }
+    // Where walls surely hide that point of the mirror from the light,
+    // nothing arrives, and no ray need say so.
+    if hidden.iter().any(|&(lo, hi)| lo < u && u < hi) {
+        return Rgb::ZERO;
+    }
+    let h = mirror.a + u * e;
+    let skip_x = Skip(receiver.wall.unwrap_or(u32::MAX), m);
+    stats.work.mirrored_shadow_rays += 1;
+    let first = transmittance(scene, &Ray::new(x, h - x), 1.0, skip_x, None, stats);
+    if first == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let skip_h = Skip(m, scene.light_wall[index].unwrap_or(u32::MAX));
+    stats.work.mirrored_shadow_rays += 1;
+    let second = transmittance(scene, &Ray::new(h, s.to), s.t_max - t, skip_h, None, stats);
+    first * second * v
+}
+
+/// For every light and flat mirror of `scene`, the intervals of the
+/// mirror's parameter that an opaque wall surely hides from the light:
+/// for a point or spot at `p`, each opaque segment wholly between `p` and
+/// the mirror's line (both ends strictly closer to the line, on `p`'s
+/// side) hides the interval between its ends' projections from `p`; for
+/// a sun, each one wholly upstream of the line hides the interval between
+/// its ends' projections along the sunlight. Shrunk by a margin, so that
+/// a point inside one is hidden whatever the rounding of its ray. Beams,
+/// arcs and panes hide nothing here (their rays decide). Empty lists
+/// beyond the closed form's budget, which never asks.
+fn mirror_shadows(scene: &Scene) -> Vec<Vec<(f64, f64)>> {
+    if pairs(scene) > MAX_AIMED_MIRROR_PAIRS {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for (index, light) in scene.lights.iter().enumerate() {
+        for &m in &scene.flat_mirrors {
+            let mut hidden = Vec::new();
+            if let Some(mirror) = scene.walls[m as usize].as_segment() {
+                for (w, wall) in scene.walls.iter().enumerate() {
+                    let w = w as u32;
+                    if w == m || scene.light_wall[index] == Some(w) {
+                        continue;
+                    }
+                    if wall.material.pane_tint().is_some() {
+                        continue;
+                    }
+                    let Some(segment) = wall.as_segment() else {
+                        continue;
+                    };
+                    let interval = match light.shape {
+                        LightShape::Point { at } | LightShape::Spot { at, .. } => {
+                            shadow_from(segment, |q| central(mirror, at, q))
+                        }
+                        LightShape::Directional { direction } => {
+                            shadow_from(segment, |q| parallel(mirror, direction, q))
+                        }
+                        _ => None,
+                    };
+                    hidden.extend(interval);
+                }
+            }
+            out.push(hidden);
+        }
+    }
+    out
+}
+
+/// The interval a segment hides of the mirror's parameter, given where
+/// each end projects (`None` where an end is not wholly in front).
+fn shadow_from(segment: &Segment, project: impl Fn(DVec2) -> Option<f64>) -> Option<(f64, f64)> {
+    let (ua, ub) = (project(segment.a)?, project(segment.b)?);
+    let (lo, hi) = (ua.min(ub), ua.max(ub));
+    // A margin of a millionth of the mirror and of the parameter's
+    // rounding, so that only points surely inside count.
+    let margin = 1e-6 + 1e-9 * (lo.abs() + hi.abs());
+    let (lo, hi) = (lo + margin, hi - margin);
+    (lo < hi && hi > 0.0 && lo < 1.0).then_some((lo, hi))
+}
+
+/// Where the ray from `p` through `q` meets the mirror's line, as the
+/// mirror's parameter, if `q` lies strictly between `p` and that line.
+fn central(mirror: &Segment, p: DVec2, q: DVec2) -> Option<f64> {
+    let (sp, sq) = (mirror.side_value(p), mirror.side_value(q));
+    let ratio = sq / sp;
+    if !(ratio > 1e-9 && ratio < 1.0 - 1e-9) {
+        return None;
+    }
+    let d = q - p;
+    let e = mirror.b - mirror.a;
+    let denom = cross(d, e);
+    let u = cross(mirror.a - p, d) / denom;
+    u.is_finite().then_some(u)
+}
+
+/// Where sunlight through `q`, travelling along `direction`, meets the
+/// mirror's line, as the mirror's parameter, if `q` lies strictly
+/// upstream of it.
+fn parallel(mirror: &Segment, direction: DVec2, q: DVec2) -> Option<f64> {
+    let e = mirror.b - mirror.a;
+    let denom = cross(direction, e);
+    // q + s direction = a + u e: s > 0 upstream.
+    let rel = mirror.a - q;
+    let s = cross(rel, e) / denom;
+    let u = cross(rel, direction) / denom;
+    (s.is_finite() && u.is_finite() && s > 1e-9 * e.length()).then_some(u)
+}
+
+/// Reflects `p` across the line of `mirror`.
+#[inline]
+fn reflect_point(mirror: &Segment, p: DVec2) -> DVec2 {
+    let e = mirror.b - mirror.a;
+    let foot = mirror.a + e * ((p - mirror.a).dot(e) / e.length_squared());
+    2.0 * foot - p
+}
