@@ -23,7 +23,7 @@ use crate::decision::Decision;
 use crate::estimators::{Receiver, transmittance};
 use crate::lights::arriving;
 use crate::options::{Integrator, RenderOptions};
-use crate::scene::{LightShape, Material, Scene};
+use crate::scene::{LightShape, Material, MirrorShadows, Scene};
 use crate::{Rgb, Stats};
 
 /// Most pairs of a flat mirror and a point, spot, sun or beam that
@@ -95,7 +95,6 @@ pub(crate) fn aimed_in_mirrors(
         None => 0..scene.lights.len(),
     };
     let shadows = scene.mirror_shadows.get_or_init(|| mirror_shadows(scene));
-    let mirrors = scene.flat_mirrors.len();
     let mut sum = Rgb::ZERO;
     for index in lights {
         let shape = &scene.lights[index].shape;
@@ -104,7 +103,10 @@ pub(crate) fn aimed_in_mirrors(
         }
         let mut of_light = Rgb::ZERO;
         for (k, &m) in scene.flat_mirrors.iter().enumerate() {
-            let hidden = shadows.get(index * mirrors + k).map_or(&[][..], |h| &h[..]);
+            let hidden = shadows
+                .get(index)
+                .and_then(|of_light| of_light.get(k))
+                .map_or(&[][..], |h| &h[..]);
             let wall = &scene.walls[m as usize];
             let Material::Mirror { tint } = wall.material else {
                 continue;
@@ -201,12 +203,17 @@ fn in_mirror(
 /// a point inside one is hidden whatever the rounding of its ray. Beams,
 /// arcs and panes hide nothing here (their rays decide). Empty lists
 /// beyond the closed form's budget, which never asks.
-fn mirror_shadows(scene: &Scene) -> Vec<Vec<(f64, f64)>> {
+fn mirror_shadows(scene: &Scene) -> MirrorShadows {
     if pairs(scene) > MAX_AIMED_MIRROR_PAIRS {
         return Vec::new();
     }
-    let mut out = Vec::new();
+    let mut out = Vec::with_capacity(scene.lights.len());
     for (index, light) in scene.lights.iter().enumerate() {
+        let mut of_light = Vec::new();
+        if !is_aimed(&light.shape) {
+            out.push(of_light);
+            continue;
+        }
         for &m in &scene.flat_mirrors {
             let mut hidden = Vec::new();
             if let Some(mirror) = scene.walls[m as usize].as_segment() {
@@ -233,8 +240,9 @@ fn mirror_shadows(scene: &Scene) -> Vec<Vec<(f64, f64)>> {
                     hidden.extend(interval);
                 }
             }
-            out.push(hidden);
+            of_light.push(hidden);
         }
+        out.push(of_light);
     }
     out
 }

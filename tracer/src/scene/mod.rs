@@ -817,6 +817,10 @@ impl Parts {
     }
 }
 
+/// Per light, per flat mirror, intervals of the mirror's parameter
+/// (`Scene::mirror_shadows`).
+pub(crate) type MirrorShadows = Vec<Vec<Vec<(f64, f64)>>>;
+
 /// A complete scene: its walls and lights, and the tables derived from
 /// them. Built by [`Scene::new`] or [`Scene::with_glass`], which check
 /// every value; read through its accessors; changed only by building a
@@ -851,11 +855,12 @@ pub struct Scene {
     /// The walls that are flat, perfect mirrors (`Material::Mirror`), in
     /// index order.
     pub(crate) flat_mirrors: Vec<u32>,
-    /// Per light and flat mirror (`light * flat_mirrors.len() + k`), the
-    /// parts of the mirror (intervals of its parameter) that opaque walls
-    /// surely hide from the light: filled once, when the closed form of
-    /// lights in mirrors first asks (`estimators::mirrored`).
-    pub(crate) mirror_shadows: std::sync::OnceLock<Vec<Vec<(f64, f64)>>>,
+    /// Per light, and for a point, spot, sun or beam per flat mirror (in
+    /// the order of `flat_mirrors`), the parts of the mirror (intervals of
+    /// its parameter) that opaque walls surely hide from the light: filled
+    /// once, when the closed form of lights in mirrors first asks
+    /// (`estimators::mirrored`).
+    pub(crate) mirror_shadows: std::sync::OnceLock<MirrorShadows>,
     /// The glass edges that are segments, each body's together (by body,
     /// then index).
     pub(crate) glass_edges: Vec<u32>,
