@@ -12,8 +12,9 @@
 //! loop (`path.rs`), the photon loop (`light_tracer.rs`) and glossy
 //! next-event estimation ask the [`Ledger`] the plan built
 //! (`Plan::ledger`). The receivers' direct-light sums take the closed
-//! forms that [`Ledger::closed_form`] names, by the plan's same two
-//! decisions (`Plan::mirror_lights`, `Plan::glass_lights`).
+//! forms that [`Ledger::closed_form`] names, by the plan's same
+//! decisions (`Plan::mirror_lights`, `Plan::glass_lights`, and
+//! `Plan::closed_forms` for points, spots, suns and beams in a mirror).
 //!
 //! The tests walk every class of path up to six events, for every kind of
 //! light and every combination of the plan's decisions, through the same
