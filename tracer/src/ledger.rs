@@ -273,15 +273,16 @@ impl Ledger {
     /// on the floor.
     #[inline]
     pub(crate) fn photon_lights_floor(self, photon: &Photon) -> bool {
-        if photon.area {
-            photon.run.is_specular()
-                && !self.closed_form(LightKind::Area, photon.run, Vertex::Floor)
-        } else if photon.lobes > 0 || photon.unseen {
-            true
-        } else {
-            photon.run.is_specular()
-                && !self.closed_form(LightKind::Aimed, photon.run, Vertex::Floor)
+        // A point's light off a rough mirror, and a laser's, no receiver
+        // takes; the rest counts after a run no closed form takes.
+        if !photon.area && (photon.lobes > 0 || photon.unseen) {
+            return true;
         }
+        let light = match photon.area {
+            true => LightKind::Area,
+            false => LightKind::Aimed,
+        };
+        photon.run.is_specular() && !self.closed_form(light, photon.run, Vertex::Floor)
     }
 
     /// What a caustic photon with history `photon` does at a wall of kind
