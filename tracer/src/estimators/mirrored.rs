@@ -50,6 +50,49 @@ pub(crate) fn pairs(scene: &Scene) -> usize {
     scene.flat_mirrors.len() * aimed
 }
 
+/// Whether every run of specular events a light path can take in `scene`
+/// is one reflection off one flat mirror: every wall that reflects
+/// specularly is a flat mirror, and all of them lie on one line, so that
+/// light one of them reflects never reaches another (two-sided mirrors
+/// off one line could face each other). Where so, and the closed form
+/// runs, it counts all the light of points, spots, suns and beams after
+/// mirrors: none is left to photons.
+pub(crate) fn takes_every_run(scene: &Scene) -> bool {
+    let mut line: Option<Segment> = None;
+    for wall in scene
+        .walls
+        .iter()
+        .filter(|w| w.material.reflects_specularly())
+    {
+        let (Material::Mirror { .. }, Some(&segment)) = (wall.material, wall.as_segment()) else {
+            return false;
+        };
+        let Some(first) = line else {
+            line = Some(segment);
+            continue;
+        };
+        let along = first.b - first.a;
+        let length = along.length();
+        // Off the line by more than rounding in the points' size: light
+        // off one mirror could reach the other.
+        let on_line = |p: DVec2| {
+            let off = cross(along, p - first.a).abs();
+            let size = first
+                .a
+                .abs()
+                .max(first.b.abs())
+                .max(p.abs())
+                .max_element()
+                .max(length);
+            length > 0.0 && off <= 1e-12 * length * size.max(1.0)
+        };
+        if !(on_line(segment.a) && on_line(segment.b)) {
+            return false;
+        }
+    }
+    true
+}
+
 /// Where receivers take points, spots, suns and beams seen in one flat
 /// mirror in closed form, and why: wherever shadow rays are cast and
 /// mirrors reflect, within [`MAX_AIMED_MIRROR_PAIRS`].

@@ -59,6 +59,14 @@ impl ClosedForms {
         }
     }
 
+    /// Whether the closed forms count every path of points, spots, suns
+    /// and beams through mirrors and glass in `scene`: there, the caustic
+    /// pass has none of their light left to carry (rough mirrors and
+    /// lasers aside, which the plan asks about).
+    pub(crate) fn take_aimed_runs(&self, scene: &Scene) -> bool {
+        self.aimed_mirrors.runs && mirrored::takes_every_run(scene)
+    }
+
     /// Each closed form's name, as the plan lists it, and its decision.
     pub(crate) fn named(&self) -> [(&'static str, &Decision); 1] {
         [(

@@ -160,6 +160,10 @@ pub struct Plan {
     /// The caustic pass: light from points, spots and suns through
     /// mirrors and glass, traced from the lights (`caustics.rs`).
     pub caustics: bool,
+    /// The closed forms count every path of points, spots, suns and
+    /// beams through mirrors and glass, so the caustic pass need not
+    /// (`ClosedForms::take_aimed_runs`).
+    pub aimed_runs_closed: bool,
     /// The wall half of the memo.
     pub wall_memo: bool,
     /// The onward memo: the rest of a path, read at its first diffuse
@@ -242,7 +246,8 @@ impl Plan {
         let (mirror_pairs, mirror_lights, glass_pairs, glass_lights) =
             closed_form_decisions(scene, options, &inventory, shadows);
         let closed_forms = ClosedForms::of(scene, options, shadows);
-        let transport = transport_decisions(scene, options, &inventory);
+        let aimed_runs_closed = closed_forms.take_aimed_runs(scene);
+        let transport = transport_decisions(scene, options, &inventory, aimed_runs_closed);
         let (wall_memo_fits, wall_memo, onward) = memo_decisions(
             scene,
             options,
@@ -316,6 +321,7 @@ impl Plan {
             area_targets: transport.area_targets,
             last_legs: transport.last_legs,
             caustics: transport.caustics,
+            aimed_runs_closed,
             wall_memo,
             onward,
             original: options.integrator == Integrator::Original,
@@ -348,7 +354,15 @@ struct Transport {
 
 /// The plan's decisions of how light travels (`Plan::indirect`,
 /// `mirror_emission`, `area_photons`, `last_legs`, `caustics`).
-fn transport_decisions(scene: &Scene, options: &RenderOptions, inventory: &Inventory) -> Transport {
+/// `aimed_runs_closed` says the closed forms count all light of points,
+/// spots, suns and beams after mirrors and glass
+/// (`ClosedForms::take_aimed_runs`).
+fn transport_decisions(
+    scene: &Scene,
+    options: &RenderOptions,
+    inventory: &Inventory,
+    aimed_runs_closed: bool,
+) -> Transport {
     let Inventory {
         aimed,
         lasers,
@@ -397,16 +411,18 @@ fn transport_decisions(scene: &Scene, options: &RenderOptions, inventory: &Inven
     // light could be met, and photons do not take it; not forced, as
     // it would find none.
     let last_legs = indirect && specular_paths && areas > 0 && !area_photons;
-    // Path tracing cannot find their light after a mirror or glass,
-    // and leaves it to photons off a rough mirror at a path's first
-    // bounce (where a narrow lobe makes paths noisy): the caustic pass
-    // does, wherever both are in the scene.
+    // Path tracing cannot find their light after a mirror or glass
+    // (where no closed form takes all of it), and leaves it to photons
+    // off a rough mirror at a path's first bounce (where a narrow lobe
+    // makes paths noisy): the caustic pass does, wherever both are in
+    // the scene.
     // A laser's light no path finds at all: the caustic pass takes it
     // wherever the scene has one.
+    let aimed_specular = specular_paths && !aimed_runs_closed;
     let caustics = options.caustics
         && !tracing_light
         && !no_lights
-        && (((specular_paths || glossy_paths) && aimed > 0) || lasers > 0 || area_photons);
+        && (((aimed_specular || glossy_paths) && aimed > 0) || lasers > 0 || area_photons);
     Transport {
         indirect_possible,
         indirect,

@@ -617,6 +617,7 @@ impl Plan {
             area_photons,
             area_targets,
             caustics,
+            aimed_runs_closed,
             ..
         } = *self;
         let specular = self.inventory.mirrors + self.inventory.glass_edges;
@@ -626,6 +627,7 @@ impl Plan {
         add(
             "points, spots and sun seen in mirrors or glass",
             (caustics && aimed > 0)
+                || (aimed_runs_closed && aimed > 0 && specular_reflectors > 0)
                 || (tracing_light && specular_limit > 0 && specular > 0 && aimed > 0),
             if specular == 0 {
                 "no mirror or glass in the scene".into()
@@ -637,6 +639,14 @@ impl Plan {
                 "every mirror is black: no light goes on from one".into()
             } else if tracing_light {
                 "light tracing follows their light through mirrors and glass".into()
+            } else if aimed_runs_closed && !caustics {
+                format!(
+                    "{}: all their light off it is taken in closed form (points, spots and suns in a mirror), so no photon pass is traced",
+                    match specular_reflectors {
+                        1 => "1 flat mirror".to_string(),
+                        n => format!("{n} flat mirrors, all on one line"),
+                    }
+                )
             } else if !caustics_enabled {
                 "the caustic pass is switched off (--caustics off): path tracing alone cannot see them".into()
             } else {
