@@ -156,7 +156,11 @@ pub(crate) fn aimed_in_mirrors(
             };
             // A receiver on the mirror, or a light on it, meets no
             // reflection there.
-            if tint == Rgb::ZERO || receiver.wall == Some(m) || scene.light_wall[index] == Some(m) {
+            if tint == Rgb::ZERO
+                || receiver.wall == Some(m)
+                || scene.light_wall[index] == Some(m)
+                || wholly_hidden(hidden)
+            {
                 continue;
             }
             let Some(mirror) = wall.as_segment() else {
@@ -205,6 +209,11 @@ fn in_mirror(
     if !(t > 0.0 && t < s.t_max && u > 0.0 && u < 1.0) {
         return Rgb::ZERO;
     }
+    // Where walls surely hide that point of the mirror from the light,
+    // nothing arrives, and no ray need say so.
+    if hidden.iter().any(|&(lo, hi)| lo < u && u < hi) {
+        return Rgb::ZERO;
+    }
     // The receiver's normal reflected in the mirror's line, as the image
     // sees it: the cosine of the light arriving at `x`.
     let cosine = match receiver.normal {
@@ -216,11 +225,6 @@ fn in_mirror(
     };
     let v = arriving(light.intensity, s.value, cosine, s.pdf);
     if !(v > 0.0 && v.is_finite()) {
-        return Rgb::ZERO;
-    }
-    // Where walls surely hide that point of the mirror from the light,
-    // nothing arrives, and no ray need say so.
-    if hidden.iter().any(|&(lo, hi)| lo < u && u < hi) {
         return Rgb::ZERO;
     }
     let h = mirror.a + u * e;
@@ -283,11 +287,34 @@ fn mirror_shadows(scene: &Scene) -> MirrorShadows {
                     hidden.extend(interval);
                 }
             }
-            of_light.push(hidden);
+            of_light.push(merged(hidden));
         }
         out.push(of_light);
     }
     out
+}
+
+/// The union of open intervals, as disjoint ones in order: a mirror
+/// wholly hidden is then one interval that holds `[0, 1]`.
+fn merged(mut intervals: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    intervals.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<(f64, f64)> = Vec::with_capacity(intervals.len());
+    for (lo, hi) in intervals {
+        match out.last_mut() {
+            // Open intervals that overlap join; ones that only touch
+            // leave their common end uncovered.
+            Some(last) if lo < last.1 => last.1 = last.1.max(hi),
+            _ => out.push((lo, hi)),
+        }
+    }
+    out
+}
+
+/// Whether walls surely hide the whole mirror from the light: its one
+/// merged interval holds the mirror's parameter from 0 to 1.
+#[inline]
+fn wholly_hidden(hidden: &[(f64, f64)]) -> bool {
+    hidden.first().is_some_and(|&(lo, hi)| lo <= 0.0 && hi >= 1.0)
 }
 
 /// The interval a segment hides of the mirror's parameter, given where
@@ -336,4 +363,21 @@ fn reflect_point(mirror: &Segment, p: DVec2) -> DVec2 {
     let e = mirror.b - mirror.a;
     let foot = mirror.a + e * ((p - mirror.a).dot(e) / e.length_squared());
     2.0 * foot - p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hidden_intervals_merge_where_they_overlap_and_not_where_they_touch() {
+        let m = merged(vec![(0.5, 0.9), (-0.2, 0.3), (0.2, 0.6), (1.0, 1.4), (0.9, 1.1)]);
+        assert_eq!(m, vec![(-0.2, 0.9), (0.9, 1.4)]);
+        // Two walls that meet leave the point between them open: the
+        // mirror is not wholly hidden.
+        assert!(!wholly_hidden(&m));
+        assert!(wholly_hidden(&merged(vec![(0.4, 1.2), (-0.1, 0.5)])));
+        assert!(!wholly_hidden(&merged(vec![(0.0001, 1.2)])));
+        assert!(!wholly_hidden(&[]));
+    }
 }
