@@ -314,7 +314,9 @@ fn merged(mut intervals: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
 /// merged interval holds the mirror's parameter from 0 to 1.
 #[inline]
 fn wholly_hidden(hidden: &[(f64, f64)]) -> bool {
-    hidden.first().is_some_and(|&(lo, hi)| lo <= 0.0 && hi >= 1.0)
+    hidden
+        .first()
+        .is_some_and(|&(lo, hi)| lo <= 0.0 && hi >= 1.0)
 }
 
 /// The interval a segment hides of the mirror's parameter, given where
@@ -371,7 +373,13 @@ mod tests {
 
     #[test]
     fn hidden_intervals_merge_where_they_overlap_and_not_where_they_touch() {
-        let m = merged(vec![(0.5, 0.9), (-0.2, 0.3), (0.2, 0.6), (1.0, 1.4), (0.9, 1.1)]);
+        let m = merged(vec![
+            (0.5, 0.9),
+            (-0.2, 0.3),
+            (0.2, 0.6),
+            (1.0, 1.4),
+            (0.9, 1.1),
+        ]);
         assert_eq!(m, vec![(-0.2, 0.9), (0.9, 1.4)]);
         // Two walls that meet leave the point between them open: the
         // mirror is not wholly hidden.
