@@ -41,14 +41,13 @@ cargo test --release --workspace
 python3 -m pip install --quiet --disable-pip-version-check "./cli/python[test]"
 python3 -m pytest cli/python/tests -q
 # Again with only the code that runs on every processor (no AVX): the same
-# images, plans and statistics are expected. (The docs' pictures, the
-# browser's tests and the slowest statistical tests, all run above, are
-# left out here for time: the others, the agreement of path and light
-# tracing on every example scene among them, check the portable kernel.)
+# images, plans and statistics are expected. (The docs' pictures and the
+# slowest statistical tests, all run above, are left out here for time:
+# the others, the agreement of path and light tracing on every example
+# scene among them, check the portable kernel.)
 FLATRAY_PORTABLE=1 cargo test --release -p flatray-geometry -p flatray-tests -- \
   --skip every_picture_in_the_docs_is_what_its_command_makes \
   --skip the_noise_estimate_ --skip the_relmse_estimate_ \
   --skip furnaces_of_arcs --skip round_rooms_and_columns \
   --skip the_memo_converges_at_corners --skip a_table_of_chosen_lights \
-  --skip a_lasers_spot_on_a_wall --skip in_the_page \
-  --skip a_change_on_disk_never_replaces --skip the_measure_switch_draws
+  --skip a_lasers_spot_on_a_wall
