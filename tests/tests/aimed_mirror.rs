@@ -12,7 +12,7 @@
 
 use flatray_geometry::DVec2;
 use flatray_tests::{Agreement, render, scene};
-use flatray_tracer::{MemoOptions, Plan, RenderOptions};
+use flatray_tracer::{Plan, RenderOptions};
 
 /// An L-shaped room turned by `angle` about the canvas's centre: a
 /// tinted mirror on one wall, a pane across the short arm, an opening
@@ -105,11 +105,8 @@ fn inside(angle: f64, b: usize) -> bool {
 }
 
 fn options(bounces: u32, memo: bool) -> RenderOptions {
-    let mut options = RenderOptions::default();
-    options.samples = 4;
-    options.bounces = bounces;
+    let mut options = flatray_tests::options(4, bounces, 0);
     options.scale = 0.75;
-    options.memo = MemoOptions::default();
     options.memo.enabled = memo;
     options
 }
