@@ -165,7 +165,7 @@ fn light_through_glass_renders_the_same_on_any_number_of_threads() {
     options.samples = 4;
     options.scale = 0.25;
     let plan = flatray_tracer::Plan::new(&loaded.scene, &options);
-    assert!(plan.glass_lights && plan.area_photons);
+    assert!(plan.closed_forms.glass_lights.runs && plan.area_photons);
     let one = render_on(&loaded.scene, &options, 1);
     for threads in [2, 5] {
         let many = render_on(&loaded.scene, &options, threads);

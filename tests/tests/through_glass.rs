@@ -62,7 +62,7 @@ fn path_tracing_through_glass_edges_agrees_with_light_tracing() {
         options.scale = 1.0;
         options.integrator = Integrator::Path;
         assert!(
-            Plan::new(&scene, &options).glass_lights,
+            Plan::new(&scene, &options).closed_forms.glass_lights.runs,
             "the closed form runs"
         );
         let agreement = Agreement {
@@ -135,7 +135,11 @@ fn photons_and_paths_share_lines_and_circles_after_glass() {
         options.integrator = Integrator::Path;
         let plan = Plan::new(&scene, &options);
         assert!(plan.area_photons && plan.caustics, "{column}");
-        assert_eq!(plan.glass_lights, column.is_empty(), "{column}");
+        assert_eq!(
+            plan.closed_forms.glass_lights.runs,
+            column.is_empty(),
+            "{column}"
+        );
         let agreement = Agreement {
             block: 8,
             runs: 12,
@@ -159,7 +163,7 @@ fn a_rough_mirror_sees_the_lights_in_a_flat_mirror() {
     options.scale = 1.0;
     options.integrator = Integrator::Path;
     let plan = Plan::new(&scene, &options);
-    assert!(plan.mirror_lights && !plan.area_photons);
+    assert!(plan.closed_forms.mirror_lights.runs && !plan.area_photons);
     let agreement = Agreement {
         block: 8,
         runs: 12,

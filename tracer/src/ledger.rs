@@ -13,8 +13,7 @@
 //! next-event estimation ask the [`Ledger`] the plan built
 //! (`Plan::ledger`). The receivers' direct-light sums take the closed
 //! forms that [`Ledger::closed_form`] names, by the plan's same
-//! decisions (`Plan::mirror_lights`, `Plan::glass_lights`, and
-//! `Plan::closed_forms` for points, spots, suns and beams in a mirror).
+//! decisions (`Plan::closed_forms`, each closed form's own).
 //!
 //! The tests walk every class of path up to six events, for every kind of
 //! light and every combination of the plan's decisions, through the same

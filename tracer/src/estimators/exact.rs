@@ -33,7 +33,9 @@ use std::cell::RefCell;
 
 use flatray_geometry::{Arc, DVec2, Ray, Segment, Shape, Skip, cross, intersect};
 
+use crate::decision::Decision;
 use crate::estimators::{Receiver, Visibility};
+use crate::options::{Integrator, RenderOptions};
 use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
@@ -253,10 +255,49 @@ pub(crate) fn exact_light(
 }
 
 /// Most pairs of a flat mirror and a line or circle light that receivers
-/// take in closed form through the mirror (`Plan::mirror_lights`): each
-/// pair costs every receiver point a look at the walls around the mirror
-/// and the light.
+/// take in closed form through the mirror (`ClosedForms::mirror_lights`):
+/// each pair costs every receiver point a look at the walls around the
+/// mirror and the light.
 pub const MAX_MIRROR_PAIRS: usize = 64;
+
+/// The flat mirror and line or circle light pairs of `scene`.
+pub(crate) fn mirror_pairs(scene: &Scene) -> usize {
+    scene.flat_mirrors.len() * scene.lights.iter().filter(|l| is_exact(&l.shape)).count()
+}
+
+/// Whether receivers take line and circle lights seen in one flat mirror
+/// in closed form ([`through_mirrors`]), and why: where shadow rays are
+/// cast, light is reflected, the pairs fit [`MAX_MIRROR_PAIRS`] and no
+/// wall is an arc (the closed form takes the walls around a mirror as
+/// segments). Elsewhere path rays find that light.
+pub(crate) fn decide(scene: &Scene, options: &RenderOptions, shadows: bool) -> Decision {
+    let pairs = mirror_pairs(scene);
+    let counted = |n: usize| match n {
+        1 => "1 flat mirror and light pair".to_string(),
+        n => format!("{n} flat mirror and light pairs"),
+    };
+    if options.integrator == Integrator::Light {
+        Decision::skipped("light tracing does not take it")
+    } else if pairs == 0 {
+        Decision::skipped("no flat mirror and line or circle light in the scene")
+    } else if options.specular == 0 {
+        Decision::skipped("specular = 0: no light is reflected")
+    } else if pairs > MAX_MIRROR_PAIRS {
+        Decision::skipped(format!(
+            "{}, over {MAX_MIRROR_PAIRS}: path rays find them",
+            counted(pairs)
+        ))
+    } else if super::has_arcs(scene) {
+        Decision::skipped("the scene has arcs: path rays find them")
+    } else if !shadows {
+        Decision::skipped("no shadow rays are cast")
+    } else {
+        Decision::runs(format!(
+            "{}: every floor and wall point takes them exactly; path rays add them only after more than one mirror or glass event",
+            counted(pairs)
+        ))
+    }
+}
 
 /// The light that every line and circle light brings `x` after exactly
 /// one reflection off one of `mirrors` (flat mirrors; their tints), in

@@ -4,17 +4,18 @@
 //! and the plan decides (`Plan::ledger`) where each runs.
 //!
 //! - `exact.rs`: a line or circle light seen directly from a receiver
-//!   point, and through one flat mirror (`Ledger::mirror_lights`);
+//!   point, and through one flat mirror (`ClosedForms::mirror_lights`);
 //! - `refracted.rs`: a line or circle light seen from inside a smooth
-//!   glass body through one of its edges (`Ledger::glass_lights`);
+//!   glass body through one of its edges (`ClosedForms::glass_lights`);
 //! - `square.rs`: a point, spot or sun averaged over a pixel's square of
 //!   the floor;
 //! - `mirrored.rs`: a point, spot, sun or beam seen from a receiver point
-//!   through one flat mirror (`Ledger::aimed_mirrors`).
+//!   through one flat mirror (`ClosedForms::aimed_mirrors`).
 //!
-//! A closed form the plan decides by a rule of its own has an entry in
-//! [`ClosedForms`]: its decision, which the ledger reads and the plan's
-//! wording lists, and its term in [`at_point`].
+//! Each closed form through a mirror or glass has an entry in
+//! [`ClosedForms`]: its decision, made by its own module's `decide`, which
+//! the ledger reads and the plan's wording lists, and its term in
+//! [`at_point`] or [`with_closed_forms`].
 //!
 //! What the lights themselves answer (a sample of their light at a point,
 //! their power, a photon) is `lights/`; these modules ask it and never
@@ -30,8 +31,8 @@ pub(crate) mod square;
 pub(crate) use contribution::{
     Receiver, Visibility, light_contribution, transmittance, weighed_contribution,
 };
-pub(crate) use exact::{MAX_MIRROR_PAIRS, is_exact, through_mirrors, through_mirrors_of};
-pub(crate) use refracted::{MAX_GLASS_PAIRS, glass_pairs, through_glass, through_glass_of};
+pub(crate) use exact::{is_exact, through_mirrors, through_mirrors_of};
+pub(crate) use refracted::{through_glass, through_glass_of};
 
 use flatray_geometry::DVec2;
 
@@ -41,10 +42,18 @@ use crate::options::RenderOptions;
 use crate::scene::Scene;
 use crate::{Rgb, Stats};
 
-/// The closed forms that decide where they run by rules of their own,
-/// each with its decision and the reason for it.
+/// The closed forms through mirrors and glass, each with its decision of
+/// where it runs and the reason for it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ClosedForms {
+    /// Line and circle lights seen in one flat mirror, taken at every
+    /// receiver and left out of path rays that meet them right after
+    /// that mirror (`exact::through_mirrors`).
+    pub mirror_lights: Decision,
+    /// Line and circle lights seen through one edge of the glass body a
+    /// receiver is in, left out of path rays that meet them right after
+    /// that one refraction (`refracted::through_glass`).
+    pub glass_lights: Decision,
     /// Points, spots, suns and beams seen in one flat mirror
     /// (`mirrored.rs`).
     pub aimed_mirrors: Decision,
@@ -55,6 +64,8 @@ impl ClosedForms {
     /// where the plan casts shadow rays if `shadows`.
     pub(crate) fn of(scene: &Scene, options: &RenderOptions, shadows: bool) -> ClosedForms {
         ClosedForms {
+            mirror_lights: exact::decide(scene, options, shadows),
+            glass_lights: refracted::decide(scene, options, shadows),
             aimed_mirrors: mirrored::decide(scene, options, shadows),
         }
     }
@@ -68,12 +79,28 @@ impl ClosedForms {
     }
 
     /// Each closed form's name, as the plan lists it, and its decision.
-    pub(crate) fn named(&self) -> [(&'static str, &Decision); 1] {
-        [(
-            "points, spots and suns in a mirror, closed form",
-            &self.aimed_mirrors,
-        )]
+    pub(crate) fn named(&self) -> [(&'static str, &Decision); 3] {
+        [
+            (
+                "lines and circles in a mirror, closed form",
+                &self.mirror_lights,
+            ),
+            (
+                "lines and circles through one glass edge, closed form",
+                &self.glass_lights,
+            ),
+            (
+                "points, spots and suns in a mirror, closed form",
+                &self.aimed_mirrors,
+            ),
+        ]
     }
+}
+
+/// Whether any wall of `scene` is an arc: the closed forms through a
+/// mirror or a glass edge take the walls around it as segments.
+fn has_arcs(scene: &Scene) -> bool {
+    scene.walls.iter().any(|w| w.shape.as_arc().is_some())
 }
 
 /// The closed forms that a receiver point `x` takes at that point alone,

@@ -29,19 +29,21 @@
 //! Paths skip the emission they meet right after exactly that one
 //! refraction out of the body their vertex is in (`path.rs`), so the two
 //! estimators share the light with no overlap. Rough or dispersive glass,
-//! and scenes with arcs, stay sampled (`Plan::glass_lights`).
+//! and scenes with arcs, stay sampled (`ClosedForms::glass_lights`).
 
 use flatray_geometry::{DVec2, Ray, Segment, Side, Skip, intersect};
 
 use super::exact::{GAUSS_12, SCRATCH, SLIVER, find_walls, is_exact, kinks, legs};
+use crate::decision::Decision;
 use crate::estimators::Receiver;
 use crate::lights::{circle, line};
 use crate::optics::fresnel;
+use crate::options::{Integrator, RenderOptions};
 use crate::scene::{Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
 /// Most pairs of a glass edge and a line or circle light that receivers
-/// inside glass take in closed form (`Plan::glass_lights`): each pair
+/// inside glass take in closed form (`ClosedForms::glass_lights`): each pair
 /// costs every receiver inside the edge's body a look at the walls
 /// around the edge and the light.
 pub const MAX_GLASS_PAIRS: usize = 256;
@@ -57,6 +59,47 @@ const GRAZING_SINE: f64 = 0.98;
 /// The glass edge and line or circle light pairs of `scene`.
 pub(crate) fn glass_pairs(scene: &Scene) -> usize {
     scene.glass_edges.len() * scene.lights.iter().filter(|l| is_exact(&l.shape)).count()
+}
+
+/// Whether receivers inside glass take line and circle lights seen
+/// through one edge of their body in closed form ([`through_glass`]),
+/// and why: where shadow rays are cast, light is refracted, the pairs fit
+/// [`MAX_GLASS_PAIRS`], every body is smooth and not dispersive, and no
+/// wall is an arc (the closed form takes the walls around an edge as
+/// segments). Elsewhere path rays find that light.
+pub(crate) fn decide(scene: &Scene, options: &RenderOptions, shadows: bool) -> Decision {
+    let pairs = glass_pairs(scene);
+    let counted = |n: usize| match n {
+        1 => "1 glass edge and light pair".to_string(),
+        n => format!("{n} glass edge and light pairs"),
+    };
+    let rough_or_dispersive = scene
+        .glass
+        .iter()
+        .any(|g| g.dispersion != 0.0 || g.roughness > 0.0);
+    if options.integrator == Integrator::Light {
+        Decision::skipped("light tracing does not take it")
+    } else if pairs == 0 {
+        Decision::skipped("no glass and line or circle light in the scene")
+    } else if options.specular == 0 {
+        Decision::skipped("specular = 0: no light is refracted")
+    } else if pairs > MAX_GLASS_PAIRS {
+        Decision::skipped(format!(
+            "{}, over {MAX_GLASS_PAIRS}: path rays find them",
+            counted(pairs)
+        ))
+    } else if rough_or_dispersive {
+        Decision::skipped("rough or dispersive glass: path rays find them")
+    } else if super::has_arcs(scene) {
+        Decision::skipped("the scene has arcs: path rays find them")
+    } else if !shadows {
+        Decision::skipped("no shadow rays are cast")
+    } else {
+        Decision::runs(format!(
+            "{}: every floor and wall point inside glass takes them exactly; path rays add them only after more than one mirror or glass event",
+            counted(pairs)
+        ))
+    }
 }
 
 /// The light that every line and circle light brings `x` after exactly one

@@ -130,21 +130,8 @@ pub struct Plan {
     /// Lights with an area met by a path ray after a mirror or glass, or
     /// off a rough mirror.
     pub mirror_emission: bool,
-    /// Line and circle lights taken in closed form through one flat
-    /// mirror at every receiver, and left out of path rays that meet
-    /// them right after that mirror (`estimators::exact::through_mirrors`).
-    pub mirror_lights: bool,
-    /// Pairs of a flat mirror and a line or circle light.
-    pub mirror_pairs: usize,
-    /// Line and circle lights taken in closed form through one edge of
-    /// the glass body a receiver is in, and left out of path rays that
-    /// meet them right after that one refraction
-    /// (`estimators::refracted::through_glass`).
-    pub glass_lights: bool,
-    /// Pairs of a glass edge and a line or circle light.
-    pub glass_pairs: usize,
-    /// The closed forms that decide by rules of their own, each with its
-    /// reason (`estimators::ClosedForms`).
+    /// The closed forms through mirrors and glass, each with its reason
+    /// (`estimators::ClosedForms`).
     pub closed_forms: ClosedForms,
     /// Line and circle lights send caustic photons at the mirror and
     /// glass edges, which take their light after runs of specular events
@@ -218,8 +205,8 @@ impl Plan {
     /// plan's decisions.
     pub(crate) fn ledger(&self) -> crate::ledger::Ledger {
         crate::ledger::Ledger {
-            mirror_lights: self.mirror_lights,
-            glass_lights: self.glass_lights,
+            mirror_lights: self.closed_forms.mirror_lights.runs,
+            glass_lights: self.closed_forms.glass_lights.runs,
             aimed_mirrors: self.closed_forms.aimed_mirrors.runs,
             area_photons: self.area_photons,
             caustics: self.caustics,
@@ -243,8 +230,6 @@ impl Plan {
         let tracing_light = options.integrator == Integrator::Light;
         let shadows =
             !tracing_light && (force || (inventory.occluders > 0 && !scene.lights.is_empty()));
-        let (mirror_pairs, mirror_lights, glass_pairs, glass_lights) =
-            closed_form_decisions(scene, options, &inventory, shadows);
         let closed_forms = ClosedForms::of(scene, options, shadows);
         let aimed_runs_closed = closed_forms.take_aimed_runs(scene);
         let transport = transport_decisions(scene, options, &inventory, aimed_runs_closed);
@@ -312,10 +297,6 @@ impl Plan {
             shadows,
             indirect: transport.indirect,
             mirror_emission: transport.mirror_emission,
-            mirror_lights,
-            mirror_pairs,
-            glass_lights,
-            glass_pairs,
             closed_forms,
             area_photons: transport.area_photons,
             area_targets: transport.area_targets,
@@ -506,44 +487,6 @@ fn floor_decisions(
         line_piece_tenths,
         dense_walls,
     }
-}
-
-/// The closed forms through one flat mirror and through one glass edge:
-/// their (mirror, light) and (edge, light) pairs, and whether each runs.
-fn closed_form_decisions(
-    scene: &Scene,
-    options: &RenderOptions,
-    inventory: &Inventory,
-    shadows: bool,
-) -> (usize, bool, usize, bool) {
-    // Lines and circles seen in one flat mirror, in closed form at
-    // each receiver, up to a budget of (mirror, light) pairs.
-    let mirror_pairs = scene.flat_mirrors.len()
-        * scene
-            .lights
-            .iter()
-            .filter(|l| crate::estimators::is_exact(&l.shape))
-            .count();
-    // The closed form through a mirror takes the walls around it as
-    // segments.
-    let mirror_lights = shadows
-        && inventory.arcs == 0
-        && options.specular > 0
-        && mirror_pairs > 0
-        && mirror_pairs <= crate::estimators::MAX_MIRROR_PAIRS;
-    // Lines and circles seen through one edge of smooth glass, in
-    // closed form at each receiver inside glass, up to a budget of
-    // (edge, light) pairs; the closed form takes the walls around as
-    // segments.
-    let glass_pairs = crate::estimators::glass_pairs(scene);
-    let glass_lights = shadows
-        && inventory.arcs == 0
-        && options.specular > 0
-        && glass_pairs > 0
-        && glass_pairs <= crate::estimators::MAX_GLASS_PAIRS
-        && inventory.dispersive == 0
-        && inventory.rough_glass == 0;
-    (mirror_pairs, mirror_lights, glass_pairs, glass_lights)
 }
 
 /// What [`memo_decisions`] reads of the scene and of the plan's earlier

@@ -47,8 +47,8 @@ impl Plan {
         self.direct_effects(&mut effects);
         self.shadow_effects(&mut effects);
         self.indirect_effects(&mut effects);
-        self.seen_effects(&mut effects);
         self.closed_form_effects(&mut effects);
+        self.seen_effects(&mut effects);
         self.wall_effects(&mut effects);
         self.wall_cache_effects(&mut effects);
         self.floor_cache_effects(&mut effects);
@@ -280,7 +280,7 @@ impl Plan {
         );
     }
 
-    /// The closed forms that decide by rules of their own
+    /// The closed forms through mirrors and glass
     /// (`estimators::ClosedForms`), each as it gives its reason.
     fn closed_form_effects(&self, effects: &mut Vec<Effect>) {
         for (name, decision) in self.closed_forms.named() {
@@ -292,84 +292,22 @@ impl Plan {
         }
     }
 
-    /// Lines and circles seen in mirrors and through glass: in closed form, or by path rays.
+    /// Lines and circles seen in mirrors and through glass by path rays.
     fn seen_effects(&self, effects: &mut Vec<Effect>) {
         let Inventory {
             areas,
-            arcs,
             rough_mirrors,
-            dispersive,
-            rough_glass,
             ..
         } = self.inventory;
         let Plan {
             bounces,
-            specular: specular_limit,
-            tracing_light,
             indirect,
             mirror_emission,
-            mirror_lights,
-            mirror_pairs,
-            glass_lights,
-            glass_pairs,
             ..
         } = *self;
         let specular = self.inventory.mirrors + self.inventory.glass_edges;
         let mut add =
             |name: &'static str, runs: bool, why: String| effects.push(Effect { name, runs, why });
-        let n = counted;
-        add(
-            "lines and circles in a mirror, closed form",
-            mirror_lights,
-            if mirror_lights {
-                format!(
-                    "{}: every floor and wall point takes them exactly; path rays add them only after more than one mirror or glass event",
-                    n(mirror_pairs, "flat mirror and light pair")
-                )
-            } else if tracing_light {
-                "light tracing does not take it".into()
-            } else if mirror_pairs == 0 {
-                "no flat mirror and line or circle light in the scene".into()
-            } else if specular_limit == 0 {
-                "specular = 0: no light is reflected".into()
-            } else if mirror_pairs > crate::estimators::MAX_MIRROR_PAIRS {
-                format!(
-                    "{}, over {}: path rays find them",
-                    n(mirror_pairs, "flat mirror and light pair"),
-                    crate::estimators::MAX_MIRROR_PAIRS
-                )
-            } else {
-                "no shadow rays are cast".into()
-            },
-        );
-        add(
-            "lines and circles through one glass edge, closed form",
-            glass_lights,
-            if glass_lights {
-                format!(
-                    "{}: every floor and wall point inside glass takes them exactly; path rays add them only after more than one mirror or glass event",
-                    n(glass_pairs, "glass edge and light pair")
-                )
-            } else if tracing_light {
-                "light tracing does not take it".into()
-            } else if glass_pairs == 0 {
-                "no glass and line or circle light in the scene".into()
-            } else if specular_limit == 0 {
-                "specular = 0: no light is refracted".into()
-            } else if glass_pairs > crate::estimators::MAX_GLASS_PAIRS {
-                format!(
-                    "{}, over {}: path rays find them",
-                    n(glass_pairs, "glass edge and light pair"),
-                    crate::estimators::MAX_GLASS_PAIRS
-                )
-            } else if dispersive > 0 || rough_glass > 0 {
-                "rough or dispersive glass: path rays find them".into()
-            } else if arcs > 0 {
-                "the scene has arcs: path rays find them".into()
-            } else {
-                "no shadow rays are cast".into()
-            },
-        );
         let glossy = rough_mirrors > 0 && bounces > 0;
         add(
             "lines and circles seen in mirrors or glass",
