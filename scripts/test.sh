@@ -40,14 +40,17 @@ cargo test --release --workspace
 # two-worker Ray among them).
 python3 -m pip install --quiet --disable-pip-version-check "./cli/python[test]"
 python3 -m pytest cli/python/tests -q
-# Again with only the code that runs on every processor (no AVX): the same
-# images, plans and statistics are expected. (The docs' pictures and the
-# slowest statistical tests, all run above, are left out here for time:
-# the others, the agreement of path and light tracing on every example
-# scene among them, check the portable kernel.)
-FLATRAY_PORTABLE=1 cargo test --release -p flatray-geometry -p flatray-tests -- \
-  --skip every_picture_in_the_docs_is_what_its_command_makes \
-  --skip the_noise_estimate_ --skip the_relmse_estimate_ \
-  --skip furnaces_of_arcs --skip round_rooms_and_columns \
-  --skip the_memo_converges_at_corners --skip a_table_of_chosen_lights \
-  --skip a_lasers_spot_on_a_wall
+# Again with only the code that runs on every processor (no AVX): the
+# geometry's kernels, and the end-to-end tests that render through every
+# part of the pixel loop (every example scene with and without fast paths,
+# path and light tracing, the closed forms, lines, memos, hard cases),
+# which must give the same images, plans and statistics. The long
+# statistical suites and the docs' pictures, run above, are not run again.
+FLATRAY_PORTABLE=1 cargo test --release -p flatray-geometry
+FLATRAY_PORTABLE=1 cargo test --release -p flatray-tests \
+  --test identity --test determinism --test hard_cases --test non_negative \
+  --test exact_light --test circle_light --test square_light --test beams \
+  --test aimed_mirror --test through_glass --test specular_runs --test glass \
+  --test rough_mirror --test rough_glass --test light_tracing --test path_tracing \
+  --test direct_light --test culling --test coherence --test lines --test onward \
+  --test passes --test adaptive --test daylight --test snapshots
