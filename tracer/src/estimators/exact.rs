@@ -35,7 +35,7 @@ use flatray_geometry::{Arc, DVec2, Ray, Segment, Shape, Skip, cross, intersect};
 
 use crate::decision::Decision;
 use crate::estimators::{Receiver, Visibility};
-use crate::options::{Integrator, RenderOptions};
+use crate::options::RenderOptions;
 use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
@@ -271,32 +271,17 @@ pub(crate) fn mirror_pairs(scene: &Scene) -> usize {
 /// wall is an arc (the closed form takes the walls around a mirror as
 /// segments). Elsewhere path rays find that light.
 pub(crate) fn decide(scene: &Scene, options: &RenderOptions, shadows: bool) -> Decision {
-    let pairs = mirror_pairs(scene);
-    let counted = |n: usize| match n {
-        1 => "1 flat mirror and light pair".to_string(),
-        n => format!("{n} flat mirror and light pairs"),
+    let terms = super::Terms {
+        pairs: mirror_pairs(scene),
+        most: MAX_MIRROR_PAIRS,
+        pair: "flat mirror and light pair",
+        none: "no flat mirror and line or circle light in the scene",
+        event: "reflected",
+        otherwise: "path rays find them",
+        runs: "every floor and wall point takes them exactly; path rays add them only after more than one mirror or glass event",
     };
-    if options.integrator == Integrator::Light {
-        Decision::skipped("light tracing does not take it")
-    } else if pairs == 0 {
-        Decision::skipped("no flat mirror and line or circle light in the scene")
-    } else if options.specular == 0 {
-        Decision::skipped("specular = 0: no light is reflected")
-    } else if pairs > MAX_MIRROR_PAIRS {
-        Decision::skipped(format!(
-            "{}, over {MAX_MIRROR_PAIRS}: path rays find them",
-            counted(pairs)
-        ))
-    } else if super::has_arcs(scene) {
-        Decision::skipped("the scene has arcs: path rays find them")
-    } else if !shadows {
-        Decision::skipped("no shadow rays are cast")
-    } else {
-        Decision::runs(format!(
-            "{}: every floor and wall point takes them exactly; path rays add them only after more than one mirror or glass event",
-            counted(pairs)
-        ))
-    }
+    let held = super::has_arcs(scene).then_some("the scene has arcs: path rays find them");
+    super::decide(options, shadows, terms, held)
 }
 
 /// The light that every line and circle light brings `x` after exactly

@@ -22,7 +22,7 @@ use flatray_geometry::{DVec2, Ray, Segment, Skip, cross};
 use crate::decision::Decision;
 use crate::estimators::{Receiver, transmittance};
 use crate::lights::arriving;
-use crate::options::{Integrator, RenderOptions};
+use crate::options::RenderOptions;
 use crate::scene::{LightShape, Material, MirrorShadows, Scene};
 use crate::{Rgb, Stats};
 
@@ -97,30 +97,16 @@ pub(crate) fn takes_every_run(scene: &Scene) -> bool {
 /// mirror in closed form, and why: wherever shadow rays are cast and
 /// mirrors reflect, within [`MAX_AIMED_MIRROR_PAIRS`].
 pub(crate) fn decide(scene: &Scene, options: &RenderOptions, shadows: bool) -> Decision {
-    let pairs = pairs(scene);
-    let counted = |n: usize| match n {
-        1 => "1 flat mirror and light pair".to_string(),
-        n => format!("{n} flat mirror and light pairs"),
+    let terms = super::Terms {
+        pairs: pairs(scene),
+        most: MAX_AIMED_MIRROR_PAIRS,
+        pair: "flat mirror and light pair",
+        none: "no flat mirror and point, spot, directional light or beam in the scene",
+        event: "reflected",
+        otherwise: "the caustic pass takes them",
+        runs: "every floor and wall point takes them exactly, by the path to its image; the caustic pass leaves them alone",
     };
-    if options.integrator == Integrator::Light {
-        Decision::skipped("light tracing does not take it")
-    } else if pairs == 0 {
-        Decision::skipped("no flat mirror and point, spot, directional light or beam in the scene")
-    } else if options.specular == 0 {
-        Decision::skipped("specular = 0: no light is reflected")
-    } else if pairs > MAX_AIMED_MIRROR_PAIRS {
-        Decision::skipped(format!(
-            "{}, over {MAX_AIMED_MIRROR_PAIRS}: the caustic pass takes them",
-            counted(pairs)
-        ))
-    } else if !shadows {
-        Decision::skipped("no shadow rays are cast")
-    } else {
-        Decision::runs(format!(
-            "{}: every floor and wall point takes them exactly, by the path to its image; the caustic pass leaves them alone",
-            counted(pairs)
-        ))
-    }
+    super::decide(options, shadows, terms, None)
 }
 
 /// The light that every point, spot, sun and beam (or light `light`

@@ -97,6 +97,55 @@ impl ClosedForms {
     }
 }
 
+/// What a closed form through mirrors or glass says of itself, for
+/// [`decide`]: its pairs of a specular wall and a light, its budget of
+/// them, and its words.
+struct Terms {
+    pairs: usize,
+    most: usize,
+    /// One pair, as in "flat mirror and light pair".
+    pair: &'static str,
+    /// Why there are none: "no flat mirror and ... in the scene".
+    none: &'static str,
+    /// What `specular = 0` stops: "reflected" or "refracted".
+    event: &'static str,
+    /// Who takes the light where the closed form does not.
+    otherwise: &'static str,
+    /// What the closed form does where it runs.
+    runs: &'static str,
+}
+
+/// Where a closed form through mirrors or glass runs, and why: with its
+/// pairs within budget, light reflected or refracted, shadow rays cast,
+/// and no reason of its own against it (`held`, checked before shadows).
+/// Light tracing takes none of them.
+fn decide(options: &RenderOptions, shadows: bool, terms: Terms, held: Option<&str>) -> Decision {
+    let counted = |n: usize| match n {
+        1 => format!("1 {}", terms.pair),
+        n => format!("{n} {}s", terms.pair),
+    };
+    if options.integrator == crate::options::Integrator::Light {
+        Decision::skipped("light tracing does not take it")
+    } else if terms.pairs == 0 {
+        Decision::skipped(terms.none)
+    } else if options.specular == 0 {
+        Decision::skipped(format!("specular = 0: no light is {}", terms.event))
+    } else if terms.pairs > terms.most {
+        Decision::skipped(format!(
+            "{}, over {}: {}",
+            counted(terms.pairs),
+            terms.most,
+            terms.otherwise
+        ))
+    } else if let Some(held) = held {
+        Decision::skipped(held)
+    } else if !shadows {
+        Decision::skipped("no shadow rays are cast")
+    } else {
+        Decision::runs(format!("{}: {}", counted(terms.pairs), terms.runs))
+    }
+}
+
 /// Whether any wall of `scene` is an arc: the closed forms through a
 /// mirror or a glass edge take the walls around it as segments.
 fn has_arcs(scene: &Scene) -> bool {

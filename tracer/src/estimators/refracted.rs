@@ -38,7 +38,7 @@ use crate::decision::Decision;
 use crate::estimators::Receiver;
 use crate::lights::{circle, line};
 use crate::optics::fresnel;
-use crate::options::{Integrator, RenderOptions};
+use crate::options::RenderOptions;
 use crate::scene::{Falloff, LightShape, Material, Scene};
 use crate::{Rgb, Stats};
 
@@ -68,38 +68,27 @@ pub(crate) fn glass_pairs(scene: &Scene) -> usize {
 /// wall is an arc (the closed form takes the walls around an edge as
 /// segments). Elsewhere path rays find that light.
 pub(crate) fn decide(scene: &Scene, options: &RenderOptions, shadows: bool) -> Decision {
-    let pairs = glass_pairs(scene);
-    let counted = |n: usize| match n {
-        1 => "1 glass edge and light pair".to_string(),
-        n => format!("{n} glass edge and light pairs"),
+    let terms = super::Terms {
+        pairs: glass_pairs(scene),
+        most: MAX_GLASS_PAIRS,
+        pair: "glass edge and light pair",
+        none: "no glass and line or circle light in the scene",
+        event: "refracted",
+        otherwise: "path rays find them",
+        runs: "every floor and wall point inside glass takes them exactly; path rays add them only after more than one mirror or glass event",
     };
     let rough_or_dispersive = scene
         .glass
         .iter()
         .any(|g| g.dispersion != 0.0 || g.roughness > 0.0);
-    if options.integrator == Integrator::Light {
-        Decision::skipped("light tracing does not take it")
-    } else if pairs == 0 {
-        Decision::skipped("no glass and line or circle light in the scene")
-    } else if options.specular == 0 {
-        Decision::skipped("specular = 0: no light is refracted")
-    } else if pairs > MAX_GLASS_PAIRS {
-        Decision::skipped(format!(
-            "{}, over {MAX_GLASS_PAIRS}: path rays find them",
-            counted(pairs)
-        ))
-    } else if rough_or_dispersive {
-        Decision::skipped("rough or dispersive glass: path rays find them")
+    let held = if rough_or_dispersive {
+        Some("rough or dispersive glass: path rays find them")
     } else if super::has_arcs(scene) {
-        Decision::skipped("the scene has arcs: path rays find them")
-    } else if !shadows {
-        Decision::skipped("no shadow rays are cast")
+        Some("the scene has arcs: path rays find them")
     } else {
-        Decision::runs(format!(
-            "{}: every floor and wall point inside glass takes them exactly; path rays add them only after more than one mirror or glass event",
-            counted(pairs)
-        ))
-    }
+        None
+    };
+    super::decide(options, shadows, terms, held)
 }
 
 /// The light that every line and circle light brings `x` after exactly one
