@@ -40,14 +40,17 @@ cargo test --release --workspace
 # two-worker Ray among them).
 python3 -m pip install --quiet --disable-pip-version-check "./cli/python[test]"
 python3 -m pytest cli/python/tests -q
-# Again with only the code that runs on every processor (no AVX): the
-# geometry's kernels, and the end-to-end tests that render through every
-# part of the pixel loop (every example scene with and without fast paths,
-# path and light tracing, the closed forms, lines, memos, hard cases),
-# which must give the same images, plans and statistics. The long
-# statistical suites and the docs' pictures, run above, are not run again.
-FLATRAY_PORTABLE=1 cargo test --release -p flatray-geometry
-FLATRAY_PORTABLE=1 cargo test --release -p flatray-tests \
+# Again with only the code that runs on every processor (no AVX): every
+# crate's unit tests (the geometry's kernels, the tracer's estimators),
+# the geometry's property tests, and the end-to-end tests that render
+# through every part of the pixel loop (every example scene with and
+# without fast paths, path and light tracing, the closed forms, lines,
+# memos, hard cases), which must give the same images, plans and
+# statistics. The long statistical suites and the docs' pictures, run
+# above, are not run again. `--workspace` keeps the features of every
+# dependency as in the first run, so nothing is compiled again.
+FLATRAY_PORTABLE=1 cargo test --release --workspace --lib \
+  --test arc_roots --test properties \
   --test identity --test determinism --test hard_cases --test non_negative \
   --test exact_light --test circle_light --test square_light --test beams \
   --test aimed_mirror --test through_glass --test specular_runs --test glass \
