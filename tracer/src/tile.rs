@@ -1,7 +1,7 @@
 //! The path estimators (`Path`, `Original`) as units of the render loop:
 //! what every pass of a render shares (the plan and the structures it
-//! builds once), what each pass fills for itself (its caustic pass and
-//! onward memo), and a tile of pixels per unit, in blocks of
+//! builds once), what each pass fills for itself (the list [`FILLS`]:
+//! caustic photons, onward memo, lines), and a tile of pixels per unit, in blocks of
 //! [`CULL_BLOCK`] pixels that share their culling lists.
 
 use flatray_geometry::{ArcCandidates, DVec2};
@@ -107,16 +107,97 @@ fn tile_meets(window: Window, (tx, ty): (u32, u32)) -> bool {
     window.meets((tx * TILE, ty * TILE), ((tx + 1) * TILE, (ty + 1) * TILE))
 }
 
-/// What one pass of a path-traced render fills for itself: its caustic
-/// pass and its onward memo.
+/// What one pass of a path-traced render fills for itself before its
+/// pixels, each built by one step of [`FILLS`] where the plan runs it.
+#[derive(Default)]
 pub(crate) struct Fills {
-    pub(crate) caustics: Option<Caustics>,
-    pub(crate) onward: Option<OnwardMemo>,
+    caustics: Option<Caustics>,
+    onward: Option<OnwardMemo>,
     /// The floor's indirect light along lines (`Plan::floor_lines`).
-    pub(crate) lines: Option<Lines>,
+    lines: Option<Lines>,
+}
+
+/// What a step of [`FILLS`] builds from.
+struct FillInput<'a> {
+    scene: &'a Scene,
+    options: &'a RenderOptions,
+    shared: &'a Shared,
+    pass: &'a Pass,
+    progress: &'a (dyn Fn(u64) + Sync),
+}
+
+/// One step of a pass's fills: builds its part of `fills` where the plan
+/// runs it, reading the parts the steps before it built.
+type FillStep = fn(&FillInput<'_>, &mut Fills, &mut Stats);
+
+/// A pass's fills in the order they read each other: the caustic photons
+/// first (light through mirrors and glass that next-event estimation at
+/// the walls reads), then the onward memo (whose gathers read them), then
+/// the floor's lines (whose paths read both). A new fill is one step
+/// here and one field of [`Fills`]; the render loop walks the list.
+const FILLS: [FillStep; 3] = [caustic_photons, onward_memo, floor_lines];
+
+/// Light from points, spots and suns through mirrors and glass, which no
+/// path from the floor can find, traced from the lights.
+fn caustic_photons(input: &FillInput<'_>, fills: &mut Fills, stats: &mut Stats) {
+    let plan = &input.shared.plan;
+    if !plan.caustics {
+        return;
+    }
+    // Photons are no pixel samples: the callback hears of them with 0,
+    // as a heartbeat.
+    fills.caustics = crate::caustics::trace_caustics(
+        input.scene,
+        input.options,
+        (Limits::of(input.options), input.pass),
+        plan.ledger(),
+        stats,
+        &|_| (input.progress)(0),
+    );
+}
+
+/// The rest of a path from each diffuse wall, gathered after the direct
+/// light and the caustic photons its paths read.
+fn onward_memo(input: &FillInput<'_>, fills: &mut Fills, stats: &mut Stats) {
+    let FillInput {
+        scene,
+        options,
+        shared,
+        pass,
+        ..
+    } = *input;
+    let Some(wall_memo) = shared.memo.as_ref().filter(|_| shared.plan.onward) else {
+        return;
+    };
+    let (width, height) = image_size(scene, options.scale);
+    let trace = fills.trace(scene, options, shared, pass);
+    // The first pass's halves read a copy each; a later pass is one half
+    // of the noise estimate by itself.
+    let copies = if pass.index == 0 { 2 } else { 1 };
+    let gathers = crate::onward::gathers(
+        pass.count(),
+        width as u64 * height as u64,
+        (wall_memo.values() as u64, options.bounces.saturating_sub(1)),
+        copies,
+    );
+    let memo = crate::onward::build_onward(&trace, wall_memo, (gathers, copies), pass.seed, stats);
+    fills.onward = Some(memo);
+}
+
+/// The floor's indirect light along lines, whose paths read the fills
+/// before it.
+fn floor_lines(input: &FillInput<'_>, fills: &mut Fills, stats: &mut Stats) {
+    if !input.shared.plan.floor_lines {
+        return;
+    }
+    let mut trace = fills.trace(input.scene, input.options, input.shared, input.pass);
+    trace.floor_direct = false;
+    let lines = crate::lines::gather_lines(trace, input.options, input.pass, stats, input.progress);
+    fills.lines = Some(lines);
 }
 
 impl Fills {
+    /// Pass `pass`'s fills: every step of [`FILLS`] in turn.
     fn new(
         scene: &Scene,
         options: &RenderOptions,
@@ -125,57 +206,34 @@ impl Fills {
         stats: &mut Stats,
         progress: &(dyn Fn(u64) + Sync),
     ) -> Fills {
-        let plan = &shared.plan;
-        let (width, height) = image_size(scene, options.scale);
-        // Light from points, spots and suns through mirrors and glass,
-        // which no path from the floor can find: traced from the lights
-        // first, so that next-event estimation at the walls can read it.
-        let caustics = if plan.caustics {
-            // Photons are no pixel samples: the callback hears of them
-            // with 0, as a heartbeat.
-            crate::caustics::trace_caustics(
-                scene,
-                options,
-                (Limits::of(options), pass),
-                plan.ledger(),
-                stats,
-                &|_| progress(0),
-            )
-        } else {
-            None
+        let input = FillInput {
+            scene,
+            options,
+            shared,
+            pass,
+            progress,
         };
-        // The rest of a path from each diffuse wall, gathered after the
-        // direct light and the caustic pass that its paths read.
-        let onward = shared
-            .memo
-            .as_ref()
-            .filter(|_| plan.onward)
-            .map(|wall_memo| {
-                let trace = trace_for(scene, options, shared, (caustics.as_ref(), None));
-                // The first pass's halves read a copy each; a later pass
-                // is one half of the noise estimate by itself.
-                let copies = if pass.index == 0 { 2 } else { 1 };
-                let gathers = crate::onward::gathers(
-                    pass.count(),
-                    width as u64 * height as u64,
-                    (wall_memo.values() as u64, options.bounces.saturating_sub(1)),
-                    copies,
-                );
-                crate::onward::build_onward(&trace, wall_memo, (gathers, copies), pass.seed, stats)
-            });
-        // The floor's indirect light along lines, whose paths read all
-        // of the above.
-        let lines = plan.floor_lines.then(|| {
-            let onward = onward.as_ref().map(|memo| Onward::of(memo, pass.middle));
-            let mut trace = trace_for(scene, options, shared, (caustics.as_ref(), onward));
-            trace.floor_direct = false;
-            crate::lines::gather_lines(trace, options, pass, stats, progress)
-        });
-        Fills {
-            caustics,
-            onward,
-            lines,
+        let mut fills = Fills::default();
+        for step in FILLS {
+            step(&input, &mut fills, stats);
         }
+        fills
+    }
+
+    /// The switches of pass `pass`'s path samples, reading what is
+    /// filled so far.
+    fn trace<'a>(
+        &'a self,
+        scene: &'a Scene,
+        options: &RenderOptions,
+        shared: &'a Shared,
+        pass: &Pass,
+    ) -> Trace<'a> {
+        let onward = self
+            .onward
+            .as_ref()
+            .map(|memo| Onward::of(memo, pass.middle));
+        trace_for(scene, options, shared, (self.caustics.as_ref(), onward))
     }
 }
 
@@ -216,18 +274,7 @@ pub(crate) fn path_passes(
             measures: measures && pass.index == 0,
             coherence: shared.coherence.as_ref(),
             culling: plan.floor_ray_culling,
-            trace: trace_for(
-                scene,
-                options,
-                shared,
-                (
-                    fills.caustics.as_ref(),
-                    fills
-                        .onward
-                        .as_ref()
-                        .map(|memo| Onward::of(memo, pass.middle)),
-                ),
-            ),
+            trace: fills.trace(scene, options, shared, pass),
             one_bounce_memo: shared.memo.as_ref().filter(|_| plan.fast.shortcut.runs),
             lines: fills.lines.as_ref(),
             strata_loops: plan.fast.strata_loops.runs,
