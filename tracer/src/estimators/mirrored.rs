@@ -374,4 +374,43 @@ mod tests {
         assert!(!wholly_hidden(&merged(vec![(0.0001, 1.2)])));
         assert!(!wholly_hidden(&[]));
     }
+
+    /// A black mirror sends no light on: the closed form neither walks it
+    /// nor counts it against its budget, nor does it stop the closed form
+    /// from taking every run.
+    #[test]
+    fn black_mirrors_are_left_out_of_the_pairs() {
+        use crate::scene::{Canvas, Falloff, Floor, Light, Wall};
+        let wall = |a: (f64, f64), b: (f64, f64), tint: Rgb| {
+            Wall::segment(
+                DVec2::new(a.0, a.1),
+                DVec2::new(b.0, b.1),
+                Material::Mirror { tint },
+            )
+        };
+        let walls = vec![
+            wall((10.0, 10.0), (50.0, 10.0), Rgb::splat(0.9)),
+            // Facing the first mirror, and black.
+            wall((10.0, 30.0), (50.0, 30.0), Rgb::ZERO),
+        ];
+        let lights = vec![Light {
+            shape: LightShape::Point {
+                at: DVec2::new(30.0, 20.0),
+            },
+            color: Rgb::ONE,
+            intensity: 1.0,
+            falloff: Falloff::Flatland,
+            spectrum: None,
+        }];
+        let canvas = Canvas {
+            width: 60,
+            height: 40,
+            origin: DVec2::ZERO,
+        };
+        let scene =
+            Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene");
+        assert_eq!(scene.flat_mirrors, vec![0]);
+        assert_eq!(pairs(&scene), 1);
+        assert!(takes_every_run(&scene));
+    }
 }

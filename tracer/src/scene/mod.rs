@@ -852,8 +852,10 @@ pub struct Scene {
     /// a solid line light's own wall, or the first wall that a point or
     /// spot light lies on (to within rounding).
     pub(crate) light_wall: Vec<Option<u32>>,
-    /// The walls that are flat, perfect mirrors (`Material::Mirror`), in
-    /// index order.
+    /// The walls that are flat, perfect mirrors (`Material::Mirror`) and
+    /// reflect some light (a black mirror's tint sends none on), in
+    /// index order: the closed forms through one mirror walk them and
+    /// count them against their budgets.
     pub(crate) flat_mirrors: Vec<u32>,
     /// Per light, and for a point, spot, sun or beam per flat mirror (in
     /// the order of `flat_mirrors`), the parts of the mirror (intervals of
@@ -1072,7 +1074,9 @@ impl Scene {
         let flat_mirrors = (0..walls.len() as u32)
             .filter(|&w| {
                 let wall = &walls[w as usize];
-                matches!(wall.material, Material::Mirror { .. }) && wall.as_segment().is_some()
+                matches!(wall.material, Material::Mirror { .. })
+                    && wall.material.reflects_specularly()
+                    && wall.as_segment().is_some()
             })
             .collect();
         let mut glass_edges: Vec<u32> = (0..walls.len() as u32)
