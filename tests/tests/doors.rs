@@ -2,7 +2,7 @@
 //! through in turned rooms, under every integrator and bounce count; an
 //! open door and an open window do; a door is a bound between rooms
 //! whether open or shut; a generated apartment's rooms are found one by
-//! one.
+//! one, on the grid and turned off it.
 
 use flatray_geometry::DVec2;
 use flatray_tests::{options, render, scene};
@@ -204,6 +204,107 @@ fn the_rooms_of_a_generated_apartment_are_found_one_by_one() {
                 rooms_of(&[], 25.0),
                 rooms as usize,
                 "{what}: by the door width"
+            );
+        }
+    }
+}
+
+/// A generated apartment turned about its centre by angles off the grid
+/// has the rooms of the plan as drawn: as many, each about as large, the
+/// outside one more, and a door width over the doors' closes their gaps
+/// without the doors as it does on the grid (the door rule asks for
+/// walls' ends on one line, at any angle).
+#[test]
+fn the_rooms_of_a_turned_generated_apartment_are_those_of_the_plan() {
+    use flatray_geometry::{Segment, Shape};
+    use flatray_tracer::{Canvas, Floor, Scene, Wall};
+
+    let areas = |scene: &Scene, doors: &[Segment], width: f64| {
+        let size = flatray_tracer::image_size(scene, 0.5);
+        let found = flatray_io::rooms::find(scene, size, &[], doors, width).expect("regions");
+        let outside = found.rooms.iter().filter(|r| r.open).count();
+        let mut inside: Vec<f64> = found
+            .rooms
+            .iter()
+            .filter(|r| !r.open)
+            .map(|r| r.area)
+            .collect();
+        inside.sort_by(f64::total_cmp);
+        (inside, outside)
+    };
+    for rooms in [9u32, 16] {
+        let apartment = flatray_io::generate::Apartment {
+            rooms,
+            seed: 2,
+            ..Default::default()
+        };
+        let loaded = scene(&apartment.to_ron());
+        let plan = &loaded.scene;
+        let (flat, _) = areas(plan, &loaded.doors, 0.0);
+        let share = flat.iter().sum::<f64>() / rooms as f64;
+        let big =
+            |a: &[f64]| -> Vec<f64> { a.iter().copied().filter(|&x| x > 0.25 * share).collect() };
+        let flat = big(&flat);
+        assert_eq!(
+            flat.len(),
+            rooms as usize,
+            "{rooms} rooms on the grid: {flat:?}"
+        );
+        let (width, height) = (plan.canvas().width as f64, plan.canvas().height as f64);
+        let centre = plan.canvas().origin + 0.5 * DVec2::new(width, height);
+        let side = width.hypot(height).ceil();
+        for degrees in [17.0f64, 62.0] {
+            let (s, c) = degrees.to_radians().sin_cos();
+            let turn = |p: DVec2| {
+                let q = p - centre;
+                centre + DVec2::new(c * q.x - s * q.y, s * q.x + c * q.y)
+            };
+            let turn_segment = |g: &Segment| Segment::new(turn(g.a), turn(g.b));
+            let walls: Vec<Wall> = plan
+                .walls()
+                .iter()
+                .map(|w| match &w.shape {
+                    Shape::Segment(g) => Wall::segment(turn(g.a), turn(g.b), w.material),
+                    Shape::Arc(_) => panic!("a generated plan has no arcs"),
+                })
+                .collect();
+            let canvas = Canvas {
+                width: side as u32,
+                height: side as u32,
+                origin: centre - 0.5 * DVec2::splat(side),
+            };
+            let turned = Scene::new(
+                canvas,
+                Floor::Color(flatray_tracer::Rgb::ONE),
+                0.5,
+                walls,
+                Vec::new(),
+            )
+            .expect("a valid scene");
+            let doors: Vec<Segment> = loaded.doors.iter().map(turn_segment).collect();
+            let what = format!("{rooms} rooms turned {degrees}°");
+            let (inside, outside) = areas(&turned, &doors, 0.0);
+            assert_eq!(outside, 1, "{what}: the outside");
+            let found = big(&inside);
+            assert_eq!(found.len(), rooms as usize, "{what}: {inside:?}");
+            // Sorted by area, each room as large as its match on the grid,
+            // to within the pixels along its walls.
+            for (a, b) in found.iter().zip(&flat) {
+                assert!(
+                    (a / b - 1.0).abs() < 0.08,
+                    "{what}: {found:?} against {flat:?}"
+                );
+            }
+            let (by_width, _) = areas(&turned, &[], 25.0);
+            assert_eq!(
+                big(&by_width).len(),
+                rooms as usize,
+                "{what}: by the door width"
+            );
+            let (joined, _) = areas(&turned, &[], 0.0);
+            assert!(
+                big(&joined).len() < rooms as usize,
+                "{what}: without the doors"
             );
         }
     }
