@@ -1,8 +1,8 @@
 //! The path estimators (`Path`, `Original`) as units of the render loop:
 //! what every pass of a render shares (the plan and the structures it
 //! builds once), what each pass fills for itself (the list [`FILLS`]:
-//! caustic photons, onward memo, lines), and a tile of pixels per unit, in blocks of
-//! [`CULL_BLOCK`] pixels that share their culling lists.
+//! caustic photons, onward memo, lines), and a tile of pixels per unit,
+//! in blocks of [`CULL_BLOCK`] pixels that share their culling lists.
 
 use flatray_geometry::{ArcCandidates, DVec2};
 
