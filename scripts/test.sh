@@ -15,17 +15,31 @@
 # nothing installed):
 #
 #   scripts/test.sh geometry io
+#
+# Its three steps one by one, as CI runs them (`.ci/run`): Chromium's
+# install, the workspace's tests, then the Python package's and the
+# portable rerun:
+#
+#   scripts/test.sh --install
+#   cargo test --release --workspace
+#   scripts/test.sh --after-workspace
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if [ "$#" -gt 0 ]; then
-  for layer in "$@"; do
-    cargo test --release -p "flatray-$layer"
-  done
-  exit 0
-fi
+steps="all"
+case "${1:-}" in
+  --install) steps="install" ;;
+  --after-workspace) steps="after" ;;
+  "") ;;
+  *)
+    for layer in "$@"; do
+      cargo test --release -p "flatray-$layer"
+    done
+    exit 0
+    ;;
+esac
 
-if ! command -v chromium >/dev/null 2>&1 && [ -z "${FLATRAY_CHROMIUM:-}" ]; then
+if [ "$steps" != "after" ] && ! command -v chromium >/dev/null 2>&1 && [ -z "${FLATRAY_CHROMIUM:-}" ]; then
   echo "installing Chromium (Debian's package) for the browser test" >&2
   sudo=""
   [ "$(id -u)" = 0 ] || sudo="sudo"
@@ -33,9 +47,15 @@ if ! command -v chromium >/dev/null 2>&1 && [ -z "${FLATRAY_CHROMIUM:-}" ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq chromium
 fi
 
+if [ "$steps" = "install" ]; then
+  exit 0
+fi
+
 export CARGO_TERM_COLOR="${CARGO_TERM_COLOR:-never}"
 
-cargo test --release --workspace
+if [ "$steps" = "all" ]; then
+  cargo test --release --workspace
+fi
 # The Python package, built from source by pip, and its tests (a local
 # two-worker Ray among them).
 python3 -m pip install --quiet --disable-pip-version-check "./cli/python[test]"
