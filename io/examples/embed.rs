@@ -45,6 +45,7 @@ fn render_room(out: &Path) -> Result<f64, Box<dyn std::error::Error>> {
         })
         .collect();
     let lamp = Light {
+        profile: None,
         shape: LightShape::Point {
             at: corner(-40.0, 10.0),
         },

@@ -13,7 +13,7 @@
 //! sees, by every estimator the line lights have.
 
 use flatray_geometry::{DVec2, Segment};
-use flatray_tracer::scene::{Canvas, Wall};
+use flatray_tracer::scene::{Canvas, Profile, Wall};
 use solar_positioning::time::JulianDate;
 use solar_positioning::{Location, RefractionCorrection, SolarPositions};
 
@@ -129,6 +129,19 @@ pub fn sun_place_with(
         azimuth: place.azimuth(),
         elevation: place.elevation_angle(),
     })
+}
+
+/// A sky's radiance profile on the canvas: `knots` of an azimuth
+/// (degrees clockwise from north) and a factor, with north at `north`
+/// degrees clockwise from the canvas's up. A direction of bearing `b`
+/// clockwise from up (y growing down) is `(sin b, -cos b)`, of world
+/// angle `b - 90` degrees.
+pub fn sky_profile(knots: &[(f64, f64)], north: f64) -> Result<Profile, String> {
+    let world: Vec<(f64, f64)> = knots
+        .iter()
+        .map(|&(azimuth, factor)| ((north + azimuth - 90.0).to_radians(), factor))
+        .collect();
+    Profile::new(&world)
 }
 
 /// The direction the sun's rays travel across the canvas (y growing

@@ -905,18 +905,30 @@ pub enum LightSpec {
         #[serde(default)]
         spectrum: Option<SpectrumSpec>,
     },
-    /// Light of uniform radiance arriving from beyond the scene in every
-    /// direction that no wall blocks.
+    /// Light arriving from beyond the scene in every direction that no
+    /// wall blocks: of uniform radiance, or of a radiance that varies with
+    /// the azimuth it arrives from (`profile`).
     Sky {
         #[serde(default = "white")]
         color: Color,
         /// The sky's radiance: an unobstructed point receives `2 pi`
-        /// times it.
+        /// times it (with a profile, times the profile's integral over the
+        /// circle).
         #[serde(default = "one")]
         intensity: Intensity,
         /// What it emits wavelength by wavelength, in place of `color`.
         #[serde(default)]
         spectrum: Option<SpectrumSpec>,
+        /// The radiance's factor by the azimuth the light arrives from:
+        /// pairs of an azimuth (degrees clockwise from north) and a factor
+        /// on `intensity`, linear between them around the circle. One pair
+        /// is a uniform sky.
+        #[serde(default)]
+        profile: Option<Vec<(Finite, NonNegative)>>,
+        /// The angle of north on the canvas, in degrees clockwise from up:
+        /// where the profile's azimuths turn from.
+        #[serde(default)]
+        north: Finite,
     },
     /// A disk whose rim emits outward; not a wall.
     Circle {

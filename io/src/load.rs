@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use flatray_geometry::{DVec2, Segment, Shape, Side};
 use flatray_tracer::scene::{
-    Canvas, Falloff, Floor, GlassBody, Item, Light, LightShape, Material, Scene, Wall,
+    Canvas, Falloff, Floor, GlassBody, Item, Light, LightShape, Material, Profile, Scene, Wall,
 };
 use flatray_tracer::{Integrator, LightChoice, RenderOptions, Rgb};
 use ron::extensions::Extensions;
@@ -12,9 +12,9 @@ use ron::extensions::Extensions;
 use crate::error::SceneError;
 use crate::format::MAX_COORDINATE;
 use crate::format::{
-    Color, EmitSpec, FalloffSpec, FloorSpec, IntegratorSpec, LampName, LightSpec, LightUnits,
-    LightsSpec, MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MaterialSpec, SceneFile, SpectrumSpec, ToneMap,
-    Units,
+    Color, EmitSpec, FalloffSpec, Finite, FloorSpec, IntegratorSpec, LampName, LightSpec,
+    LightUnits, LightsSpec, MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MaterialSpec, NonNegative,
+    SceneFile, SpectrumSpec, ToneMap, Units,
 };
 use crate::locate;
 
@@ -422,6 +422,7 @@ fn build(file: SceneFile, source: &Source, base: &Path) -> Result<Loaded, SceneE
         {
             let wall_of_light = Some(walls.len() as u32);
             lights.push(Light {
+                profile: None,
                 shape: match shape {
                     Shape::Segment(_) => LightShape::Line {
                         segment,
@@ -608,13 +609,22 @@ fn unobstructed_sky(file: &SceneFile) -> Option<f64> {
             .iter()
             .map(|l| match *l {
                 LightSpec::Sky {
-                    color, intensity, ..
+                    color,
+                    intensity,
+                    ref profile,
+                    north,
+                    ..
                 } => {
                     let luminance = crate::measure::luminance((color.0, color.1, color.2));
+                    // The radiance's integral over the circle.
+                    let around = sky_profile_of(profile.as_deref(), north.0)
+                        .ok()
+                        .flatten()
+                        .map_or(std::f64::consts::TAU, |p| p.total());
                     match lumens {
                         true if luminance > 0.0 => intensity.0,
                         true => 0.0,
-                        false => std::f64::consts::TAU * intensity.0 * luminance,
+                        false => around * intensity.0 * luminance,
                     }
                 }
                 _ => 0.0,
@@ -793,6 +803,7 @@ fn light(
             falloff: f,
             ..
         } => Light {
+            profile: None,
             shape: LightShape::Point {
                 at: DVec2::new(at.0, at.1),
             },
@@ -822,6 +833,7 @@ fn light(
                 ));
             }
             Light {
+                profile: None,
                 shape: LightShape::Spot {
                     at: DVec2::new(at.0, at.1),
                     direction: DVec2::new(direction.0, direction.1),
@@ -866,6 +878,7 @@ fn light(
                 None
             };
             Light {
+                profile: None,
                 shape: LightShape::Line {
                     segment,
                     one_sided,
@@ -895,6 +908,7 @@ fn light(
                 ));
             }
             Light {
+                profile: None,
                 shape: LightShape::Circle {
                     at: DVec2::new(at.0, at.1),
                     radius: radius.0,
@@ -911,6 +925,7 @@ fn light(
             intensity,
             ..
         } => Light {
+            profile: None,
             shape: LightShape::Directional {
                 direction: DVec2::new(direction.0, direction.1),
             },
@@ -934,6 +949,7 @@ fn light(
                 return Err(source.error(Place::Light(k), format!("light {k}: {message}")));
             }
             Light {
+                profile: None,
                 shape,
                 color: rgb(color),
                 intensity: intensity.0,
@@ -950,6 +966,7 @@ fn light(
             intensity,
             ..
         } => Light {
+            profile: None,
             shape: LightShape::Laser {
                 at: DVec2::new(at.0, at.1),
                 direction: DVec2::new(direction.0, direction.1),
@@ -1002,12 +1019,19 @@ fn sky_lights(
     let mut lights = Vec::new();
     for (k, spec) in file.lights.iter().enumerate() {
         if let LightSpec::Sky {
-            color, intensity, ..
+            color,
+            intensity,
+            ref profile,
+            north,
+            ..
         } = *spec
         {
             let spectrum = light_spectrum(spec.spectrum(), color).map_err(|message| {
                 source.error(Place::Light(k), format!("light {k}: {message}"))
             })?;
+            let profile = sky_profile_of(profile.as_deref(), north.0)
+                .map_err(|message| source.error(Place::Light(k), format!("light {k}: {message}")))?
+                .map(std::sync::Arc::new);
             for segment in crate::daylight::sky_frame(canvas, walls) {
                 lights.push((
                     k,
@@ -1022,12 +1046,28 @@ fn sky_lights(
                         // Radiance: each radian of sky brings `intensity`.
                         falloff: Falloff::Flatland,
                         spectrum,
+                        profile: profile.clone(),
                     },
                 ));
             }
         }
     }
     Ok(lights)
+}
+
+/// A sky's profile from the file's pairs of azimuth and factor, if it
+/// has one.
+fn sky_profile_of(
+    knots: Option<&[(Finite, NonNegative)]>,
+    north: f64,
+) -> Result<Option<Profile>, String> {
+    let Some(knots) = knots else {
+        return Ok(None);
+    };
+    let pairs: Vec<(f64, f64)> = knots.iter().map(|(a, f)| (a.0, f.0)).collect();
+    crate::daylight::sky_profile(&pairs, north)
+        .map(Some)
+        .map_err(|e| format!("the sky's profile: {e}"))
 }
 
 /// The file's lights in the renderer's units: with
@@ -1105,7 +1145,11 @@ fn in_lumens(
     }
     let per_unit = match kind {
         Photometry::Sun => 1.0,
-        Photometry::Sky => std::f64::consts::TAU,
+        // The illuminance of an open floor over its radiance.
+        Photometry::Sky => light
+            .profile
+            .as_ref()
+            .map_or(std::f64::consts::TAU, |p| p.total()),
         Photometry::Lamp => {
             if matches!(
                 light.falloff,
@@ -1152,6 +1196,7 @@ fn sun(k: usize, light: &LightSpec, source: &Source) -> Result<Light, SceneError
         .map_err(|message| source.error(Place::Light(k), format!("light {k}: {message}")))?;
     let elevation = place.elevation.to_radians();
     Ok(Light {
+        profile: None,
         shape: LightShape::Directional {
             direction: crate::daylight::sun_direction(place.azimuth, north.0),
         },

@@ -19,6 +19,7 @@ fn canvas() -> Canvas {
 
 fn lamp(at: DVec2) -> Light {
     Light {
+        profile: None,
         shape: LightShape::Point { at },
         color: Rgb::ONE,
         intensity: 1.0,

@@ -344,3 +344,206 @@ fn a_sky_around_walls_at_the_coordinate_limit_loads_and_renders() {
     let v = direct.get(10, 12)[0] as f64;
     assert!((v - TAU / 4.0).abs() < 0.05, "{v}");
 }
+
+/// A sky brighter to the south: azimuths (degrees clockwise from north)
+/// and factors, as the scene file gives them.
+const SOUTH: [(f64, f64); 4] = [(0.0, 0.4), (90.0, 1.0), (180.0, 1.8), (270.0, 0.9)];
+
+fn profile_text(knots: &[(f64, f64)]) -> String {
+    let pairs: Vec<String> = knots
+        .iter()
+        .map(|(a, f)| format!("({a:?}, {f:?})"))
+        .collect();
+    format!("[{}]", pairs.join(", "))
+}
+
+/// The profile's factor for light arriving from canvas direction `d` (y
+/// down), with north `north` degrees clockwise from up: the file's
+/// reading, written here apart from the renderer's.
+fn factor(knots: &[(f64, f64)], north: f64, d: DVec2) -> f64 {
+    let bearing = d.x.atan2(-d.y).to_degrees();
+    let azimuth = (bearing - north).rem_euclid(360.0);
+    let n = knots.len();
+    for k in 0..n {
+        let (a0, f0) = knots[k];
+        let (mut a1, f1) = knots[(k + 1) % n];
+        if a1 <= a0 {
+            a1 += 360.0;
+        }
+        let mut t = azimuth;
+        if t < a0 {
+            t += 360.0;
+        }
+        if t >= a0 && t <= a1 {
+            return f0 + (f1 - f0) * (t - a0) / (a1 - a0);
+        }
+    }
+    unreachable!("{azimuth}")
+}
+
+/// `∫ factor` over the directions from `p` across `gap`, by the
+/// trapezoid rule between the profile's knots (exact for a factor linear
+/// between them).
+fn profile_over(knots: &[(f64, f64)], north: f64, p: DVec2, gap: &Segment) -> f64 {
+    let (a, b) = (gap.a - p, gap.b - p);
+    let (a, b) = if a.perp_dot(b) < 0.0 { (b, a) } else { (a, b) };
+    let sweep = a.perp_dot(b).atan2(a.dot(b));
+    let start = a.y.atan2(a.x);
+    let mut cuts = vec![0.0, sweep];
+    for &(azimuth, _) in knots {
+        // The knot's world angle: bearing north + azimuth, less 90 degrees.
+        let world = (north + azimuth - 90.0).to_radians();
+        let t = (world - start).rem_euclid(TAU);
+        if t < sweep {
+            cuts.push(t);
+        }
+    }
+    cuts.sort_by(f64::total_cmp);
+    let at = |t: f64| {
+        let angle = start + t;
+        factor(knots, north, DVec2::new(angle.cos(), angle.sin()))
+    };
+    cuts.windows(2)
+        .map(|w| 0.5 * (at(w[0]) + at(w[1])) * (w[1] - w[0]))
+        .sum()
+}
+
+/// Through an opening, a point receives the sky's radiance times its
+/// profile integrated over the directions the opening shows it, exactly
+/// at 4 spp, in rooms turned three ways with north turned with them or
+/// not.
+#[test]
+fn a_sky_brighter_to_the_south_gives_its_profile_over_the_opening() {
+    let samples = 4;
+    for (degrees, north) in [(0.0, 0.0), (17.0, 47.0), (45.0, -160.0)] {
+        let sky = format!(
+            "Sky(intensity: 0.8, north: {north:?}, profile: {})",
+            profile_text(&SOUTH)
+        );
+        let (text, gap) = room(degrees, None, &sky);
+        let image = render(&scene(&text).scene, &options(samples, 0)).image;
+        let checked = assert_inside_matches(&image, samples, degrees, |p| {
+            [0.8 * profile_over(&SOUTH, north, p, &gap); 3]
+        });
+        assert!(checked > 1000, "only {checked} pixels");
+    }
+}
+
+/// One knot of factor 1 is the uniform sky, bit for bit where no rounding
+/// of the profile's integral enters (the light tracer's photons carry the
+/// factor 1), and within rounding through the closed forms.
+#[test]
+fn a_profile_of_one_knot_is_the_uniform_sky() {
+    let (uniform, _) = room(17.0, None, "Sky(intensity: 0.5)");
+    let (flat, _) = room(
+        17.0,
+        None,
+        "Sky(intensity: 0.5, north: 33, profile: [(120, 1)])",
+    );
+    for integrator in [
+        flatray_tracer::Integrator::Path,
+        flatray_tracer::Integrator::Light,
+    ] {
+        let mut options = options(2, 2);
+        options.integrator = integrator;
+        let a = render(&scene(&uniform).scene, &options).image;
+        let b = render(&scene(&flat).scene, &options).image;
+        for (p, q) in a.pixels.iter().zip(&b.pixels) {
+            for c in 0..3 {
+                assert!(
+                    (p[c] - q[c]).abs() <= 1e-5 * p[c].abs().max(1e-3),
+                    "{integrator:?}: {p:?} against {q:?}"
+                );
+            }
+        }
+    }
+}
+
+/// An open floor takes the sky's radiance times the profile's integral
+/// over the whole circle, at every pixel, and that is the open floor
+/// that the daylight factor divides by.
+#[test]
+fn an_open_floor_takes_the_profile_integrated_around_the_circle() {
+    let loaded = scene(&format!(
+        "Scene(canvas: (40, 30), origin: (-1e6, 3e5), floor: Color((1, 1, 1)),
+               lights: [Sky(intensity: 0.3, north: 10, profile: {})])",
+        profile_text(&SOUTH)
+    ));
+    // The trapezoid rule between the knots, around the circle.
+    let around: f64 = (0..SOUTH.len())
+        .map(|k| {
+            let (a0, f0) = SOUTH[k];
+            let (a1, f1) = SOUTH[(k + 1) % SOUTH.len()];
+            0.5 * (f0 + f1) * (a1 - a0).rem_euclid(360.0).to_radians()
+        })
+        .sum();
+    let exact = 0.3 * around;
+    let image = render(&loaded.scene, &options(1, 2)).image;
+    for p in &image.pixels {
+        assert!(
+            (p[0] as f64 - exact).abs() <= 1e-5 * exact,
+            "{p:?} against {exact}"
+        );
+    }
+    let open = loaded.sky.expect("a sky alone");
+    assert!(
+        (open - exact).abs() <= 1e-9 * exact,
+        "{open} against {exact}"
+    );
+}
+
+/// Under a profiled sky, light tracing and the default path tracing agree
+/// per block within 5 standard errors over 24 seeds in a turned room with
+/// a mirror (the sky in it in closed form) and a glass prism (its light
+/// through the glass by paths and aimed photons), with bounces.
+#[test]
+fn light_tracing_agrees_with_path_tracing_under_a_profiled_sky() {
+    let sky = format!(
+        "Sky(intensity: 0.5, north: 25, profile: {})",
+        profile_text(&SOUTH)
+    );
+    let (text, _) = room(17.0, None, &sky);
+    let text = text
+        .replace(
+            "walls: [",
+            "walls: [Wall(a: (20.0, 40.0), b: (30.0, 47.0), material: Mirror()), ",
+        )
+        .replace(
+            "lights: [",
+            "glass: [Glass(points: [(36, 30), (46, 34), (38, 42)], ior: 1.5)], lights: [",
+        );
+    let loaded = scene(&text);
+    let mut options = options(4, 2);
+    options.memo.enabled = false;
+    let agreement = Agreement {
+        block: 8,
+        runs: 24,
+        first_seed: 700,
+        k: 5.0,
+        min_blocks: 40,
+    };
+    agreement.check("profiled sky", &loaded.scene, options, |_| true);
+}
+
+/// A profile's bad knots are refused where they stand.
+#[test]
+fn a_bad_profile_is_refused_at_its_line_and_column() {
+    let cases = [
+        ("[(0, -1)]", "expected a finite number >= 0"),
+        (
+            "[(0, 1), (360, 2)]",
+            "two knots of a profile stand at one direction",
+        ),
+        ("[]", "at least one knot"),
+        ("[(0, 1), (90)]", ""),
+    ];
+    for (profile, expected) in cases {
+        let text = format!(
+            "Scene(canvas: (8, 8), floor: Color((1, 1, 1)),\n  lights: [Sky(profile: {profile})])"
+        );
+        let error = flatray_io::parse(&text, "sky.ron".as_ref(), ".".as_ref()).unwrap_err();
+        let message = error.to_string();
+        assert!(message.contains(expected), "{profile}: {message}");
+        assert!(message.contains("sky.ron:2:"), "{profile}: {message}");
+    }
+}

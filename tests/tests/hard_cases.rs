@@ -570,6 +570,7 @@ fn degenerate_input_is_handled_as_documented() {
         "wall 0: a wall needs two different endpoints, found (10, 10) twice"
     );
     let line = Light {
+        profile: None,
         shape: LightShape::Line {
             segment: Segment::new(p, p),
             one_sided: false,
@@ -754,6 +755,7 @@ fn a_non_finite_value_is_reported_not_written() {
         origin: DVec2::ZERO,
     };
     let lamp = |intensity| Light {
+        profile: None,
         shape: LightShape::Point {
             at: DVec2::new(4.0, 4.0),
         },

@@ -695,7 +695,9 @@ impl Estimator for CausticPass<'_> {
                     unseen: false,
                     wavelength,
                 };
-                let power = colour * (weight * aimed.factor / aim.measure());
+                // Its light arrives at receivers from `-dir`.
+                let factor = aimed.factor * light.profile_at(-aimed.dir);
+                let power = colour * (weight * factor / aim.measure());
                 (photon, power, true)
             } else {
                 let aperture = &emitter.apertures[pick(&emitter.cumulative, stream.uniform())];

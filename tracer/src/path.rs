@@ -676,7 +676,9 @@ fn emission_crossed(
     for (index, light) in scene.lights.iter().enumerate() {
         if let Some(t) = light.shape.met_by(ray, t_max) {
             let r = unfolded + t;
-            let v = light.intensity * light.falloff.per_radian(r, scene.small_radius);
+            let v = light.intensity
+                * light.falloff.per_radian(r, scene.small_radius)
+                * light.profile_at(-ray.dir);
             let v = match glossy_from {
                 Some(from) => {
                     v * glossy_emission_weight(

@@ -226,6 +226,7 @@ mod tests {
         let diffuse = Material::Diffuse { albedo: None };
         let mirror = Material::Mirror { tint: Rgb::ONE };
         let light = Light {
+            profile: None,
             shape: LightShape::Line {
                 segment: Segment::new(DVec2::new(14.0, 1.0), DVec2::new(16.0, 1.0)),
                 one_sided: false,
@@ -254,7 +255,7 @@ mod tests {
             Floor::Color(Rgb::ONE),
             0.5,
             walls.clone(),
-            vec![light],
+            vec![light.clone()],
         )
         .expect("a valid scene");
         let sides = last_leg_sides(&scene);

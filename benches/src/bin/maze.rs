@@ -47,6 +47,7 @@ fn main() {
                 ((j + 0.5) * size / 4.0 / cell).floor() * cell + 0.5 * cell,
             );
             Light {
+                profile: None,
                 shape: LightShape::Point { at },
                 color: Rgb::new(1.0, 0.95, 0.8),
                 intensity: 2.0,

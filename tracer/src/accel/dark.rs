@@ -180,6 +180,7 @@ mod tests {
             wall((12.0, 20.0), (20.0, 20.0), pane),
         ];
         let light = |shape| Light {
+            profile: None,
             shape,
             color: Rgb::ONE,
             intensity: 5.0,

@@ -239,6 +239,7 @@ mod tests {
     /// circle.
     fn every_kind_of_light() -> Scene {
         let light = |shape, falloff| Light {
+            profile: None,
             shape,
             color: Rgb::new(1.0, 0.8, 0.6),
             intensity: 2.0,

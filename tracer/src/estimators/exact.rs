@@ -36,7 +36,7 @@ use flatray_geometry::{Arc, DVec2, Ray, Segment, Shape, Skip, cross, intersect};
 use crate::decision::Decision;
 use crate::estimators::{Receiver, Visibility};
 use crate::options::RenderOptions;
-use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Scene};
+use crate::scene::{EMITTING_SIDE, Falloff, LightShape, Material, Profile, Scene};
 use crate::{Rgb, Stats};
 
 /// A span of the light (positions along a line light, `[0, 1]`; angles
@@ -150,7 +150,13 @@ pub(crate) fn exact_light(
                         sweep(whole, scratch);
                     }
                 }
-                line.spans_integral(&scratch.spans, receiver.normal, light.falloff, r0)
+                let profile = light.profile.as_deref();
+                line.spans_integral(
+                    &scratch.spans,
+                    receiver.normal,
+                    (light.falloff, profile),
+                    r0,
+                )
             })
         }
         LightShape::Circle { at, radius } => {
@@ -497,7 +503,10 @@ fn in_mirror(
                 }
             }
             sweep(whole, scratch);
-            return line.spans_integral(&scratch.spans, normal, light.falloff, r0)
+            // Seen from the image, a direction towards the light is the
+            // one its light leaves in, reversed: what the profile takes.
+            let profile = light.profile.as_deref();
+            return line.spans_integral(&scratch.spans, normal, (light.falloff, profile), r0)
                 * light.intensity;
         }
         let cuts = &mut scratch.cuts;
@@ -575,7 +584,8 @@ fn in_mirror(
             sum += span.through
                 * match &view {
                     View::Line(line) => {
-                        line.integral(span.from, span.to, normal, light.falloff, r0)
+                        let emitter = (light.falloff, light.profile.as_deref());
+                        line.integral(span.from, span.to, normal, emitter, r0)
                     }
                     View::Disk(disk) => {
                         let (mut a, b) = (span.from, span.to);
@@ -971,12 +981,12 @@ impl LineView {
         &self,
         spans: &[Span],
         normal: Option<DVec2>,
-        falloff: Falloff,
+        emitter: (Falloff, Option<&Profile>),
         r0: f64,
     ) -> Rgb {
         let mut sum = Rgb::ZERO;
         for span in spans {
-            let v = self.integral(span.from, span.to, normal, falloff, r0);
+            let v = self.integral(span.from, span.to, normal, emitter, r0);
             sum += span.through * v;
         }
         sum
@@ -986,13 +996,15 @@ impl LineView {
     /// `from` to `to`: the angle (or, on a wall of unit normal `normal`,
     /// the receiver's cosine) weighed by what the falloff brings per
     /// radian, by antiderivatives in `u`, split where the falloff has a
-    /// kink.
+    /// kink. `emitter` is the light's falloff and its profile, which only
+    /// `Flatland` takes (`Light::profile`): then the profile's own
+    /// integrals over the directions from `x`.
     fn integral(
         &self,
         from: f64,
         to: f64,
         normal: Option<DVec2>,
-        falloff: Falloff,
+        (falloff, profile): (Falloff, Option<&Profile>),
         r0: f64,
     ) -> f64 {
         if to.is_nan() || to <= from || self.h.is_nan() || self.h <= 0.0 {
@@ -1005,9 +1017,12 @@ impl LineView {
         let (lo, hi) = if ua <= ub { (ua, ub) } else { (ub, ua) };
         if falloff == Falloff::Flatland {
             // One per radian at every distance, the clamp included.
-            return match cosine {
-                None => angle_between(self.point(from) - self.x, self.point(to) - self.x),
-                Some(c) => flat_wall(self.h, c, lo, hi),
+            let (a, b) = (self.point(from) - self.x, self.point(to) - self.x);
+            return match (profile, normal.zip(cosine)) {
+                (None, None) => angle_between(a, b),
+                (None, Some((_, c))) => flat_wall(self.h, c, lo, hi),
+                (Some(p), None) => p.integral(a, b),
+                (Some(p), Some((n, _))) => p.cosine_integral(a, b, n),
             };
         }
         // Cuts where `r` crosses a kink's distance: `u = +-sqrt(rho^2 - h^2)`.
@@ -1394,7 +1409,7 @@ mod tests {
                         // The integral takes the part the receiver faces.
                         let exact = match line.receiving(normal) {
                             Some((a, b)) if b.min(to) > a.max(from) => {
-                                line.integral(a.max(from), b.min(to), normal, falloff, r0)
+                                line.integral(a.max(from), b.min(to), normal, (falloff, None), r0)
                             }
                             _ => 0.0,
                         };
@@ -1535,6 +1550,7 @@ pub(crate) mod closed_forms {
 
     pub(crate) fn line(a: DVec2, b: DVec2, falloff: Falloff) -> Light {
         Light {
+            profile: None,
             shape: LightShape::Line {
                 segment: Segment::new(a, b),
                 one_sided: false,
@@ -1621,6 +1637,7 @@ pub(crate) mod closed_forms {
         let (l_lo, l_hi) = (light_axis - light_half, light_axis + light_half);
         let hidden = (l_hi.min(cone_hi) - l_lo.max(cone_lo)).max(0.0);
         let circle = Light {
+            profile: None,
             shape: LightShape::Circle { at: lc, radius: lr },
             color: Rgb::ONE,
             intensity: 1.0,
@@ -1748,7 +1765,7 @@ pub(crate) mod closed_forms {
         ] {
             let s = scene(
                 vec![wall(DVec2::new(end, 5.0), DVec2::new(10.0, 5.0), OPAQUE)],
-                vec![disk],
+                vec![disk.clone()],
             );
             let got = at(&s, DVec2::ZERO, None, None).x;
             assert!(close(got, visible), "end {end}: {got} against {visible}");
@@ -1776,7 +1793,7 @@ pub(crate) mod closed_forms {
         );
         let x = DVec2::new(0.0, 3.0);
         let mut stats = Stats::default();
-        let s = scene(vec![mirror], vec![light]);
+        let s = scene(vec![mirror], vec![light.clone()]);
         let mut through = |s: &Scene, normal: Option<DVec2>| {
             let receiver = Receiver {
                 normal,
@@ -1796,7 +1813,7 @@ pub(crate) mod closed_forms {
                 mirror,
                 wall(DVec2::new(0.0, 1.0), DVec2::new(5.0, 1.0), OPAQUE),
             ],
-            vec![light],
+            vec![light.clone()],
         );
         assert!(close(through(&half, None), 0.8 * angle / 2.0));
         // The same wall above the light hides nothing.

@@ -394,6 +394,7 @@ mod tests {
             wall((10.0, 30.0), (50.0, 30.0), Rgb::ZERO),
         ];
         let lights = vec![Light {
+            profile: None,
             shape: LightShape::Point {
                 at: DVec2::new(30.0, 20.0),
             },

@@ -85,6 +85,10 @@ pub(crate) fn decide(scene: &Scene, options: &RenderOptions, shadows: bool) -> D
         Some("rough or dispersive glass: path rays find them")
     } else if super::has_arcs(scene) {
         Some("the scene has arcs: path rays find them")
+    } else if scene.lights.iter().any(|l| l.profile.is_some()) {
+        // Its closed form integrates the angle outside the glass, which
+        // a profile would weigh by the direction bent at the edge.
+        Some("a light's radiance varies with its direction (a sky's profile): path rays find them")
     } else {
         None
     };

@@ -713,6 +713,7 @@ mod tests {
 
     fn light(shape: LightShape, falloff: Falloff) -> Light {
         Light {
+            profile: None,
             shape,
             color: Rgb::ONE,
             intensity: 1.0,
@@ -888,7 +889,7 @@ mod tests {
         ];
         let square = (DVec2::new(3.7, 1.6), DVec2::new(0.9, 1.3));
         for l in lights {
-            let s = scene(walls.clone(), vec![l]);
+            let s = scene(walls.clone(), vec![l.clone()]);
             let got = value(&s, square);
             let grid = grid_mean(&s, square, 1000);
             let scale = grid.max_element().max(1e-3);
@@ -918,10 +919,10 @@ mod tests {
         let lamp = point(DVec2::new(0.0, 2.5), Falloff::Flatland);
         // Small enough that the lamp's kernel is not steep across it.
         let square = (DVec2::new(3.0, 2.5), DVec2::new(0.1, 0.1));
-        let alone = scene(vec![near], vec![lamp]);
+        let alone = scene(vec![near], vec![lamp.clone()]);
         let mut all = vec![near];
         all.extend(far);
-        let crowded = scene(all, vec![lamp]);
+        let crowded = scene(all, vec![lamp.clone()]);
         let at = |s: &Scene, list: Option<Vec<u32>>| {
             let lists = [list];
             let receiver = Receiver {

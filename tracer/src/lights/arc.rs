@@ -101,6 +101,7 @@ mod tests {
     fn a_circle_of_light_gives_two_pi_inside() {
         let arc = Arc::circle(DVec2::new(3.0, -2.0), 5.0, 0.4);
         let light = Light {
+            profile: None,
             shape: LightShape::Arc { arc, wall: None },
             color: Rgb::ONE,
             intensity: 1.0,

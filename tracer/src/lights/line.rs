@@ -49,11 +49,12 @@ pub(crate) fn incident_of(
     (point, distance, subtended): (DVec2, f64, f64),
     r0: f64,
 ) -> Incident {
+    let to = point - x;
     Incident {
-        to: point - x,
+        to,
         t_max: 1.0,
         length: distance,
-        value: light.falloff.per_radian(distance, r0),
+        value: light.falloff.per_radian(distance, r0) * light.profile_at(to),
         pdf: 1.0 / subtended,
     }
 }
@@ -97,10 +98,12 @@ pub(super) fn emit(
     } else {
         Side::Negative
     };
+    let dir = cosine_half_circle(segment.normal_on(side), stream.uniform());
     Photon {
         origin,
-        dir: cosine_half_circle(segment.normal_on(side), stream.uniform()),
-        scale: 1.0,
+        dir,
+        // A receiver in its path sees the light arrive from `-dir`.
+        scale: light.profile_at(-dir),
         kernel: PhotonKernel::Line(light.falloff),
         skip: wall.map_or(Skip::NONE, Skip::one),
         unseen: false,
@@ -119,7 +122,8 @@ pub(super) fn met_by(segment: &Segment, one_sided: bool, ray: &Ray, t_max: f64) 
 
 /// What a path ray that meets line light `light` from `side`, at total
 /// distance `r`, carries back: `I G(r') r'` per radian (the radiance `I`
-/// for `Flatland`), nothing from the dark side of a one-sided light.
+/// for `Flatland`), nothing from the dark side of a one-sided light. A
+/// wall's light has no profile (`Light::profile`).
 pub(crate) fn emitted(light: &Light, one_sided: bool, side: Side, r: f64, r0: f64) -> f64 {
     if one_sided && side != EMITTING_SIDE {
         return 0.0;

@@ -359,7 +359,8 @@ impl LightShape {
                     .fold(f64::INFINITY, f64::min)
                     - 0.5 * segment.length();
                 let d = d.max(r0);
-                falloff.per_radian(d, r0) * (segment.length() / d).min(std::f64::consts::PI)
+                let most = light.profile.as_ref().map_or(1.0, |p| p.max());
+                falloff.per_radian(d, r0) * (segment.length() / d).min(std::f64::consts::PI) * most
             }
             LightShape::Circle { at, radius } => {
                 let d = (distance(at) - radius).max(r0);

@@ -344,6 +344,15 @@ fn light(light: &Light, walls: usize) -> Checked {
     }
     intensity(light.intensity)?;
     falloff(light.falloff)?;
+    if light.profile.is_some() {
+        let takes_one = matches!(light.shape, LightShape::Line { wall: None, .. })
+            && light.falloff == Falloff::Flatland;
+        if !takes_one {
+            return Err(
+                "only a line light that is no wall, of flatland falloff, takes a profile".into(),
+            );
+        }
+    }
     shape(&light.shape, walls)
 }
 

@@ -8,10 +8,12 @@
 //! cannot fall out of step with the walls and lights.
 
 mod check;
+mod profile;
 pub use check::{
     IOR_RANGE, InvalidScene, Item, MAX_CANVAS_PIXELS, MAX_CANVAS_SIDE, MAX_COORDINATE,
     MAX_INTENSITY, SMALL_RADIUS_RANGE,
 };
+pub use profile::Profile;
 /// The checks of single values, with the messages a scene file's errors
 /// use.
 pub mod checks {
@@ -730,7 +732,7 @@ pub enum LightShape {
 
 /// A light: its shape, colour, intensity and falloff, and optionally
 /// its spectrum.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Light {
     pub shape: LightShape,
     /// Its colour in linear sRGB; for a light with a spectrum, the
@@ -742,9 +744,25 @@ pub struct Light {
     /// disperses, each wavelength apart where glass does
     /// (`crate::spectrum`).
     pub spectrum: Option<Spectrum>,
+    /// How its radiance varies with the direction its light arrives
+    /// from: a factor on `intensity` ([`Profile`]). Only a line light
+    /// that is no wall, under `Falloff::Flatland`, takes one (a sky's
+    /// frame); `None` is a factor of 1 everywhere.
+    pub profile: Option<std::sync::Arc<Profile>>,
 }
 
 impl Light {
+    /// The factor of its profile on its radiance for light that arrives
+    /// from direction `from` (from the receiver towards the light): 1 for
+    /// a light without one.
+    #[inline]
+    pub fn profile_at(&self, from: DVec2) -> f64 {
+        match &self.profile {
+            Some(profile) => profile.at(from),
+            None => 1.0,
+        }
+    }
+
     /// The spot window at a unit direction `to_receiver` from the light, or
     /// 1 for a light that is not a spot.
     #[inline]
@@ -1706,6 +1724,7 @@ mod tests {
         assert_eq!(out, expected);
         // An emitting wall stays whole; what lies on it goes.
         let mut lights = vec![Light {
+            profile: None,
             shape: LightShape::Line {
                 segment: walls[0].shape.chord(),
                 one_sided: false,
