@@ -494,8 +494,10 @@ fn an_open_floor_takes_the_profile_integrated_around_the_circle() {
 
 /// Under a profiled sky, light tracing and the default path tracing agree
 /// per block within 5 standard errors over 24 seeds in a turned room with
-/// a mirror (the sky in it in closed form) and a glass prism (its light
-/// through the glass by paths and aimed photons), with bounces.
+/// a mirror (the sky in it in closed form), a rough mirror (next-event
+/// estimation and path rays weighed against each other) and a glass prism
+/// (its light through the glass by paths and aimed photons), with
+/// bounces.
 #[test]
 fn light_tracing_agrees_with_path_tracing_under_a_profiled_sky() {
     let sky = format!(
@@ -506,7 +508,8 @@ fn light_tracing_agrees_with_path_tracing_under_a_profiled_sky() {
     let text = text
         .replace(
             "walls: [",
-            "walls: [Wall(a: (20.0, 40.0), b: (30.0, 47.0), material: Mirror()), ",
+            "walls: [Wall(a: (20.0, 40.0), b: (30.0, 47.0), material: Mirror()), \
+             Wall(a: (26.0, 28.0), b: (38.0, 26.0), material: Rough(roughness: 0.5)), ",
         )
         .replace(
             "lights: [",

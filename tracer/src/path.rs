@@ -676,9 +676,11 @@ fn emission_crossed(
     for (index, light) in scene.lights.iter().enumerate() {
         if let Some(t) = light.shape.met_by(ray, t_max) {
             let r = unfolded + t;
+            // The ray runs from the receiver to the light: its light
+            // arrives from `ray.dir`.
             let v = light.intensity
                 * light.falloff.per_radian(r, scene.small_radius)
-                * light.profile_at(-ray.dir);
+                * light.profile_at(ray.dir);
             let v = match glossy_from {
                 Some(from) => {
                     v * glossy_emission_weight(
