@@ -26,6 +26,7 @@ use crate::tile::{Shared, path_passes};
 ///     intensity: 1.0,
 ///     falloff: Falloff::Flatland,
 ///     spectrum: None,
+///     profile: None,
 /// };
 /// let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.5)), 0.5, vec![], vec![lamp])?;
 /// let mut options = RenderOptions::default();

@@ -977,8 +977,9 @@ impl Scene {
     ///     intensity: 1.0,
     ///     falloff: Falloff::Flatland,
     ///     spectrum: None,
+    ///     profile: None,
     /// };
-    /// let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.5)), 0.5, vec![], vec![lamp])?;
+    /// let scene = Scene::new(canvas, Floor::Color(Rgb::splat(0.5)), 0.5, vec![], vec![lamp.clone()])?;
     /// assert_eq!(scene.lights().len(), 1);
     ///
     /// let far = Light { intensity: -1.0, ..lamp };
@@ -1025,7 +1026,8 @@ impl Scene {
     /// # use glam::DVec2;
     /// # let canvas = Canvas { width: 10, height: 10, origin: DVec2::ZERO };
     /// # let lamp = Light { shape: LightShape::Point { at: DVec2::new(5.0, 5.0) },
-    /// #     color: Rgb::ONE, intensity: 1.0, falloff: Falloff::Flatland, spectrum: None };
+    /// #     color: Rgb::ONE, intensity: 1.0, falloff: Falloff::Flatland, spectrum: None,
+    /// #     profile: None };
     /// # let scene = Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, vec![], vec![lamp])?;
     /// let mut parts = scene.parts();
     /// parts.lights[0].intensity = 2.0;
