@@ -181,6 +181,18 @@ fn in_body(
         let Some(segment) = wall.as_segment() else {
             continue;
         };
+        // A one-sided line whose dark side holds the whole edge (its ends,
+        // or on its line) sends it nothing.
+        if let LightShape::Line {
+            segment: l,
+            one_sided: true,
+            ..
+        } = light.shape
+            && !line::lights(&l, true, segment.a)
+            && !line::lights(&l, true, segment.b)
+        {
+            continue;
+        }
         let Some(edge) = Edge::new(segment, inside, x, glass.ior) else {
             continue;
         };
