@@ -268,6 +268,36 @@ impl Edge {
         ))
     }
 
+    /// Whether the rays towards `ya` and `yb` (in front of the line, or
+    /// on it) both leave before the edge's first end, or both after its
+    /// last: the rays that leave the glass do not cross in front of its
+    /// line, so the ray that leaves at an end splits the points in front
+    /// into those reached before it and after it. A point within a
+    /// rounding margin of that ray counts as reached through the edge, so
+    /// that [`Edge::root`] decides it.
+    fn beyond_ends(&self, ya: DVec2, yb: DVec2) -> bool {
+        let (a, b) = (self.coords(ya), self.coords(yb));
+        let scale = self.length + (a.0 - self.tau_x).abs() + (b.0 - self.tau_x).abs() + a.1 + b.1;
+        let margin = 1e-9 * scale;
+        // `s d - c (tau - end)`, with `(s, c)` the leaving ray's direction
+        // in the edge's coordinates: above 0 before the ray, below after.
+        let side = |end: f64, (tau, d): (f64, f64)| -> Option<f64> {
+            let u = end - self.tau_x;
+            let l = (u * u + self.depth * self.depth).sqrt();
+            let s = self.n * u / l;
+            if s.abs() >= 1.0 || s.is_nan() {
+                // Totally reflected there: every leaving ray lies on one
+                // side of this end, and it cuts nothing.
+                return None;
+            }
+            let c = (1.0 - s * s).sqrt();
+            Some(s * d - c * (tau - end))
+        };
+        let before = |y| side(0.0, y).is_some_and(|v| v > margin);
+        let after = |y| side(self.length, y).is_some_and(|v| v < -margin);
+        (before(a) && before(b)) || (after(a) && after(b))
+    }
+
     /// The `tau` of the ray that leaves towards `y` (in front of the line,
     /// or on it): the root of Fermat's condition, by Newton's steps kept
     /// inside a shrinking bracket.
@@ -664,6 +694,9 @@ fn light_span(edge: &Edge, shape: &LightShape) -> Option<(f64, f64)> {
                     }
                 }
             };
+            if edge.beyond_ends(ya, yb) {
+                return None;
+            }
             let (ta, tb) = (edge.root(ya), edge.root(yb));
             Some((ta.min(tb), ta.max(tb)))
         }
@@ -878,5 +911,55 @@ mod tests {
             assert!(cross(dir, to).abs() < 1e-9, "{y}: {dir} {to}");
             assert!(dir.dot(to) > 0.0);
         }
+    }
+
+    /// Points that `beyond_ends` puts before the first end or after the
+    /// last are reached by rays that leave there, and a light it keeps
+    /// has a point reached through the edge; on edges turned every way,
+    /// from deep and shallow receivers, with indices above and below 1.
+    #[test]
+    fn beyond_ends_leaves_out_only_what_the_edge_shows_none_of() {
+        let mut stream = crate::sampling::Stream::new(5, 7, 11);
+        let (mut before, mut after, mut kept) = (0, 0, 0);
+        for _ in 0..4000 {
+            let angle = stream.uniform() * std::f64::consts::TAU;
+            let along = DVec2::new(angle.cos(), angle.sin());
+            let a = DVec2::new(
+                stream.uniform() * 20.0 - 10.0,
+                stream.uniform() * 20.0 - 10.0,
+            );
+            let length = 0.5 + stream.uniform() * 10.0;
+            let segment = Segment::new(a, a + along * length);
+            let inside = if stream.uniform() < 0.5 {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            let out = -along.perp() * inside.sign();
+            let depth = 0.01 + stream.uniform() * 8.0;
+            let x = a + along * (stream.uniform() * 30.0 - 10.0) - out * depth;
+            let n = if stream.uniform() < 0.8 { 1.5 } else { 0.8 };
+            let Some(edge) = Edge::new(&segment, inside, x, n) else {
+                continue;
+            };
+            let front = |stream: &mut crate::sampling::Stream| {
+                a + along * (stream.uniform() * 60.0 - 25.0) + out * (stream.uniform() * 15.0)
+            };
+            let (ya, yb) = (front(&mut stream), front(&mut stream));
+            let (ta, tb) = (edge.root(ya), edge.root(yb));
+            if edge.beyond_ends(ya, yb) {
+                let low = ta < 0.0 && tb < 0.0;
+                let high = ta > length && tb > length;
+                assert!(low || high, "{ya} {yb}: roots {ta} {tb}, length {length}");
+                before += low as u32;
+                after += high as u32;
+            } else {
+                kept += 1;
+            }
+        }
+        assert!(
+            before > 100 && after > 100 && kept > 1000,
+            "{before} {after} {kept}"
+        );
     }
 }
