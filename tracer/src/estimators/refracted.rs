@@ -268,6 +268,45 @@ impl Edge {
         ))
     }
 
+    /// [`Edge::root`] for a point `(tau_y, d_y)` strictly in front of the
+    /// line, by Newton's method in `t`, the sine of the angle inside:
+    /// the ray leaves at `tau_x + depth t / sqrt(1 - t^2)` with the sine
+    /// `n t` outside, so it passes `y` where
+    /// `F(t) = depth t / sqrt(1 - t^2) + d_y n t / sqrt(1 - n^2 t^2)`
+    /// equals `|tau_y - tau_x|`. `F` is increasing and convex for `t >= 0`,
+    /// so Newton's steps from a `t` where `F` is too large fall to the
+    /// root without passing it; each of its two terms alone, and their
+    /// slopes at 0, bound the root above and give that start. `None`
+    /// where a value is not finite.
+    fn root_in_front(&self, tau_y: f64, d_y: f64) -> Option<f64> {
+        let (n, dx) = (self.n, self.depth);
+        let offset = tau_y - self.tau_x;
+        let target = offset.abs();
+        if target == 0.0 {
+            return Some(self.tau_x);
+        }
+        let (q, r) = (target / dx, target / d_y);
+        let mut t = (target / (dx + n * d_y))
+            .min(q / (1.0 + q * q).sqrt())
+            .min(r / (1.0 + r * r).sqrt() / n);
+        if !t.is_finite() {
+            return None;
+        }
+        for _ in 0..MAX_STEPS {
+            let (c1, c2) = ((1.0 - t * t).sqrt(), (1.0 - n * n * t * t).sqrt());
+            let value = dx * t / c1 + d_y * n * t / c2 - target;
+            let slope = dx / (c1 * c1 * c1) + d_y * n / (c2 * c2 * c2);
+            let next = t - value / slope;
+            // Falling while it gains: the root, to rounding.
+            if !(next < t && next >= 0.0) {
+                break;
+            }
+            t = next;
+        }
+        let tau = self.tau_x + offset.signum() * dx * t / (1.0 - t * t).sqrt();
+        tau.is_finite().then_some(tau)
+    }
+
     /// Whether the rays towards `ya` and `yb` (in front of the line, or
     /// on it) both leave before the edge's first end, or both after its
     /// last: the rays that leave the glass do not cross in front of its
@@ -303,6 +342,11 @@ impl Edge {
     /// inside a shrinking bracket.
     fn root(&self, y: DVec2) -> f64 {
         let (tau_y, d_y) = self.coords(y);
+        if d_y > 0.0
+            && let Some(tau) = self.root_in_front(tau_y, d_y)
+        {
+            return tau;
+        }
         let d_y = d_y.max(0.0);
         let (n, tx, dx) = (self.n, self.tau_x, self.depth);
         // Increasing in tau; its derivative, positive.
@@ -910,6 +954,41 @@ mod tests {
             let to = (y - p).normalize();
             assert!(cross(dir, to).abs() < 1e-9, "{y}: {dir} {to}");
             assert!(dir.dot(to) > 0.0);
+        }
+        // Points all over the front, from near the line to far off it,
+        // for indices above and below 1: the root is where Fermat's
+        // condition `n sin(inside) = sin(outside)` changes sign, found
+        // here by halving its bracket to the last bit.
+        let mut stream = crate::sampling::Stream::new(3, 1, 4);
+        for n in [1.5, 1.33, 2.4, 0.8] {
+            let e = edge(n);
+            for _ in 0..20_000 {
+                let d = (stream.uniform() * 24.0 - 12.0).exp();
+                let y = DVec2::new((stream.uniform() - 0.5) * 400.0, d);
+                let (tau_y, d_y) = e.coords(y);
+                let fermat = |tau: f64| {
+                    let (u, v) = (tau - e.tau_x, tau_y - tau);
+                    n * u / (u * u + e.depth * e.depth).sqrt() - v / (v * v + d_y * d_y).sqrt()
+                };
+                let (mut lo, mut hi) = (e.tau_x.min(tau_y), e.tau_x.max(tau_y));
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if mid == lo || mid == hi {
+                        break;
+                    }
+                    if fermat(mid) < 0.0 {
+                        lo = mid
+                    } else {
+                        hi = mid
+                    }
+                }
+                let tau = e.root(y);
+                let scale = (lo - e.tau_x).abs() + e.depth;
+                assert!(
+                    (tau - lo).abs() <= 1e-12 * scale,
+                    "n {n}, {y}: root {tau}, halving {lo}"
+                );
+            }
         }
     }
 
