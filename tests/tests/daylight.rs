@@ -320,24 +320,34 @@ fn a_wall_far_off_the_canvas_still_shades_the_floor_from_the_sky() {
 }
 
 /// Walls as far out as a scene may hold them (1e15): the sky's frame
-/// stays within that bound, and the render is finite and not negative.
+/// stays within that bound, and the render is finite and not negative,
+/// with a profile too.
 #[test]
 fn a_sky_around_walls_at_the_coordinate_limit_loads_and_renders() {
-    let loaded = scene(
-        "Scene(canvas: (16, 16), floor: Color((1, 1, 1)),
+    let at_the_limit = |sky: &str| {
+        scene(&format!(
+            "Scene(canvas: (16, 16), floor: Color((1, 1, 1)),
                walls: [Wall(a: (-1e15, 5), b: (1e15, 5.5)), Wall(a: (3, -1e15), b: (3, 1e15))],
-               lights: [Sky(intensity: 1)])",
-    );
-    let image = render(&loaded.scene, &options(2, 2)).image;
-    assert!(
-        image
-            .pixels
-            .iter()
-            .flatten()
-            .all(|v| v.is_finite() && *v >= 0.0),
-        "{:?}",
-        image.pixels
-    );
+               lights: [{sky}])"
+        ))
+    };
+    let profiled = at_the_limit(&format!(
+        "Sky(north: 33, profile: {})",
+        profile_text(&SOUTH)
+    ));
+    let loaded = at_the_limit("Sky(intensity: 1)");
+    for scene in [&loaded.scene, &profiled.scene] {
+        let image = render(scene, &options(2, 2)).image;
+        assert!(
+            image
+                .pixels
+                .iter()
+                .flatten()
+                .all(|v| v.is_finite() && *v >= 0.0),
+            "{:?}",
+            image.pixels
+        );
+    }
     // The quarter right of the vertical wall and below the other sees a
     // quarter turn of sky directly: pi / 2.
     let direct = render(&loaded.scene, &options(2, 0)).image;
