@@ -802,16 +802,14 @@ fn light(
             intensity,
             falloff: f,
             ..
-        } => Light {
-            profile: None,
-            shape: LightShape::Point {
+        } => lamp(
+            LightShape::Point {
                 at: DVec2::new(at.0, at.1),
             },
-            color: rgb(color),
-            intensity: intensity.0,
-            falloff: f.map_or(default_falloff, falloff),
-            spectrum: None,
-        },
+            rgb(color),
+            intensity.0,
+            f.map_or(default_falloff, falloff),
+        ),
         LightSpec::Spot {
             at,
             direction,
@@ -832,19 +830,17 @@ fn light(
                     ),
                 ));
             }
-            Light {
-                profile: None,
-                shape: LightShape::Spot {
+            lamp(
+                LightShape::Spot {
                     at: DVec2::new(at.0, at.1),
                     direction: DVec2::new(direction.0, direction.1),
                     cone: cone.0.to_radians(),
                     softness: softness.0.to_radians(),
                 },
-                color: rgb(color),
-                intensity: intensity.0,
-                falloff: f.map_or(default_falloff, falloff),
-                spectrum: None,
-            }
+                rgb(color),
+                intensity.0,
+                f.map_or(default_falloff, falloff),
+            )
         }
         LightSpec::Line {
             a,
@@ -877,18 +873,16 @@ fn light(
             } else {
                 None
             };
-            Light {
-                profile: None,
-                shape: LightShape::Line {
+            lamp(
+                LightShape::Line {
                     segment,
                     one_sided,
                     wall,
                 },
-                color: rgb(color),
-                intensity: intensity.0,
-                falloff: f.map_or(default_falloff, falloff),
-                spectrum: None,
-            }
+                rgb(color),
+                intensity.0,
+                f.map_or(default_falloff, falloff),
+            )
         }
         LightSpec::Circle {
             at,
@@ -907,33 +901,29 @@ fn light(
                     ),
                 ));
             }
-            Light {
-                profile: None,
-                shape: LightShape::Circle {
+            lamp(
+                LightShape::Circle {
                     at: DVec2::new(at.0, at.1),
                     radius: radius.0,
                 },
-                color: rgb(color),
-                intensity: intensity.0,
-                falloff: f.map_or(default_falloff, falloff),
-                spectrum: None,
-            }
+                rgb(color),
+                intensity.0,
+                f.map_or(default_falloff, falloff),
+            )
         }
         LightSpec::Directional {
             direction,
             color,
             intensity,
             ..
-        } => Light {
-            profile: None,
-            shape: LightShape::Directional {
+        } => lamp(
+            LightShape::Directional {
                 direction: DVec2::new(direction.0, direction.1),
             },
-            color: rgb(color),
-            intensity: intensity.0,
-            falloff: Falloff::Constant,
-            spectrum: None,
-        },
+            rgb(color),
+            intensity.0,
+            Falloff::Constant,
+        ),
         LightSpec::Beam {
             a,
             b,
@@ -965,20 +955,32 @@ fn light(
             color,
             intensity,
             ..
-        } => Light {
-            profile: None,
-            shape: LightShape::Laser {
+        } => lamp(
+            LightShape::Laser {
                 at: DVec2::new(at.0, at.1),
                 direction: DVec2::new(direction.0, direction.1),
             },
-            color: rgb(color),
-            intensity: intensity.0,
-            falloff: Falloff::Constant,
-            spectrum: None,
-        },
+            rgb(color),
+            intensity.0,
+            Falloff::Constant,
+        ),
     };
     built.spectrum = spectrum;
     Ok(built)
+}
+
+/// A light of `shape`, `color`, `intensity` and `falloff`, without a
+/// spectrum (the caller sets the file's) or a profile (a sky's lines
+/// have theirs).
+fn lamp(shape: LightShape, color: Rgb, intensity: f64, falloff: Falloff) -> Light {
+    Light {
+        shape,
+        color,
+        intensity,
+        falloff,
+        spectrum: None,
+        profile: None,
+    }
 }
 
 /// The render settings a scene's `render: (...)` asks for.

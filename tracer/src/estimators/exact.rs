@@ -413,6 +413,9 @@ fn in_mirror(
 ) -> Rgb {
     let light = &scene.lights[index];
     let r0 = scene.small_radius;
+    // Seen from the image, the directions towards the light are those its
+    // light leaves in, reversed: what its profile takes.
+    let emitter = (light.falloff, light.profile.as_deref());
     // A point on the mirror's line sees it edge-on.
     let side = mirror.side_value(x);
     if side == 0.0 || !side.is_finite() {
@@ -503,11 +506,7 @@ fn in_mirror(
                 }
             }
             sweep(whole, scratch);
-            // Seen from the image, a direction towards the light is the
-            // one its light leaves in, reversed: what the profile takes.
-            let profile = light.profile.as_deref();
-            return line.spans_integral(&scratch.spans, normal, (light.falloff, profile), r0)
-                * light.intensity;
+            return line.spans_integral(&scratch.spans, normal, emitter, r0) * light.intensity;
         }
         let cuts = &mut scratch.cuts;
         cuts.clear();
@@ -583,10 +582,7 @@ fn in_mirror(
         for span in &scratch.spans {
             sum += span.through
                 * match &view {
-                    View::Line(line) => {
-                        let emitter = (light.falloff, light.profile.as_deref());
-                        line.integral(span.from, span.to, normal, emitter, r0)
-                    }
+                    View::Line(line) => line.integral(span.from, span.to, normal, emitter, r0),
                     View::Disk(disk) => {
                         let (mut a, b) = (span.from, span.to);
                         let mut v = 0.0;
