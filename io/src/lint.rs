@@ -145,6 +145,20 @@ pub(crate) fn lint(text: &str, file: &SceneFile, canvas: &Canvas) -> Vec<Warning
                 }
                 continue;
             }
+            LightSpec::Sky {
+                profile: Some(knots),
+                ..
+            } => {
+                if !knots.is_empty() && knots.iter().all(|(_, factor)| factor.0 == 0.0) {
+                    at(
+                        item(&light_items, k),
+                        format!(
+                            "light {k}: the sky's profile is 0 at every azimuth: it gives no light"
+                        ),
+                    );
+                }
+                continue;
+            }
             LightSpec::Directional { .. } | LightSpec::Sky { .. } => continue,
         };
         let offset = item(&light_items, k);

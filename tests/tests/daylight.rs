@@ -561,3 +561,24 @@ fn a_bad_profile_is_refused_at_its_line_and_column() {
         assert!(message.contains("sky.ron:2:"), "{profile}: {message}");
     }
 }
+
+/// A profile of zeros loads, and `check` warns that the sky gives no
+/// light; one factor above zero does not.
+#[test]
+fn a_profile_of_zeros_is_warned_of() {
+    let text = |profile: &str| {
+        format!(
+            "Scene(canvas: (8, 8), floor: Color((1, 1, 1)),\n  lights: [Sky(profile: {profile})])"
+        )
+    };
+    let dark = scene(&text("[(0, 0), (180, 0)]"));
+    assert!(
+        dark.warnings
+            .iter()
+            .any(|w| w.message.contains("profile is 0 at every azimuth") && w.line == 2),
+        "{:?}",
+        dark.warnings
+    );
+    let lit = scene(&text("[(0, 0), (180, 0.5)]"));
+    assert!(lit.warnings.is_empty(), "{:?}", lit.warnings);
+}
