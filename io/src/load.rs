@@ -938,14 +938,7 @@ fn light(
             if let Err(message) = flatray_tracer::scene::checks::light_shape(&shape) {
                 return Err(source.error(Place::Light(k), format!("light {k}: {message}")));
             }
-            Light {
-                profile: None,
-                shape,
-                color: rgb(color),
-                intensity: intensity.0,
-                falloff: Falloff::Constant,
-                spectrum: None,
-            }
+            lamp(shape, rgb(color), intensity.0, Falloff::Constant)
         }
         // A sky is built with the walls' frame, in `build` (`sky_lights`).
         LightSpec::Sun { .. } | LightSpec::Sky { .. } => sun(k, light, source)?,

@@ -262,6 +262,18 @@ fn the_sun_of_a_date_is_the_directional_light_it_stands_for() {
     );
 }
 
+/// That `text`, read as file `name`, is refused on its line 2 with a
+/// message holding `expected` (`about` names the case).
+fn assert_refused_on_line_2(text: &str, name: &str, expected: &str, about: &str) {
+    let error = flatray_io::parse(text, name.as_ref(), ".".as_ref()).unwrap_err();
+    let message = error.to_string();
+    assert!(message.contains(expected), "{about}: {message}");
+    assert!(
+        message.contains(&format!("{name}:2:")),
+        "{about}: {message}"
+    );
+}
+
 /// Dates that do not exist, times out of range and places off the globe
 /// are refused where they stand.
 #[test]
@@ -288,10 +300,7 @@ fn a_bad_date_time_or_place_is_refused_at_its_line_and_column() {
             "Scene(canvas: (8, 8), floor: Color((1, 1, 1)),\n  lights: [Sun({})])",
             fields.join(", ")
         );
-        let error = flatray_io::parse(&text, "sun.ron".as_ref(), ".".as_ref()).unwrap_err();
-        let message = error.to_string();
-        assert!(message.contains(expected), "{field}: {message}");
-        assert!(message.contains("sun.ron:2:"), "{field}: {message}");
+        assert_refused_on_line_2(&text, "sun.ron", expected, field);
     }
 }
 
@@ -555,10 +564,7 @@ fn a_bad_profile_is_refused_at_its_line_and_column() {
         let text = format!(
             "Scene(canvas: (8, 8), floor: Color((1, 1, 1)),\n  lights: [Sky(profile: {profile})])"
         );
-        let error = flatray_io::parse(&text, "sky.ron".as_ref(), ".".as_ref()).unwrap_err();
-        let message = error.to_string();
-        assert!(message.contains(expected), "{profile}: {message}");
-        assert!(message.contains("sky.ron:2:"), "{profile}: {message}");
+        assert_refused_on_line_2(&text, "sky.ron", expected, profile);
     }
 }
 
