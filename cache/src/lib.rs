@@ -16,9 +16,10 @@
 //! It also tells its caller which reads to check against an exact
 //! estimate, so that the memo's bias can be taken out by whoever knows the
 //! physics ([`Check`]): one read in [`CHECK_RATE`] (by a hash of the wall
-//! and the read's position along it), and every read between bins whose
-//! values say that the interpolation may be off by more than a check can
-//! take out without going below zero.
+//! and the read's position along it); one in 8, 4 or 2 between bins whose
+//! values say the interpolation may be further off, so that the check
+//! still cannot go below zero; and every read where even that cannot be
+//! promised.
 //!
 //! What it never does: decide physics. It does not know what irradiance
 //! is; the tracer hands it a fill function and reads numbers back. It reads
@@ -46,10 +47,12 @@ pub struct WallMemo {
     /// Per (span, side, bin): the sum over lights, what a lookup reads.
     /// Only the sum is kept, so the memory does not grow with the lights.
     total: Vec<Value>,
-    /// Per (span, side, bin): whether every read interpolated from this
-    /// bin is checked ([`Check::Always`]); empty for a memo that is never
-    /// checked ([`WallMemo::build_like`]).
-    always: Vec<bool>,
+    /// Per (span, side, bin): how the reads interpolated from this bin
+    /// are checked, as the base-2 logarithm of their check rate: 0 for
+    /// [`Check::Always`], [`CHECK_RATE_LOG2`] where the bins are smooth
+    /// enough for the usual rate; empty for a memo that is never checked
+    /// ([`WallMemo::build_like`]).
+    rates: Vec<u8>,
 }
 
 /// How the caller takes a read ([`WallMemo::read`]).
@@ -57,11 +60,12 @@ pub struct WallMemo {
 pub enum Check {
     /// The memo's value as it is.
     No,
-    /// One read in [`CHECK_RATE`]: the caller reads `m + CHECK_RATE (e - m)`
-    /// for the memo's `m` and an exact estimate `e`, which is on average
-    /// the exact value whatever the memo holds, and is not below zero
-    /// wherever `e >= m (1 - 1 / CHECK_RATE)`.
-    Sampled,
+    /// One read in `rate` (a power of two, at most [`CHECK_RATE`]): the
+    /// caller reads `m + rate (e - m)` for the memo's `m` and an exact
+    /// estimate `e`, which is on average the exact value whatever the memo
+    /// holds, and is not below zero wherever `e >= m (1 - 1 / rate)`. The
+    /// rate is lower where the bins may be further off ([`uneven_bins`]).
+    Sampled { rate: u64 },
     /// The memo's value may be off by more than a sampled check can take
     /// out without going below zero (a shadow's edge, a lamp close to the
     /// wall, a span's end): the caller takes the exact estimate alone.
@@ -122,6 +126,9 @@ pub struct Key {
 /// One read in this many is marked for checking ([`checked`]).
 pub const CHECK_RATE: u64 = 16;
 
+/// The base-2 logarithm of [`CHECK_RATE`].
+const CHECK_RATE_LOG2: u8 = CHECK_RATE.trailing_zeros() as u8;
+
 /// Cells along a wall, as a share of its length, within which [`checked`]
 /// decides alike: far finer than a bin, and far coarser than the rounding
 /// of a position along a wall far from the origin (a scene translated by
@@ -139,13 +146,21 @@ const CHECK_CELLS: f64 = (1u64 << 16) as f64;
 /// exact value, whatever the memo holds.
 #[inline(always)]
 pub fn checked(wall: u32, u: f64, path: u64) -> bool {
+    checked_at(wall, u, path, CHECK_RATE)
+}
+
+/// [`checked`] for one read in `rate`, a power of two at most
+/// [`CHECK_RATE`]: of the same hash, so that a read checked at one rate
+/// is checked at every lower one.
+#[inline(always)]
+pub fn checked_at(wall: u32, u: f64, path: u64, rate: u64) -> bool {
     // NaN and the ends map to cells 0 and CHECK_CELLS, as the cast saturates.
     let cell = (u * CHECK_CELLS) as u64;
     let mut z =
         cell ^ ((wall as u64) << 32).rotate_left(17) ^ path.wrapping_mul(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    (z ^ (z >> 31)).is_multiple_of(CHECK_RATE)
+    (z ^ (z >> 31)).is_multiple_of(rate)
 }
 
 /// The ends of a wall's spans between its `junctions` (positions along
@@ -206,35 +221,46 @@ impl WallMemo {
             walls.push(SpanRange { first, count, ends });
         }
         let total = fill_bins(&walls, &spans, lights, fill);
-        let always = uneven_bins(&spans, &total);
+        let rates = uneven_bins(&spans, &total);
         WallMemo {
             lights,
             walls,
             spans,
             total,
-            always,
+            rates,
         }
     }
 
-    /// Marks the reads about `u` on `wall` (both sides) as always checked:
-    /// `u` is a place where the light the memo holds may jump (the edge of
-    /// a shadow that a wall casts), which the bins' values do not show
-    /// where it falls between two centres that see the same light. The
-    /// reads marked are those interpolated from the bins about `u`.
-    pub fn mark_edge(&mut self, wall: u32, u: f64) {
-        if self.always.is_empty() || wall as usize >= self.walls.len() || !u.is_finite() {
+    /// Marks the reads about `u` on `wall` as checked more often: `u` is a
+    /// place where the light the memo holds may jump (the edge of a shadow
+    /// that a wall casts), which the bins' values do not show where it
+    /// falls between two centres that see the same light. `jump` bounds,
+    /// on each side, the light that may be missing past the edge; the
+    /// reads interpolated from the bins about `u` are checked at the
+    /// highest rate at which a check of a read that misses it cannot go
+    /// below zero ([`uneven_bins`]), or always.
+    pub fn mark_edge(&mut self, wall: u32, u: f64, jump: [Value; 2]) {
+        if self.rates.is_empty() || wall as usize >= self.walls.len() || !u.is_finite() {
             return;
         }
         let span = self.spans[self.span_of(wall, u)];
+        let n = span.bins as usize;
         let x = (u - span.u0) * span.scale - 0.5;
         // The bin a read at `u` starts from, and the one before where `u`
         // is within rounding of a centre.
         let i = x.clamp(0.0, span.last) as usize;
         let before = (x - 1e-6).clamp(0.0, span.last) as usize;
-        for side in 0..2 {
-            let base = span.offset + side * span.bins as usize;
-            self.always[base + i] = true;
-            self.always[base + before] = true;
+        for (side, jump) in jump.iter().enumerate() {
+            let base = span.offset + side * n;
+            for k in [i, before] {
+                let (a, b) = (self.total[base + k], self.total[base + (k + 1).min(n - 1)]);
+                let rate = (0..3)
+                    .map(|c| rate_log2(a[c].min(b[c]), ERROR_MARGIN * jump[c]))
+                    .min()
+                    .unwrap_or(0);
+                let flag = &mut self.rates[base + k];
+                *flag = (*flag).min(rate);
+            }
         }
     }
 
@@ -251,7 +277,7 @@ impl WallMemo {
             walls: self.walls.clone(),
             spans: self.spans.clone(),
             total: fill_bins(&self.walls, &self.spans, terms, fill),
-            always: Vec::new(),
+            rates: Vec::new(),
         }
     }
 
@@ -287,7 +313,7 @@ impl WallMemo {
     /// Bytes held by the tables: per bin, not per light.
     pub fn memory_bytes(&self) -> usize {
         self.total.len() * std::mem::size_of::<Value>()
-            + self.always.len()
+            + self.rates.len()
             + self.spans.len() * std::mem::size_of::<Span>()
             + self.walls.len() * std::mem::size_of::<SpanRange>()
     }
@@ -332,14 +358,46 @@ impl WallMemo {
     #[inline(always)]
     pub fn read(&self, key: Key, path: u64) -> (Value, Check) {
         let (value, i, beyond) = self.interpolate(key);
-        let check = if self.always.get(i).copied().unwrap_or(false)
-            || (beyond && !self.always.is_empty())
-        {
-            Check::Always
-        } else if checked(key.wall, key.u, path) {
-            Check::Sampled
-        } else {
-            Check::No
+        let check = match self.rates.get(i) {
+            // A memo that is never checked.
+            None => Check::No,
+            Some(0) => Check::Always,
+            // Beyond a span's first or last centre.
+            Some(_) if beyond => Check::Always,
+            Some(&log2) => {
+                let rate = 1u64 << log2.min(CHECK_RATE_LOG2);
+                if checked_at(key.wall, key.u, path, rate) {
+                    Check::Sampled { rate }
+                } else {
+                    Check::No
+                }
+            }
+        };
+        (value, check)
+    }
+
+    /// The rate at which [`WallMemo::read`] checks reads at `key`: 1 where
+    /// it checks every read, [`CHECK_RATE`] where the bins are smooth, 0
+    /// for a memo that checks none ([`WallMemo::build_like`]).
+    pub fn check_rate(&self, key: Key) -> u64 {
+        let (_, i, beyond) = self.interpolate(key);
+        match self.rates.get(i) {
+            None => 0,
+            Some(_) if beyond => 1,
+            Some(&log2) => 1 << log2.min(CHECK_RATE_LOG2),
+        }
+    }
+
+    /// [`WallMemo::read`] for a caller that takes no sampled checks (and so
+    /// carries the memo's bias where the bins are smooth): every read that
+    /// a check at the usual rate, [`CHECK_RATE`], could take below zero is
+    /// [`Check::Always`], and the rest [`Check::No`].
+    #[inline(always)]
+    pub fn read_unsampled(&self, key: Key) -> (Value, Check) {
+        let (value, i, beyond) = self.interpolate(key);
+        let check = match self.rates.get(i) {
+            Some(&log2) if log2 < CHECK_RATE_LOG2 || beyond => Check::Always,
+            _ => Check::No,
         };
         (value, check)
     }
@@ -376,9 +434,11 @@ impl WallMemo {
 /// exact for a parabola).
 const ERROR_MARGIN: f32 = 2.0;
 
-/// Per (span, side, bin): whether the reads interpolated from the bin may
-/// be off by more than `1 / CHECK_RATE` of the smaller of the values they
-/// blend, so that a sampled check could go below zero there. Between
+/// Per (span, side, bin): the base-2 logarithm of the highest check rate
+/// `R` (a power of two, at most [`CHECK_RATE`]) at which the reads
+/// interpolated from the bin are off by at most `1 / R` of the smaller of
+/// the values they blend, so that a check at that rate cannot go below
+/// zero there; 0 (every read checked) where even `R = 2` is too high. Between
 /// centres `h` apart, where the light is smooth, a linear interpolation is
 /// off by at most `h² |f''| / 8`, `h² f''` estimated by the second
 /// differences of the bins about it; where the light jumps between the two
@@ -388,16 +448,16 @@ const ERROR_MARGIN: f32 = 2.0;
 /// off by about half the first difference more, and the first interval of
 /// a span can't tell a jump from a slope: its first difference counts
 /// whole. A span of one bin has no estimate, and is always checked.
-fn uneven_bins(spans: &[Span], total: &[Value]) -> Vec<bool> {
-    let mut always = vec![false; total.len()];
+fn uneven_bins(spans: &[Span], total: &[Value]) -> Vec<u8> {
+    let mut rates = vec![CHECK_RATE_LOG2; total.len()];
     for span in spans {
         let n = span.bins as usize;
         for side in 0..2 {
             let base = span.offset + side * n;
             let m = &total[base..base + n];
-            let flags = &mut always[base..base + n];
+            let flags = &mut rates[base..base + n];
             if n == 1 {
-                flags[0] = true;
+                flags[0] = 0;
                 continue;
             }
             // Each colour channel is checked on its own.
@@ -423,14 +483,23 @@ fn uneven_bins(spans: &[Span], total: &[Value]) -> Vec<bool> {
                         0.0
                     };
                     let error = (ERROR_MARGIN * curve).max(jump).max(ERROR_MARGIN * end);
-                    if error > v(i).min(v(j)) / CHECK_RATE as f32 {
-                        *flag = true;
-                    }
+                    *flag = (*flag).min(rate_log2(v(i).min(v(j)), error));
                 }
             }
         }
     }
-    always
+    rates
+}
+
+/// The base-2 logarithm of the highest power of two `R` at most
+/// [`CHECK_RATE`] with `error <= least / R`, or 0 (every read checked)
+/// where `R = 2` fails or either is NaN.
+fn rate_log2(least: f32, error: f32) -> u8 {
+    let mut log2 = CHECK_RATE_LOG2;
+    while log2 > 0 && !(error <= least / (1u64 << log2) as f32) {
+        log2 -= 1;
+    }
+    log2
 }
 
 /// Every (span, side, bin) value: `fill` at the bin's centre, summed over
@@ -718,28 +787,77 @@ mod tests {
         );
     }
 
+    fn rate_at(memo: &WallMemo, side: usize, u: f64) -> u64 {
+        memo.check_rate(Key { wall: 0, side, u })
+    }
+
     #[test]
-    fn a_marked_edge_checks_the_reads_about_it_on_both_sides() {
+    fn a_marked_edge_checks_the_reads_about_it_as_its_jump_asks() {
         let mut memo = WallMemo::build(&[20.0], &[], 1.0, 1, |_, _, _, _| [1.0; 3]);
-        let before: Vec<bool> = (1..39)
-            .map(|k| check_at(&memo, 0, (k as f64 + 0.5) / 40.0) == Check::Always)
-            .collect();
-        assert!(before.iter().all(|&a| !a));
+        for k in 1..39 {
+            assert_eq!(rate_at(&memo, 0, (k as f64 + 0.5) / 40.0), CHECK_RATE);
+        }
         // A thin shadow at u = 0.3 between centres 5 and 6 (at 0.275 and
-        // 0.325), which the bins' equal values do not show.
-        memo.mark_edge(0, 0.3);
-        for side in 0..2 {
+        // 0.325), which the bins' equal values do not show, of a light
+        // that may give all of the bins' value on side 0 and a twentieth
+        // of it on side 1 (in green): every read about it is checked on
+        // side 0, and one in 8 on side 1 (twice the twentieth, 0.1, is
+        // within an eighth of 1, so that `1 + 8 (0.95 - 1) >= 0`).
+        memo.mark_edge(0, 0.3, [[1.0; 3], [0.0, 0.05, 0.0]]);
+        for (side, rate) in [(0, 1), (1, 8)] {
             for k in 1..39 {
                 let u = (k as f64 + 0.5) / 40.0;
                 let about = u > 0.275 && u < 0.325;
-                assert_eq!(check_at(&memo, side, u) == Check::Always, about, "u {u}");
+                let expected = if about { rate } else { CHECK_RATE };
+                assert_eq!(rate_at(&memo, side, u), expected, "side {side}, u {u}");
             }
         }
-        // An edge at no wall, or at no place, marks nothing.
-        let always = |memo: &WallMemo| memo.always.iter().filter(|&&a| a).count();
-        let marked = always(&memo);
-        memo.mark_edge(7, 0.5);
-        memo.mark_edge(0, f64::NAN);
-        assert_eq!(always(&memo), marked);
+        // An edge at no wall, at no place, or of no light, marks nothing;
+        // one of a jump that is not a number marks every read.
+        let marked = memo.rates.clone();
+        memo.mark_edge(7, 0.5, [[1.0; 3]; 2]);
+        memo.mark_edge(0, f64::NAN, [[1.0; 3]; 2]);
+        memo.mark_edge(0, 0.7, [[0.0; 3]; 2]);
+        assert_eq!(memo.rates, marked);
+        memo.mark_edge(0, 0.7, [[f32::NAN; 3]; 2]);
+        assert_eq!(rate_at(&memo, 1, 0.69), 1);
+    }
+
+    #[test]
+    fn a_check_at_each_reads_rate_cannot_go_below_zero_where_the_bins_show_the_light() {
+        // Lamps at several heights above a wall of 40 bins, by the
+        // wall's middle and by its end, and a shadow's edge wider than a
+        // bin: wherever the light is smooth between centres, or its jumps
+        // show in the bins, a read `m` checked at its rate `R` against the
+        // exact `e` gives `m + R (e - m) >= 0`.
+        let mut rates_seen = [0usize; 5];
+        for height in [0.05, 0.2, 0.5, 1.0, 3.0, 10.0] {
+            for (at, edge) in [(0.5, 2.0), (0.97, 2.0), (0.31, 0.62)] {
+                let exact = |u: f64| {
+                    let d = (u - at) * 40.0;
+                    let lamp = height / (height * height + d * d);
+                    let lit = if u < edge { lamp } else { 0.1 * lamp };
+                    lit + 0.001
+                };
+                let memo = WallMemo::build(&[40.0], &[], 1.0, 1, |_, _, u, _| [exact(u) as f32; 3]);
+                for k in 0..4000 {
+                    let u = (k as f64 + 0.5) / 4000.0;
+                    let rate = rate_at(&memo, 0, u);
+                    rates_seen[rate.trailing_zeros() as usize] += 1;
+                    let m = memo.lookup(Key {
+                        wall: 0,
+                        side: 0,
+                        u,
+                    })[0] as f64;
+                    let checked = m + rate as f64 * (exact(u) - m);
+                    assert!(
+                        checked >= -1e-6 * m,
+                        "height {height}, lamp at {at}, u {u}: rate {rate}, {m} -> {checked}"
+                    );
+                }
+            }
+        }
+        // Every rate is met, so each is tested.
+        assert!(rates_seen.iter().all(|&n| n > 0), "{rates_seen:?}");
     }
 }

@@ -146,11 +146,12 @@ const EDGE_RAYS: usize = 1 << 21;
 /// Where light from a point, or from a direction, casts its shadows'
 /// edges: the ray from the light through each wall's ends (and past the
 /// sides of each arc as the light sees them), to the first wall behind.
-/// The memo marks the reads about each as always checked
-/// ([`WallMemo::mark_edge`]): a shadow narrower than a bin falls between
-/// two centres that both see the light, and only its edges tell that it
-/// is there. Line lights cast their edges from both ends; a circle from
-/// its centre (its shadows' edges are soft). Returns the rays cast.
+/// The memo checks the reads about each more often, as the light that
+/// the edge may cut off there asks ([`WallMemo::mark_edge`]): a shadow
+/// narrower than a bin falls between two centres that both see the light,
+/// and only its edges tell that it is there. Line lights cast their edges
+/// from both ends; a circle from its centre (its shadows' edges are
+/// soft). Returns the rays cast.
 fn mark_shadow_edges(scene: &Scene, memo: &mut WallMemo) -> u64 {
     use flatray_geometry::{DVec2, Ray, Shape};
     use rayon::prelude::*;
@@ -163,18 +164,25 @@ fn mark_shadow_edges(scene: &Scene, memo: &mut WallMemo) -> u64 {
         Point(DVec2),
         Along(DVec2),
     }
+    // Each edge's source, and the light that casts it.
     let mut sources = Vec::new();
-    for light in &scene.lights {
-        match &light.shape {
+    for (light, l) in scene.lights.iter().enumerate() {
+        match &l.shape {
             LightShape::Point { at } | LightShape::Circle { at, .. } => {
-                sources.push(From::Point(*at))
+                sources.push((From::Point(*at), light))
             }
-            LightShape::Spot { at, .. } => sources.push(From::Point(*at)),
+            LightShape::Spot { at, .. } => sources.push((From::Point(*at), light)),
             LightShape::Line { segment, .. } => {
-                sources.extend([From::Point(segment.a), From::Point(segment.b)]);
+                sources.extend([
+                    (From::Point(segment.a), light),
+                    (From::Point(segment.b), light),
+                ]);
             }
             LightShape::Directional { direction } | LightShape::Beam { direction, .. } => {
-                sources.extend([From::Along(*direction), From::Along(-*direction)]);
+                sources.extend([
+                    (From::Along(*direction), light),
+                    (From::Along(-*direction), light),
+                ]);
             }
             _ => {}
         }
@@ -196,9 +204,9 @@ fn mark_shadow_edges(scene: &Scene, memo: &mut WallMemo) -> u64 {
     if rays == 0 || rays > EDGE_RAYS {
         return 0;
     }
-    let edges: Vec<(u32, f64)> = sources
+    let edges: Vec<(u32, f64, [Value; 2])> = sources
         .par_iter()
-        .flat_map_iter(|&source| {
+        .flat_map_iter(|&(source, light)| {
             // The points a shadow's edge passes: the walls' ends, and
             // where the light grazes each arc's circle.
             let grazes = arcs.iter().flat_map(move |&(c, r)| {
@@ -233,14 +241,38 @@ fn mark_shadow_edges(scene: &Scene, memo: &mut WallMemo) -> u64 {
                 // are not the ones found.
                 let (index, hit) =
                     first_stop(scene, Ray::new(v + dir * margin, dir), f64::INFINITY)?;
-                Some((index, hit.u))
+                Some((index, hit.u, unshadowed(scene, light, index, hit.u)))
             })
         })
         .collect();
-    for (index, u) in edges {
-        memo.mark_edge(index, u);
+    for (index, u, jump) in edges {
+        memo.mark_edge(index, u, jump);
     }
     2 * rays as u64
+}
+
+/// What `light` sends, with no wall in between, to each side of `wall` at
+/// `u`: at most what a shadow's edge there can cut off a bin's value.
+fn unshadowed(scene: &Scene, light: usize, wall: u32, u: f64) -> [Value; 2] {
+    let Some(w) = scene.walls.get(wall as usize) else {
+        return [[0.0; 3]; 2];
+    };
+    if !w.material.is_diffuse() {
+        return [[0.0; 3]; 2];
+    }
+    let x = w.shape.point_at(u);
+    let mut local = Stats::default();
+    [0, 1].map(|i| {
+        let side = Side::of_index(i);
+        let receiver = Receiver {
+            normal: Some(w.shape.normal_on(side, x)),
+            wall: Some(wall),
+            shadow_walls: None,
+        };
+        let all = Visibility::Known(Rgb::ONE);
+        let value = light_contribution(scene, light, x, receiver, 0.5, all, &mut local);
+        to_value(value)
+    })
 }
 
 /// The first wall along `ray` before `t_max` that light does not pass
@@ -303,5 +335,108 @@ impl<'a> Onward<'a> {
     #[inline(always)]
     pub fn for_sample(self, sample: u32) -> &'a [WallMemo] {
         self.copies[(sample >= self.half) as usize]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use flatray_cache::Key;
+    use flatray_geometry::DVec2;
+
+    use super::*;
+    use crate::options::RenderOptions;
+    use crate::plan::Plan;
+    use crate::scene::{Canvas, Falloff, Floor, Light, LightShape, Material, Wall};
+
+    /// A long wall lit by a bright lamp and a dim one, each behind a post
+    /// thinner than a bin, so that each casts a shadow on the wall that
+    /// falls between two bin centres which both see the lamp.
+    fn posts(dim: f64) -> Scene {
+        let diffuse = Material::Diffuse { albedo: None };
+        let segment = |a: (f64, f64), b: (f64, f64)| {
+            Wall::segment(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1), diffuse)
+        };
+        let walls = vec![
+            segment((0.0, 0.0), (100.0, 0.0)),
+            segment((49.9, 10.0), (50.1, 10.0)),
+            segment((24.9, 10.0), (25.1, 10.0)),
+        ];
+        let lamp = |x: f64, intensity: f64| Light {
+            profile: None,
+            shape: LightShape::Point {
+                at: DVec2::new(x, 20.0),
+            },
+            color: Rgb::ONE,
+            intensity,
+            falloff: Falloff::Flatland,
+            spectrum: None,
+        };
+        let lights = vec![lamp(50.0, 1.0), lamp(15.0, dim)];
+        let canvas = Canvas {
+            width: 100,
+            height: 30,
+            origin: DVec2::new(0.0, -5.0),
+        };
+        Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene")
+    }
+
+    #[test]
+    fn a_read_checked_at_its_rate_is_not_below_zero_in_a_shadow_thinner_than_a_bin() {
+        let scene = posts(0.01);
+        let options = RenderOptions::default();
+        let plan = Plan::new(&scene, &options);
+        let ledger = plan.ledger();
+        let mut stats = Stats::default();
+        let memo = build_wall_memo(
+            &scene,
+            &options.memo,
+            options.scale,
+            (true, &ledger),
+            &mut stats,
+        );
+        let wall = &scene.walls[0];
+        let mut dim_shadow_rates = Vec::new();
+        for k in 0..20_000 {
+            let u = (k as f64 + 0.5) / 20_000.0;
+            let x = wall.shape.point_at(u);
+            for side in [Side::Positive, Side::Negative] {
+                let receiver = Receiver {
+                    normal: Some(wall.shape.normal_on(side, x)),
+                    wall: Some(0),
+                    shadow_walls: None,
+                };
+                // Point lights: one shadow ray each gives the exact value.
+                let exact: Rgb = (0..scene.lights.len())
+                    .map(|l| {
+                        let vis = Visibility::Trace;
+                        light_contribution(&scene, l, x, receiver, 0.5, vis, &mut stats)
+                    })
+                    .sum();
+                let key = Key {
+                    wall: 0,
+                    side: side.index(),
+                    u,
+                };
+                let m = memo.lookup(key)[1] as f64;
+                let rate = memo.check_rate(key);
+                let checked = m + rate as f64 * (exact.y - m);
+                assert!(
+                    checked >= -1e-6 * m,
+                    "u {u}: the memo's {m}, exact {}, rate {rate} -> {checked}",
+                    exact.y
+                );
+                // Where the dim lamp's post shades the wall (the ray from
+                // (15, 20) past (25, 10) meets it at x = 35).
+                if side == Side::Positive && (x.x - 35.0).abs() < 0.05 {
+                    dim_shadow_rates.push(rate);
+                }
+            }
+        }
+        // The dim lamp's shadow asks for no more than a check in 8 there.
+        assert!(!dim_shadow_rates.is_empty());
+        assert!(
+            dim_shadow_rates.iter().all(|&r| r >= 8),
+            "{dim_shadow_rates:?}"
+        );
     }
 }

@@ -639,23 +639,26 @@ pub(crate) fn memo_irradiance(memo: &WallMemo, index: u32, side: Side, u: f64) -
 }
 
 /// [`memo_irradiance`], and how a path keyed `path` (the key of its
-/// stream where it entered the loop, `Stream::key`) checks it.
+/// stream where it entered the loop, `Stream::key`) checks it; without
+/// `sampled_checks`, only the reads always checked
+/// (`WallMemo::read_unsampled`).
 #[inline(always)]
 pub(crate) fn memo_read(
     memo: &WallMemo,
-    index: u32,
-    side: Side,
-    u: f64,
+    (index, side, u): (u32, Side, f64),
     path: u64,
+    sampled_checks: bool,
 ) -> (Rgb, Check) {
-    let (v, check) = memo.read(
-        Key {
-            wall: index,
-            side: side.index(),
-            u,
-        },
-        path,
-    );
+    let key = Key {
+        wall: index,
+        side: side.index(),
+        u,
+    };
+    let (v, check) = if sampled_checks {
+        memo.read(key, path)
+    } else {
+        memo.read_unsampled(key)
+    };
     (Rgb::new(v[0] as f64, v[1] as f64, v[2] as f64), check)
 }
 
@@ -752,15 +755,15 @@ fn wall_irradiance(
     let irradiance = match memo {
         Some(memo) => {
             stats.work.memo_lookups += 1;
-            let (read, check) = memo_read(memo, index, side, u, at.path);
+            let (read, check) = memo_read(memo, (index, side, u), at.path, trace.memo_checks);
             match check {
-                Check::Sampled if trace.memo_checks => {
+                Check::Sampled { rate } => {
                     // The memo's error, estimated where a hash of the hit
                     // picks it: unbiased, so the memo's bias (its bins hold
                     // the irradiance at their centres only) falls out.
                     stats.work.memo_checks += 1;
                     let direct = every(stream, stats);
-                    read + (direct - read) * flatray_cache::CHECK_RATE as f64
+                    read + (direct - read) * rate as f64
                 }
                 Check::Always => {
                     // Where the bins may be off by more than a sampled

@@ -46,7 +46,7 @@ pub(crate) fn memo_bounce(
         Shape::Segment(s) => s.arrival_side(dir)?,
         Shape::Arc(arc) => arc.arrival_side(arc.point_at(u), dir)?,
     };
-    let (read, check) = memo_read(memo, index, side, u, path);
+    let (read, check) = memo_read(memo, (index, side, u), path, trace.memo_checks);
     if trace.memo_checks && check != Check::No {
         return None;
     }
