@@ -357,13 +357,11 @@ impl WallMemo {
     /// for a path keyed `path` ([`checked`]).
     #[inline(always)]
     pub fn read(&self, key: Key, path: u64) -> (Value, Check) {
-        let (value, i, beyond) = self.interpolate(key);
+        let (value, i) = self.interpolate(key);
         let check = match self.rates.get(i) {
             // A memo that is never checked.
             None => Check::No,
             Some(0) => Check::Always,
-            // Beyond a span's first or last centre.
-            Some(_) if beyond => Check::Always,
             Some(&log2) => {
                 let rate = 1u64 << log2.min(CHECK_RATE_LOG2);
                 if checked_at(key.wall, key.u, path, rate) {
@@ -380,10 +378,9 @@ impl WallMemo {
     /// it checks every read, [`CHECK_RATE`] where the bins are smooth, 0
     /// for a memo that checks none ([`WallMemo::build_like`]).
     pub fn check_rate(&self, key: Key) -> u64 {
-        let (_, i, beyond) = self.interpolate(key);
+        let (_, i) = self.interpolate(key);
         match self.rates.get(i) {
             None => 0,
-            Some(_) if beyond => 1,
             Some(&log2) => 1 << log2.min(CHECK_RATE_LOG2),
         }
     }
@@ -394,9 +391,9 @@ impl WallMemo {
     /// [`Check::Always`], and the rest [`Check::No`].
     #[inline(always)]
     pub fn read_unsampled(&self, key: Key) -> (Value, Check) {
-        let (value, i, beyond) = self.interpolate(key);
+        let (value, i) = self.interpolate(key);
         let check = match self.rates.get(i) {
-            Some(&log2) if log2 < CHECK_RATE_LOG2 || beyond => Check::Always,
+            Some(&log2) if log2 < CHECK_RATE_LOG2 => Check::Always,
             _ => Check::No,
         };
         (value, check)
@@ -405,7 +402,7 @@ impl WallMemo {
     /// The interpolated value at `key`, and the index of the bin it
     /// starts from.
     #[inline(always)]
-    fn interpolate(&self, key: Key) -> (Value, usize, bool) {
+    fn interpolate(&self, key: Key) -> (Value, usize) {
         let span = &self.spans[self.span_of(key.wall, key.u)];
         let n = span.bins as usize;
         let base = span.offset + key.side * n;
@@ -413,8 +410,7 @@ impl WallMemo {
         // its bin count for a span of the whole wall, as most are).
         // Conversions through i64 (one instruction each; usize takes a
         // sequence of them on x86-64). x is at most `last`, so is i.
-        let raw = (key.u - span.u0) * span.scale - 0.5;
-        let x = raw.clamp(0.0, span.last);
+        let x = ((key.u - span.u0) * span.scale - 0.5).clamp(0.0, span.last);
         let i = x as i64;
         let j = (i + 1).min(n as i64 - 1);
         let f = (x - i as f64) as f32;
@@ -425,7 +421,7 @@ impl WallMemo {
             a[1] + (b[1] - a[1]) * f,
             a[2] + (b[2] - a[2]) * f,
         ];
-        (value, base + i, raw != x)
+        (value, base + i)
     }
 }
 
@@ -444,8 +440,9 @@ const ERROR_MARGIN: f32 = 2.0;
 /// differences of the bins about it; where the light jumps between the two
 /// centres (a shadow's edge), by up to the jump, which shows as second
 /// differences of opposite signs at the two ends, half their difference
-/// the jump. Beyond a span's first and last centre the read is constant,
-/// off by about half the first difference more, and the first interval of
+/// the jump. Beyond a span's first and last centre the read is constant
+/// (the end bin's value, checked at the end bin's rate), off by about half
+/// the first difference more, and the first interval of
 /// a span can't tell a jump from a slope: its first difference counts
 /// whole. A span of one bin has no estimate, and is always checked.
 fn uneven_bins(spans: &[Span], total: &[Value]) -> Vec<u8> {
@@ -472,13 +469,24 @@ fn uneven_bins(spans: &[Span], total: &[Value]) -> Vec<u8> {
                     let k = i.min(n - 2);
                     let first = (v(k + 1) - v(k)).abs();
                     let (si, sj) = (second(i), second(j));
-                    let curve = si.unwrap_or(0.0).abs().max(sj.unwrap_or(0.0).abs()) / 8.0;
+                    // The end bins take the curve of the nearest centre
+                    // that has a second difference.
+                    let near = |k: usize| second(k.clamp(1, n.saturating_sub(2).max(1)));
+                    let curve = near(i)
+                        .unwrap_or(0.0)
+                        .abs()
+                        .max(near(j).unwrap_or(0.0).abs())
+                        / 8.0;
                     let jump = match (si, sj) {
                         (Some(a), Some(b)) if i != j => (a - b).abs() / 2.0,
                         _ => first,
                     };
+                    // Held constant over the half bin past the end centre:
+                    // off by half a bin's slope there, which is the first
+                    // difference's (at the interval's middle) and up to
+                    // one and a half second differences more.
                     let end = if i == 0 || i == n - 1 {
-                        first / 2.0 + curve
+                        first / 2.0 + 3.0 * curve
                     } else {
                         0.0
                     };
@@ -739,7 +747,7 @@ mod tests {
     }
 
     #[test]
-    fn smooth_bins_are_sampled_and_jumps_ends_and_short_spans_always_checked() {
+    fn smooth_bins_are_sampled_and_jumps_and_short_spans_always_checked() {
         // A smooth light along a wall of 20 bins: inside the outer
         // centres, only sampled checks.
         let smooth = WallMemo::build(&[20.0], &[], 1.0, 1, |_, _, u, _| {
@@ -749,9 +757,12 @@ mod tests {
             let u = (k as f64 + 0.5) / 40.0;
             assert_ne!(check_at(&smooth, 0, u), Check::Always, "u {u}");
         }
-        // Beyond the first and last centre (the read is held constant).
-        assert_eq!(check_at(&smooth, 1, 0.01), Check::Always);
-        assert_eq!(check_at(&smooth, 1, 0.99), Check::Always);
+        // Beyond the first and last centre the read is held constant, and
+        // checked at the end bin's rate, which allows for it: here the
+        // usual one.
+        for u in [0.001, 0.01, 0.99, 0.999] {
+            assert_eq!(rate_at(&smooth, 1, u), CHECK_RATE, "u {u}");
+        }
         // A shadow's edge at u = 0.51, between centres 9 and 10 (at 0.475
         // and 0.525): the interval between them is always checked (its
         // neighbours may be, as their second differences show half the
@@ -825,14 +836,21 @@ mod tests {
 
     #[test]
     fn a_check_at_each_reads_rate_cannot_go_below_zero_where_the_bins_show_the_light() {
-        // Lamps at several heights above a wall of 40 bins, by the
-        // wall's middle and by its end, and a shadow's edge wider than a
-        // bin: wherever the light is smooth between centres, or its jumps
-        // show in the bins, a read `m` checked at its rate `R` against the
-        // exact `e` gives `m + R (e - m) >= 0`.
+        // Lamps at several heights above a wall of 40 bins, by its middle,
+        // by and past its ends, and a shadow's edge wider than a bin:
+        // wherever the light is smooth between centres (and past the end
+        // centres, where reads are held constant), or its jumps show in
+        // the bins, a read `m` checked at its rate `R` against the exact
+        // `e` gives `m + R (e - m) >= 0`.
         let mut rates_seen = [0usize; 5];
         for height in [0.05, 0.2, 0.5, 1.0, 3.0, 10.0] {
-            for (at, edge) in [(0.5, 2.0), (0.97, 2.0), (0.31, 0.62)] {
+            for (at, edge) in [
+                (0.5, 2.0),
+                (0.97, 2.0),
+                (0.02, 2.0),
+                (1.01, 2.0),
+                (0.31, 0.62),
+            ] {
                 let exact = |u: f64| {
                     let d = (u - at) * 40.0;
                     let lamp = height / (height * height + d * d);
