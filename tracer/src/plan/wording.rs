@@ -412,7 +412,7 @@ impl Plan {
                 )
             } else {
                 format!(
-                    "{} binned every {} pixel; one read in {} checked by shadow rays, so that the bins' bias falls out, and every read where the bins may be far off (a shadow's edge, a lamp close to a wall, a span's end)",
+                    "{} binned every {} pixel; one read in {} checked by shadow rays, so that the bins' bias falls out; one in 8, 4 or 2, or every one, where the bins may be further off (a shadow's edge, a lamp close to a wall, a span's end)",
                     n(diffuse, "diffuse wall"),
                     bin_length,
                     flatray_cache::CHECK_RATE
