@@ -66,9 +66,10 @@ pub enum Check {
     /// holds, and is not below zero wherever `e >= m (1 - 1 / rate)`. The
     /// rate is lower where the bins may be further off ([`uneven_bins`]).
     Sampled { rate: u64 },
-    /// The memo's value may be off by more than a sampled check can take
-    /// out without going below zero (a shadow's edge, a lamp close to the
-    /// wall, a span's end): the caller takes the exact estimate alone.
+    /// The memo's value may be off by more than a check of one read in 2
+    /// can take out without going below zero (a shadow's edge of a light
+    /// that gives most of the bins' value, a lamp very close to the wall,
+    /// a span of one bin): the caller takes the exact estimate alone.
     Always,
 }
 
@@ -504,7 +505,8 @@ fn uneven_bins(spans: &[Span], total: &[Value]) -> Vec<u8> {
 /// where `R = 2` fails or either is NaN.
 fn rate_log2(least: f32, error: f32) -> u8 {
     let mut log2 = CHECK_RATE_LOG2;
-    while log2 > 0 && !(error <= least / (1u64 << log2) as f32) {
+    let within = |log2: u8| error <= least / (1u64 << log2) as f32;
+    while log2 > 0 && !within(log2) {
         log2 -= 1;
     }
     log2

@@ -590,9 +590,11 @@ pub(crate) struct Trace<'a> {
     pub floor_direct: bool,
     /// The wall memo, read instead of shadow rays at diffuse walls.
     pub memo: Option<&'a WallMemo>,
-    /// Whether one memo read in `flatray_cache::CHECK_RATE` is checked by
-    /// next-event estimation: for paths from the floor, not for the onward
-    /// memo's gathers, whose tables every pixel shares.
+    /// Whether memo reads are checked by next-event estimation at the
+    /// rates the memo gives (`flatray_cache::Check::Sampled`): for paths
+    /// from the floor, not for the onward memo's gathers, whose tables
+    /// every pixel shares (they take the exact estimate alone wherever a
+    /// bin's rate is below the usual one).
     pub memo_checks: bool,
     /// Whether shadow rays are cast (otherwise every light is visible).
     pub shadows: bool,
