@@ -350,12 +350,16 @@ mod tests {
 
     /// A long wall lit by a bright lamp and a dim one, each behind a post
     /// thinner than a bin, so that each casts a shadow on the wall that
-    /// falls between two bin centres which both see the lamp.
-    fn posts(dim: f64) -> Scene {
+    /// falls between two bin centres which both see the lamp; all of it
+    /// turned by `angle` about (50, 10).
+    fn posts(dim: f64, angle: f64) -> Scene {
         let diffuse = Material::Diffuse { albedo: None };
-        let segment = |a: (f64, f64), b: (f64, f64)| {
-            Wall::segment(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1), diffuse)
+        let turn = |(x, y): (f64, f64)| {
+            let (sin, cos) = angle.sin_cos();
+            let (dx, dy) = (x - 50.0, y - 10.0);
+            DVec2::new(50.0 + dx * cos - dy * sin, 10.0 + dx * sin + dy * cos)
         };
+        let segment = |a: (f64, f64), b: (f64, f64)| Wall::segment(turn(a), turn(b), diffuse);
         let walls = vec![
             segment((0.0, 0.0), (100.0, 0.0)),
             segment((49.9, 10.0), (50.1, 10.0)),
@@ -364,7 +368,7 @@ mod tests {
         let lamp = |x: f64, intensity: f64| Light {
             profile: None,
             shape: LightShape::Point {
-                at: DVec2::new(x, 20.0),
+                at: turn((x, 20.0)),
             },
             color: Rgb::ONE,
             intensity,
@@ -373,18 +377,23 @@ mod tests {
         };
         let lights = vec![lamp(50.0, 1.0), lamp(15.0, dim)];
         let canvas = Canvas {
-            width: 100,
-            height: 30,
-            origin: DVec2::new(0.0, -5.0),
+            width: 120,
+            height: 120,
+            origin: DVec2::new(-10.0, -50.0),
         };
         Scene::new(canvas, Floor::Color(Rgb::ONE), 0.5, walls, lights).expect("a valid scene")
     }
 
     #[test]
     fn a_read_checked_at_its_rate_is_not_below_zero_in_a_shadow_thinner_than_a_bin() {
-        let scene = posts(0.01);
+        for angle in [0.0, 0.3, 2.0] {
+            reads_checked_at_their_rates_are_not_below_zero(&posts(0.01, angle));
+        }
+    }
+
+    fn reads_checked_at_their_rates_are_not_below_zero(scene: &Scene) {
         let options = RenderOptions::default();
-        let plan = Plan::new(&scene, &options);
+        let plan = Plan::new(scene, &options);
         let ledger = plan.ledger();
         let mut stats = Stats::default();
         let memo = build_wall_memo(
@@ -409,7 +418,7 @@ mod tests {
                 let exact: Rgb = (0..scene.lights.len())
                     .map(|l| {
                         let vis = Visibility::Trace;
-                        light_contribution(&scene, l, x, receiver, 0.5, vis, &mut stats)
+                        light_contribution(scene, l, x, receiver, 0.5, vis, &mut stats)
                     })
                     .sum();
                 let key = Key {
@@ -425,9 +434,10 @@ mod tests {
                     "u {u}: the memo's {m}, exact {}, rate {rate} -> {checked}",
                     exact.y
                 );
-                // Where the dim lamp's post shades the wall (the ray from
-                // (15, 20) past (25, 10) meets it at x = 35).
-                if side == Side::Positive && (x.x - 35.0).abs() < 0.05 {
+                // Where the dim lamp's post shades the lit side (the ray
+                // from (15, 20) past (25, 10) meets the wall 35 from its
+                // start, before the turn).
+                if side == Side::Positive && (u - 0.35).abs() < 0.0005 {
                     dim_shadow_rates.push(rate);
                 }
             }
