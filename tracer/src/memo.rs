@@ -397,7 +397,7 @@ mod tests {
         let ledger = plan.ledger();
         let mut stats = Stats::default();
         let memo = build_wall_memo(
-            &scene,
+            scene,
             &options.memo,
             options.scale,
             (true, &ledger),
