@@ -359,12 +359,11 @@ impl WallMemo {
     #[inline(always)]
     pub fn read(&self, key: Key, path: u64) -> (Value, Check) {
         let (value, i) = self.interpolate(key);
-        let check = match self.rates.get(i) {
+        let check = match self.rate_of(i) {
             // A memo that is never checked.
             None => Check::No,
-            Some(0) => Check::Always,
-            Some(&log2) => {
-                let rate = 1u64 << log2.min(CHECK_RATE_LOG2);
+            Some(1) => Check::Always,
+            Some(rate) => {
                 if checked_at(key.wall, key.u, path, rate) {
                     Check::Sampled { rate }
                 } else {
@@ -379,11 +378,7 @@ impl WallMemo {
     /// it checks every read, [`CHECK_RATE`] where the bins are smooth, 0
     /// for a memo that checks none ([`WallMemo::build_like`]).
     pub fn check_rate(&self, key: Key) -> u64 {
-        let (_, i) = self.interpolate(key);
-        match self.rates.get(i) {
-            None => 0,
-            Some(&log2) => 1 << log2.min(CHECK_RATE_LOG2),
-        }
+        self.rate_of(self.interpolate(key).1).unwrap_or(0)
     }
 
     /// [`WallMemo::read`] for a caller that takes no sampled checks (and so
@@ -393,11 +388,20 @@ impl WallMemo {
     #[inline(always)]
     pub fn read_unsampled(&self, key: Key) -> (Value, Check) {
         let (value, i) = self.interpolate(key);
-        let check = match self.rates.get(i) {
-            Some(&log2) if log2 < CHECK_RATE_LOG2 => Check::Always,
+        let check = match self.rate_of(i) {
+            Some(rate) if rate < CHECK_RATE => Check::Always,
             _ => Check::No,
         };
         (value, check)
+    }
+
+    /// The check rate of the reads interpolated from bin entry `i`, or
+    /// none for a memo that is never checked.
+    #[inline(always)]
+    fn rate_of(&self, i: usize) -> Option<u64> {
+        self.rates
+            .get(i)
+            .map(|&log2| 1 << log2.min(CHECK_RATE_LOG2))
     }
 
     /// The interpolated value at `key`, and the index of the bin it
